@@ -1,0 +1,21 @@
+"""centrality-vision: graph centrality for computer vision.
+
+Subpackages, in the one direction data flows:
+
+- :mod:`centrality_vision.graphs`: pixel graphs and data-graphs of point sets.
+- :mod:`centrality_vision.centrality`: degree, betweenness, closeness, harmonic,
+  eigenvector and eccentricity centralities, and the degree entropy.
+- :mod:`centrality_vision.datasets`: the bundled Kimia-99 silhouettes and CPD point sets.
+- :mod:`centrality_vision.plotting`: figures (matplotlib is imported lazily).
+"""
+
+from importlib.metadata import PackageNotFoundError, version
+
+from .exceptions import CentralityVisionError, ConvergenceWarning, InputError
+
+try:
+    __version__ = version("centrality-vision")
+except PackageNotFoundError:  # pragma: no cover - running from a source tree
+    __version__ = "0.0.0"
+
+__all__ = ["CentralityVisionError", "ConvergenceWarning", "InputError", "__version__"]

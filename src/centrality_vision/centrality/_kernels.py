@@ -1,0 +1,521 @@
+"""Compiled kernels (numba) for the shortest-path centralities.
+
+All kernels take a CSR adjacency as ``indptr`` (int64), ``indices`` (int32) and
+``data`` (float64 edge lengths) and a list of source nodes, and run the sources in
+parallel chunks, each with its own work arrays.
+
+Exactness, the point of writing these ourselves:
+
+- Shortest-path counts overflow float64 on long thin shapes (a 5 x 1200 pixel strip has
+  more than 1e308 shortest paths between its ends), where other libraries return NaN.
+  Every source is first run with plain float64 counts; a source whose counts overflow is
+  run again with counts kept as logarithms, which cannot overflow. The ratios
+  ``sigma[v] / sigma[w]`` that betweenness needs are the same either way.
+- With edge lengths, equal path lengths must tie exactly: on 8-neighbour pixel graphs
+  (lengths 1 and sqrt 2) floating-point sums of the same length differ in the last bits,
+  and a library that compares them with ``==`` drops shortest paths. Two lengths tie here
+  when they differ by at most ``TIE_RTOL`` times their size, which is far above rounding
+  error (about 1e-13 after 1,000 hops) and far below the smallest gap between distinct
+  lengths ``a + b sqrt 2`` of any image of up to a million pixels (about 1e-7 relative).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import get_num_threads, njit, prange
+
+__all__ = ["TIE_RTOL", "distance_stats", "multi_source_stats", "compact_groups", "brandes", "n_chunks"]
+
+TIE_RTOL = 1e-10
+_OVERFLOW = 1e300
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _heap_push(heap_d, heap_v, size, d, v):
+    i = size
+    heap_d[i] = d
+    heap_v[i] = v
+    while i > 0:
+        parent = (i - 1) >> 1
+        if heap_d[parent] <= heap_d[i]:
+            break
+        heap_d[parent], heap_d[i] = heap_d[i], heap_d[parent]
+        heap_v[parent], heap_v[i] = heap_v[i], heap_v[parent]
+        i = parent
+    return size + 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _heap_pop(heap_d, heap_v, size):
+    d = heap_d[0]
+    v = heap_v[0]
+    size -= 1
+    heap_d[0] = heap_d[size]
+    heap_v[0] = heap_v[size]
+    i = 0
+    while True:
+        left = 2 * i + 1
+        if left >= size:
+            break
+        child = left
+        if left + 1 < size and heap_d[left + 1] < heap_d[left]:
+            child = left + 1
+        if heap_d[i] <= heap_d[child]:
+            break
+        heap_d[child], heap_d[i] = heap_d[i], heap_d[child]
+        heap_v[child], heap_v[i] = heap_v[i], heap_v[child]
+        i = child
+    return d, v, size
+
+
+@njit(cache=True, nogil=True)
+def _bfs(indptr, indices, s, hops, order):
+    """Breadth-first search from ``s``; fills ``hops`` (must be -1) and ``order``; returns count."""
+    hops[s] = 0
+    order[0] = s
+    head = 0
+    tail = 1
+    while head < tail:
+        v = order[head]
+        head += 1
+        nxt = hops[v] + 1
+        for j in range(indptr[v], indptr[v + 1]):
+            w = indices[j]
+            if hops[w] < 0:
+                hops[w] = nxt
+                order[tail] = w
+                tail += 1
+    return tail
+
+
+@njit(cache=True, nogil=True)
+def _dijkstra(indptr, indices, data, s, dist, done, order, heap_d, heap_v):
+    """Dijkstra from ``s``; fills ``dist`` (must be inf), ``done`` and ``order``; returns count."""
+    dist[s] = 0.0
+    size = _heap_push(heap_d, heap_v, 0, 0.0, s)
+    count = 0
+    while size > 0:
+        d, v, size = _heap_pop(heap_d, heap_v, size)
+        if done[v]:
+            continue
+        done[v] = True
+        order[count] = v
+        count += 1
+        for j in range(indptr[v], indptr[v + 1]):
+            w = indices[j]
+            if done[w]:
+                continue
+            nd = d + data[j]
+            if nd < dist[w]:
+                dist[w] = nd
+                size = _heap_push(heap_d, heap_v, size, nd, w)
+    return count
+
+
+@njit(cache=True, parallel=True)
+def distance_stats(indptr, indices, data, sources, weighted, n_chunks):
+    """Per source: sum of distances, sum of inverse distances, largest distance, reached count."""
+    n = indptr.shape[0] - 1
+    k = sources.shape[0]
+    total = np.zeros(k)
+    inverse = np.zeros(k)
+    largest = np.zeros(k)
+    reached = np.zeros(k, dtype=np.int64)
+    n_chunks = max(1, min(k, n_chunks))
+    for c in prange(n_chunks):
+        order = np.empty(n, dtype=np.int64)
+        if weighted:
+            dist = np.full(n, np.inf)
+            done = np.zeros(n, dtype=np.bool_)
+            heap_d = np.empty(indices.shape[0] + 1)
+            heap_v = np.empty(indices.shape[0] + 1, dtype=np.int64)
+        else:
+            hops = np.full(n, -1, dtype=np.int64)
+        for i in range(c * k // n_chunks, (c + 1) * k // n_chunks):
+            s = sources[i]
+            if weighted:
+                count = _dijkstra(indptr, indices, data, s, dist, done, order, heap_d, heap_v)
+                t = 0.0
+                h = 0.0
+                for q in range(1, count):
+                    d = dist[order[q]]
+                    t += d
+                    h += 1.0 / d
+                largest[i] = dist[order[count - 1]]
+                for q in range(count):
+                    dist[order[q]] = np.inf
+                    done[order[q]] = False
+            else:
+                count = _bfs(indptr, indices, s, hops, order)
+                t = 0.0
+                h = 0.0
+                level = 0
+                level_count = 0
+                for q in range(1, count):
+                    d = hops[order[q]]
+                    if d != level:
+                        if level > 0:
+                            h += level_count / level
+                        level = d
+                        level_count = 0
+                    level_count += 1
+                    t += d
+                if level > 0:
+                    h += level_count / level
+                largest[i] = hops[order[count - 1]]
+                for q in range(count):
+                    hops[order[q]] = -1
+            total[i] = t
+            inverse[i] = h
+            reached[i] = count
+    return total, inverse, largest, reached
+
+
+_M1 = np.uint64(0x5555555555555555)
+_M2 = np.uint64(0x3333333333333333)
+_M4 = np.uint64(0x0F0F0F0F0F0F0F0F)
+_H01 = np.uint64(0x0101010101010101)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _popcount(x):
+    x = x - ((x >> np.uint64(1)) & _M1)
+    x = (x & _M2) + ((x >> np.uint64(2)) & _M2)
+    x = (x + (x >> np.uint64(4))) & _M4
+    return np.int64((x * _H01) >> np.uint64(56))
+
+
+@njit(cache=True)
+def compact_groups(indptr, indices, size):
+    """Split the nodes into groups of at most ``size`` that are close in the graph.
+
+    Greedy: from the first node not yet grouped, a breadth-first search over ungrouped
+    nodes takes the next ``size`` nodes. Returns ``(members, group_ptr)`` in CSR style.
+    Groups of nearby sources keep the bit-parallel search below short.
+    """
+    n = indptr.shape[0] - 1
+    # Seeds are taken in breadth-first order of the whole graph, so that the sweep moves
+    # through it coherently and leaves few scattered leftovers for the last groups.
+    sweep = np.empty(n, dtype=np.int64)
+    hops = np.full(n, -1, dtype=np.int64)
+    filled = 0
+    for root in range(n):
+        if hops[root] < 0:
+            filled += _bfs(indptr, indices, root, hops, sweep[filled:])
+    taken = np.zeros(n, dtype=np.bool_)
+    members = np.empty(n, dtype=np.int64)
+    group_ptr = np.zeros(n + 1, dtype=np.int64)
+    n_groups = 0
+    pos = 0
+    for start in sweep:
+        if taken[start]:
+            continue
+        taken[start] = True
+        members[pos] = start
+        head = pos
+        tail = pos + 1
+        while head < tail and tail - pos < size:
+            v = members[head]
+            head += 1
+            for j in range(indptr[v], indptr[v + 1]):
+                w = indices[j]
+                if not taken[w] and tail - pos < size:
+                    taken[w] = True
+                    members[tail] = w
+                    tail += 1
+        pos = tail
+        n_groups += 1
+        group_ptr[n_groups] = pos
+    return members, group_ptr[: n_groups + 1]
+
+
+@njit(cache=True, parallel=True)
+def multi_source_stats(indptr, indices, members, group_ptr, n_chunks):
+    """Hop-distance sums over all sources in ``members``, accumulated at the reached nodes.
+
+    Bit-parallel breadth-first search (Then et al., VLDB 2015): the (at most 64) sources
+    of a group advance together, one bit each. For undirected graphs d(s, w) = d(w, s),
+    so the sums collected at node ``w`` over all sources are ``w``'s own. Returns per
+    node: sum of distances, sum of inverse distances, largest distance and number of
+    sources that reach it (itself included).
+    """
+    n = indptr.shape[0] - 1
+    n_groups = group_ptr.shape[0] - 1
+    n_chunks = max(1, min(n_groups, n_chunks))
+    total = np.zeros((n_chunks, n))
+    inverse = np.zeros((n_chunks, n))
+    largest = np.zeros((n_chunks, n))
+    reached = np.zeros((n_chunks, n), dtype=np.int64)
+    zero = np.uint64(0)
+    for c in prange(n_chunks):
+        seen = np.zeros(n, dtype=np.uint64)
+        frontier = np.zeros(n, dtype=np.uint64)
+        nxt = np.zeros(n, dtype=np.uint64)
+        active = np.empty(n, dtype=np.int64)
+        touched = np.empty(n, dtype=np.int64)
+        tot = total[c]
+        inv = inverse[c]
+        big = largest[c]
+        rea = reached[c]
+        for g in range(c * n_groups // n_chunks, (c + 1) * n_groups // n_chunks):
+            n_active = 0
+            for q in range(group_ptr[g], group_ptr[g + 1]):
+                s = members[q]
+                bit = np.uint64(1) << np.uint64(q - group_ptr[g])
+                seen[s] = bit
+                frontier[s] = bit
+                active[n_active] = s
+                n_active += 1
+                rea[s] += 1
+            level = 0
+            while n_active > 0:
+                level += 1
+                n_touched = 0
+                for a in range(n_active):
+                    v = active[a]
+                    f = frontier[v]
+                    for j in range(indptr[v], indptr[v + 1]):
+                        w = indices[j]
+                        if f & ~seen[w] == zero:
+                            continue
+                        if nxt[w] == zero:
+                            touched[n_touched] = w
+                            n_touched += 1
+                        nxt[w] |= f
+                    frontier[v] = zero
+                n_active = 0
+                for t in range(n_touched):
+                    w = touched[t]
+                    new = nxt[w] & ~seen[w]
+                    nxt[w] = zero
+                    seen[w] |= new
+                    frontier[w] = new
+                    active[n_active] = w
+                    n_active += 1
+                    cnt = _popcount(new)
+                    tot[w] += cnt * level
+                    inv[w] += cnt / level
+                    rea[w] += cnt
+                    if level > big[w]:
+                        big[w] = level
+            seen[:] = zero
+    out_total = np.zeros(n)
+    out_inverse = np.zeros(n)
+    out_largest = np.zeros(n)
+    out_reached = np.zeros(n, dtype=np.int64)
+    for c in range(n_chunks):
+        out_total += total[c]
+        out_inverse += inverse[c]
+        out_reached += reached[c]
+        for i in range(n):
+            if largest[c, i] > out_largest[i]:
+                out_largest[i] = largest[c, i]
+    return out_total, out_inverse, out_largest, out_reached
+
+
+@njit(cache=True, nogil=True)
+def _brandes_source_bfs(indptr, indices, s, hops, order, sigma, coef, bc):
+    """One source of Brandes' algorithm with float64 path counts; False if they overflow."""
+    hops[s] = 0
+    sigma[s] = 1.0
+    order[0] = s
+    head = 0
+    tail = 1
+    while head < tail:
+        v = order[head]
+        head += 1
+        nxt = hops[v] + 1
+        sv = sigma[v]
+        for j in range(indptr[v], indptr[v + 1]):
+            w = indices[j]
+            hw = hops[w]
+            if hw < 0:
+                hops[w] = nxt
+                sigma[w] = sv
+                order[tail] = w
+                tail += 1
+            elif hw == nxt:
+                sigma[w] += sv
+    ok = sigma[order[tail - 1]] <= _OVERFLOW
+    if ok:
+        for q in range(tail):
+            if sigma[order[q]] > _OVERFLOW:
+                ok = False
+                break
+    if ok:
+        # coef[w] = (1 + delta[w]) / sigma[w]; delta[v] = sigma[v] * sum of coef over successors.
+        for q in range(tail - 1, 0, -1):
+            v = order[q]
+            nxt = hops[v] + 1
+            acc = 0.0
+            for j in range(indptr[v], indptr[v + 1]):
+                w = indices[j]
+                if hops[w] == nxt:
+                    acc += coef[w]
+            delta_v = acc * sigma[v]
+            bc[v] += delta_v
+            coef[v] = (1.0 + delta_v) / sigma[v]
+    for q in range(tail):
+        hops[order[q]] = -1
+        coef[order[q]] = 0.0
+    return ok
+
+
+@njit(cache=True, nogil=True)
+def _brandes_source_bfs_log(indptr, indices, s, hops, order, lsigma, delta, bc):
+    """One source of Brandes' algorithm with path counts kept as logarithms (cannot overflow)."""
+    hops[s] = 0
+    lsigma[s] = 0.0
+    order[0] = s
+    head = 0
+    tail = 1
+    while head < tail:
+        v = order[head]
+        head += 1
+        nxt = hops[v] + 1
+        sv = lsigma[v]
+        for j in range(indptr[v], indptr[v + 1]):
+            w = indices[j]
+            hw = hops[w]
+            if hw < 0:
+                hops[w] = nxt
+                lsigma[w] = sv
+                order[tail] = w
+                tail += 1
+            elif hw == nxt:
+                a = lsigma[w]
+                lsigma[w] = max(a, sv) + np.log1p(np.exp(-abs(a - sv)))
+    for q in range(tail):
+        delta[order[q]] = 0.0
+    for q in range(tail - 1, 0, -1):
+        v = order[q]
+        nxt = hops[v] + 1
+        acc = 0.0
+        for j in range(indptr[v], indptr[v + 1]):
+            w = indices[j]
+            if hops[w] == nxt:
+                acc += np.exp(lsigma[v] - lsigma[w]) * (1.0 + delta[w])
+        delta[v] = acc
+        bc[v] += acc
+    for q in range(tail):
+        hops[order[q]] = -1
+
+
+@njit(cache=True, nogil=True)
+def _brandes_source_dijkstra(
+    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, use_log, rtol
+):
+    # Forward pass: Dijkstra, counting shortest paths with ties up to rtol.
+    dist[s] = 0.0
+    if use_log:
+        sigma[s] = 0.0
+    else:
+        sigma[s] = 1.0
+    size = _heap_push(heap_d, heap_v, 0, 0.0, s)
+    count = 0
+    overflow = False
+    while size > 0:
+        d, v, size = _heap_pop(heap_d, heap_v, size)
+        if done[v]:
+            continue
+        done[v] = True
+        order[count] = v
+        count += 1
+        sv = sigma[v]
+        if not use_log and sv > _OVERFLOW:
+            overflow = True
+        for j in range(indptr[v], indptr[v + 1]):
+            w = indices[j]
+            if done[w]:
+                continue
+            nd = d + data[j]
+            dw = dist[w]
+            if dw == np.inf or nd < dw - rtol * dw:
+                dist[w] = nd
+                sigma[w] = sv
+                size = _heap_push(heap_d, heap_v, size, nd, w)
+            elif nd <= dw + rtol * dw:
+                if use_log:
+                    a = sigma[w]
+                    if a >= sv:
+                        sigma[w] = a + np.log1p(np.exp(sv - a))
+                    else:
+                        sigma[w] = sv + np.log1p(np.exp(a - sv))
+                else:
+                    sigma[w] += sv
+    ok = not overflow
+    if ok:
+        for q in range(count):
+            delta[order[q]] = 0.0
+        for q in range(count - 1, 0, -1):
+            v = order[q]
+            dv = dist[v]
+            acc = 0.0
+            for j in range(indptr[v], indptr[v + 1]):
+                w = indices[j]
+                dw = dist[w]
+                if dw > dv and abs(dv + data[j] - dw) <= rtol * dw:
+                    if use_log:
+                        acc += np.exp(sigma[v] - sigma[w]) * (1.0 + delta[w])
+                    else:
+                        acc += (1.0 + delta[w]) / sigma[w]
+            delta[v] = acc if use_log else acc * sigma[v]
+            bc[v] += delta[v]
+    for q in range(count):
+        dist[order[q]] = np.inf
+        done[order[q]] = False
+    return ok
+
+
+@njit(cache=True, parallel=True)
+def brandes(indptr, indices, data, sources, weighted, rtol, force_log, n_chunks):
+    """Betweenness summed over ``sources`` (ordered pairs: halve for undirected graphs).
+
+    Returns the per-node sums and the number of sources that needed log-space counts.
+    """
+    n = indptr.shape[0] - 1
+    k = sources.shape[0]
+    n_chunks = max(1, min(k, n_chunks))
+    parts = np.zeros((n_chunks, n))
+    n_log = np.zeros(n_chunks, dtype=np.int64)
+    for c in prange(n_chunks):
+        bc = parts[c]
+        order = np.empty(n, dtype=np.int64)
+        sigma = np.empty(n)
+        delta = np.empty(n)
+        delta[:] = 0.0
+        hops = np.full(n, -1, dtype=np.int64)
+        dist = np.full(n, np.inf)
+        done = np.zeros(n, dtype=np.bool_)
+        m = indices.shape[0] + 1 if weighted else 1
+        heap_d = np.empty(m)
+        heap_v = np.empty(m, dtype=np.int64)
+        for i in range(c * k // n_chunks, (c + 1) * k // n_chunks):
+            s = sources[i]
+            if weighted:
+                ok = False
+                if not force_log:
+                    ok = _brandes_source_dijkstra(
+                        indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, False, rtol
+                    )
+                if not ok:
+                    n_log[c] += 1
+                    _brandes_source_dijkstra(
+                        indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, True, rtol
+                    )
+            else:
+                ok = False
+                if not force_log:
+                    ok = _brandes_source_bfs(indptr, indices, s, hops, order, sigma, delta, bc)
+                if not ok:
+                    n_log[c] += 1
+                    _brandes_source_bfs_log(indptr, indices, s, hops, order, sigma, delta, bc)
+    out = np.zeros(n)
+    for c in range(n_chunks):
+        out += parts[c]
+    return out, n_log.sum()
+
+
+def n_chunks() -> int:
+    """Number of work chunks per call: a few per thread, for load balance."""
+    return 4 * get_num_threads()

@@ -1,0 +1,21 @@
+"""Graphs from images and point sets.
+
+Every builder returns a symmetric :class:`scipy.sparse.csr_array` of shape (n, n) whose
+stored values are Euclidean edge lengths; row ``i`` is node ``i`` (point ``i``, or the
+``i``-th foreground pixel for pixel graphs).
+"""
+
+from ._pixel import pixel_graph, salt_noise
+from ._pointsets import complete_graph, delaunay_graph, emst_graph, gabriel_graph, knn_graph
+from ._convert import to_networkx
+
+__all__ = [
+    "pixel_graph",
+    "salt_noise",
+    "delaunay_graph",
+    "gabriel_graph",
+    "emst_graph",
+    "knn_graph",
+    "complete_graph",
+    "to_networkx",
+]

@@ -1,0 +1,245 @@
+"""Data-graphs of point sets: Delaunay, Gabriel, EMST, k-NN and complete graphs."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+from scipy.spatial import Delaunay, QhullError, cKDTree
+from scipy.spatial.distance import pdist, squareform
+
+from .._validation import as_points, check_int
+from ..exceptions import InputError
+
+__all__ = ["delaunay_graph", "gabriel_graph", "emst_graph", "knn_graph", "complete_graph", "edges_to_graph"]
+
+
+def edges_to_graph(n_nodes: int, rows, cols, points=None, *, lengths=None) -> sparse.csr_array:
+    """Symmetric CSR adjacency from undirected edges ``rows[e] -- cols[e]``.
+
+    Edge values are ``lengths`` if given, else the Euclidean distances between ``points``.
+    Repeated edges are merged (not summed).
+    """
+    rows = np.asarray(rows, dtype=np.int64)
+    cols = np.asarray(cols, dtype=np.int64)
+    lo, hi = np.minimum(rows, cols), np.maximum(rows, cols)
+    keep = lo != hi
+    key = np.unique(lo[keep] * n_nodes + hi[keep])
+    lo, hi = key // n_nodes, key % n_nodes
+    if lengths is None:
+        lengths = np.linalg.norm(points[lo] - points[hi], axis=1)
+    else:
+        lengths = np.broadcast_to(np.asarray(lengths, dtype=np.float64), lo.shape)
+    graph = sparse.csr_array(
+        (np.concatenate([lengths, lengths]), (np.concatenate([lo, hi]), np.concatenate([hi, lo]))),
+        shape=(n_nodes, n_nodes),
+        dtype=np.float64,
+    )
+    graph.sort_indices()
+    graph.indices = graph.indices.astype(np.int32, copy=False)
+    graph.indptr = graph.indptr.astype(np.int32, copy=False)
+    return graph
+
+
+def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
+    n, dim = points.shape
+    centred = points - points.mean(axis=0)
+    scale = np.abs(centred).max()
+    if np.linalg.matrix_rank(centred / scale, tol=1e-12) < dim:
+        what = "collinear" if dim == 2 else "coplanar"
+        raise InputError(
+            f"`{name}` must span {dim} dimensions for a Delaunay triangulation; got {n} {what} points."
+        )
+    try:
+        tri = Delaunay(points)
+    except QhullError as exc:  # numerically degenerate input
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise InputError(f"`{name}` could not be triangulated (degenerate input): {first}") from None
+    if getattr(tri, "coplanar", np.empty((0, 3))).shape[0]:
+        missing = np.unique(tri.coplanar[:, 0]).tolist()
+        raise InputError(
+            f"`{name}` has {len(missing)} point(s) left out of the Delaunay triangulation as numerically "
+            f"coincident with others (e.g. index {missing[0]}); remove near-duplicates first."
+        )
+    return tri
+
+
+def _delaunay_edges(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    indptr, indices = _triangulation(points).vertex_neighbor_vertices
+    rows = np.repeat(np.arange(points.shape[0]), np.diff(indptr))
+    upper = rows < indices
+    return rows[upper], indices[upper].astype(np.int64)
+
+
+def delaunay_graph(points, /) -> sparse.csr_array:
+    """Delaunay triangulation of a 2D or 3D point set, as a graph.
+
+    Parameters
+    ----------
+    points : array_like of shape (n_points, 2) or (n_points, 3)
+        At least ``n_dims + 1`` distinct points that are not all collinear (2D) or
+        coplanar (3D). Row ``i`` is node ``i``.
+
+    Returns
+    -------
+    graph : scipy.sparse.csr_array of shape (n_points, n_points)
+        Symmetric; stored values are Euclidean edge lengths.
+
+    Notes
+    -----
+    Computed with Qhull through :class:`scipy.spatial.Delaunay`. For co-circular
+    (co-spherical) points the triangulation is not unique and Qhull picks one.
+
+    Examples
+    --------
+    >>> graph = delaunay_graph([[0, 0], [1, 0], [0, 1], [1, 1.1]])
+    >>> graph.nnz // 2  # four sides and one diagonal
+    5
+    """
+    points = as_points(points, name="points", n_dims=(2, 3), min_points=3, allow_duplicates=False)
+    if points.shape[0] < points.shape[1] + 1:
+        raise InputError(
+            f"`points` must have at least {points.shape[1] + 1} points in {points.shape[1]}D; got {points.shape[0]}."
+        )
+    rows, cols = _delaunay_edges(points)
+    return edges_to_graph(points.shape[0], rows, cols, points)
+
+
+def _gabriel_mask(points: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """True for the edges whose closed diametral ball holds no other point."""
+    midpoints = 0.5 * (points[rows] + points[cols])
+    radius2 = 0.25 * np.sum((points[rows] - points[cols]) ** 2, axis=1)
+    k = min(3, points.shape[0])
+    dist, idx = cKDTree(points).query(midpoints, k=k)
+    # The 3 nearest points to a midpoint include at least one point other than the edge's
+    # two end points, and that one is the nearest such point.
+    other = (idx != rows[:, None]) & (idx != cols[:, None])
+    nearest_other2 = np.where(other, dist**2, np.inf).min(axis=1)
+    return nearest_other2 > radius2 * (1.0 + 1e-12)
+
+
+def gabriel_graph(points, /) -> sparse.csr_array:
+    """Gabriel graph: the Delaunay edges whose closed diametral circle (sphere) is empty.
+
+    Edge ``(i, j)`` is kept when no other point lies inside or on the circle that has
+    the segment ``i-j`` as a diameter. With this closed-ball rule the result does not
+    depend on how Qhull triangulates co-circular points, and it is a subgraph of every
+    Delaunay triangulation and a supergraph of every Euclidean minimum spanning tree.
+
+    Parameters
+    ----------
+    points : array_like of shape (n_points, 2) or (n_points, 3)
+        As for :func:`delaunay_graph`.
+
+    Returns
+    -------
+    graph : scipy.sparse.csr_array of shape (n_points, n_points)
+        Symmetric; stored values are Euclidean edge lengths.
+
+    References
+    ----------
+    .. [1] K. R. Gabriel and R. R. Sokal, "A new statistical approach to geographic
+       variation analysis", Systematic Zoology 18(3), 259-278, 1969.
+
+    Examples
+    --------
+    >>> gabriel_graph([[0, 0], [2, 0], [1, 0.2]]).nnz // 2  # Delaunay has 3 edges
+    2
+    """
+    points = as_points(points, name="points", n_dims=(2, 3), min_points=3, allow_duplicates=False)
+    if points.shape[0] < points.shape[1] + 1:
+        raise InputError(
+            f"`points` must have at least {points.shape[1] + 1} points in {points.shape[1]}D; got {points.shape[0]}."
+        )
+    rows, cols = _delaunay_edges(points)
+    keep = _gabriel_mask(points, rows, cols)
+    return edges_to_graph(points.shape[0], rows[keep], cols[keep], points)
+
+
+def emst_graph(points, /) -> sparse.csr_array:
+    """Euclidean minimum spanning tree of a 2D or 3D point set.
+
+    Computed as the minimum spanning tree of the Delaunay graph, which contains every
+    Euclidean MST. When several spanning trees share the minimum weight (equal
+    distances) one of them is returned.
+
+    Parameters
+    ----------
+    points : array_like of shape (n_points, 2) or (n_points, 3)
+        As for :func:`delaunay_graph`.
+
+    Returns
+    -------
+    graph : scipy.sparse.csr_array of shape (n_points, n_points)
+        Symmetric tree with ``n_points - 1`` edges; values are Euclidean lengths.
+
+    Examples
+    --------
+    >>> tree = emst_graph([[0, 0], [1, 0], [0, 2], [3, 3]])
+    >>> tree.nnz // 2, round(float(tree.sum()) / 2, 3)
+    (3, 6.606)
+    """
+    from scipy.sparse.csgraph import minimum_spanning_tree
+
+    graph = delaunay_graph(points)
+    tree = sparse.coo_array(minimum_spanning_tree(graph))
+    return edges_to_graph(graph.shape[0], tree.row, tree.col, lengths=tree.data)
+
+
+def knn_graph(points, /, *, k: int) -> sparse.csr_array:
+    """Symmetric k-nearest-neighbour graph.
+
+    Joins every point to its ``k`` nearest other points; an edge is kept when either end
+    chooses it (union), so every node has degree at least ``k``.
+
+    Parameters
+    ----------
+    points : array_like of shape (n_points, n_dims)
+        Distinct points, any dimension.
+    k : int in [1, n_points - 1]
+        Number of neighbours per point. Ties in distance are broken by the k-d tree.
+
+    Returns
+    -------
+    graph : scipy.sparse.csr_array of shape (n_points, n_points)
+        Symmetric; stored values are Euclidean edge lengths.
+
+    Examples
+    --------
+    >>> graph = knn_graph([[0, 0], [1, 0], [3, 0], [7, 0]], k=1)
+    >>> sorted(map(tuple, np.argwhere(graph.toarray() > 0).tolist()))[:3]
+    [(0, 1), (1, 0), (1, 2)]
+    """
+    points = as_points(points, name="points", n_dims=tuple(range(1, 65)), min_points=2, allow_duplicates=False)
+    n = points.shape[0]
+    k = check_int(k, name="k", low=1, high=n - 1)
+    _, idx = cKDTree(points).query(points, k=k + 1)
+    rows = np.repeat(np.arange(n), k + 1)
+    cols = idx.ravel()
+    return edges_to_graph(n, rows, cols, points)
+
+
+def complete_graph(points, /) -> sparse.csr_array:
+    """Complete graph of a point set, every pair joined by its Euclidean distance.
+
+    Parameters
+    ----------
+    points : array_like of shape (n_points, n_dims)
+        Distinct points, any dimension (memory grows as ``n_points ** 2``).
+
+    Returns
+    -------
+    graph : scipy.sparse.csr_array of shape (n_points, n_points)
+
+    Examples
+    --------
+    >>> complete_graph([[0, 0], [3, 0], [0, 4]]).toarray()
+    array([[0., 3., 4.],
+           [3., 0., 5.],
+           [4., 5., 0.]])
+    """
+    points = as_points(points, name="points", n_dims=tuple(range(1, 65)), min_points=2, allow_duplicates=False)
+    graph = sparse.csr_array(squareform(pdist(points)))
+    graph.sort_indices()
+    graph.indices = graph.indices.astype(np.int32, copy=False)
+    graph.indptr = graph.indptr.astype(np.int32, copy=False)
+    return graph

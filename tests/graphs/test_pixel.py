@@ -1,0 +1,106 @@
+import numpy as np
+import pytest
+
+from centrality_vision.graphs import pixel_graph, salt_noise
+from centrality_vision.graphs._pixel import pixel_coordinates
+
+
+def _degrees(graph):
+    return np.diff(graph.indptr)
+
+
+def test_block_3x3_degrees_8_connectivity():
+    graph, nodes = pixel_graph(np.ones((3, 3), dtype=bool))
+    np.testing.assert_array_equal(_degrees(graph).reshape(3, 3), [[3, 5, 3], [5, 8, 5], [3, 5, 3]])
+    np.testing.assert_array_equal(nodes, np.arange(9))
+
+
+def test_block_3x3_degrees_4_connectivity():
+    graph, _ = pixel_graph(np.ones((3, 3), dtype=bool), connectivity=4)
+    np.testing.assert_array_equal(_degrees(graph).reshape(3, 3), [[2, 3, 2], [3, 4, 3], [2, 3, 2]])
+
+
+def test_edge_lengths_are_one_and_sqrt2():
+    graph, _ = pixel_graph(np.ones((3, 3), dtype=bool))
+    dense = graph.toarray()
+    assert dense[0, 1] == 1.0 and dense[0, 3] == 1.0
+    assert dense[0, 4] == pytest.approx(np.sqrt(2))
+    assert set(np.round(graph.data, 12)) == {1.0, round(np.sqrt(2), 12)}
+    np.testing.assert_array_equal(dense, dense.T)
+
+
+def test_nodes_are_row_major_foreground_indices():
+    image = np.array([[0, 1, 0], [1, 1, 0], [0, 0, 1]])
+    graph, nodes = pixel_graph(image)
+    np.testing.assert_array_equal(nodes, np.flatnonzero(image))
+    # (0,1)-(1,0) diagonal, (0,1)-(1,1), (1,0)-(1,1), (1,1)-(2,2) diagonal: 4 edges
+    assert graph.nnz == 8
+    np.testing.assert_array_equal(pixel_coordinates(nodes, image.shape), np.argwhere(image))
+
+
+def test_threshold_selects_bright_pixels():
+    image = np.array([[0.0, 200.0], [50.0, 255.0]])
+    graph, nodes = pixel_graph(image, threshold=128)
+    np.testing.assert_array_equal(nodes, [1, 3])
+    assert graph.nnz == 2
+
+
+def test_input_not_modified():
+    image = np.array([[True, False], [True, True]])
+    before = image.copy()
+    pixel_graph(image)
+    salt_noise(image, 0.5, seed=0)
+    np.testing.assert_array_equal(image, before)
+
+
+@pytest.mark.parametrize(
+    ("image", "kwargs", "match"),
+    [
+        (np.zeros((4, 4), dtype=bool), {}, "at least one foreground pixel"),
+        (np.zeros((0, 5)), {}, "must not be empty"),
+        (np.ones((2, 2, 2)), {}, "must be a 2D array"),
+        (np.array([[0, 2], [1, 1]]), {}, "must be binary"),
+        (np.array([[np.nan, 1.0]]), {}, "finite"),
+        (np.ones((3, 3), bool), {"connectivity": 6}, "`connectivity` must be 4 or 8"),
+    ],
+)
+def test_bad_images(image, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        pixel_graph(image, **kwargs)
+
+
+def test_non_numeric_image_is_type_error():
+    with pytest.raises(TypeError, match="`image`"):
+        pixel_graph(np.array([["a", "b"]]))
+
+
+@pytest.mark.parametrize("rate", [0.0, 0.01, 0.05, 0.1, 0.5, 1.0])
+def test_salt_noise_removes_exact_count(rate):
+    rng = np.random.default_rng(3)
+    image = rng.random((40, 50)) < 0.7
+    noisy = salt_noise(image, rate, seed=1)
+    n = int(image.sum())
+    assert int(image.sum() - noisy.sum()) == int(round(rate * n))
+    assert not np.any(noisy & ~image)  # only foreground pixels are removed
+
+
+def test_salt_noise_is_seeded():
+    image = np.ones((30, 30), dtype=bool)
+    a = salt_noise(image, 0.1, seed=7)
+    b = salt_noise(image, 0.1, seed=7)
+    c = salt_noise(image, 0.1, seed=8)
+    np.testing.assert_array_equal(a, b)
+    assert not np.array_equal(a, c)
+    gen = np.random.default_rng(7)
+    np.testing.assert_array_equal(salt_noise(image, 0.1, seed=gen), a)
+
+
+@pytest.mark.parametrize("rate", [-0.1, 1.5, float("nan")])
+def test_salt_noise_bad_rate(rate):
+    with pytest.raises(ValueError, match="`rate`"):
+        salt_noise(np.ones((3, 3), bool), rate, seed=0)
+
+
+def test_salt_noise_bad_seed():
+    with pytest.raises(TypeError, match="`seed`"):
+        salt_noise(np.ones((3, 3), bool), 0.1, seed="abc")

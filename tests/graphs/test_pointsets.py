@@ -1,0 +1,154 @@
+import itertools
+
+import networkx as nx
+import numpy as np
+import pytest
+from scipy import sparse
+from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
+from scipy.spatial import ConvexHull
+
+from centrality_vision.graphs import (
+    complete_graph,
+    delaunay_graph,
+    emst_graph,
+    gabriel_graph,
+    knn_graph,
+    to_networkx,
+)
+
+BUILDERS = [delaunay_graph, gabriel_graph, emst_graph, complete_graph, lambda p: knn_graph(p, k=3)]
+
+
+def _edges(graph):
+    coo = sparse.triu(graph, k=1).tocoo()
+    return set(zip(coo.row.tolist(), coo.col.tolist()))
+
+
+def _random_points(seed, n, dim):
+    return np.random.default_rng(seed).random((n, dim))
+
+
+@pytest.mark.parametrize("builder", BUILDERS)
+@pytest.mark.parametrize("dim", [2, 3])
+def test_graphs_are_symmetric_with_euclidean_lengths(builder, dim):
+    points = _random_points(0, 40, dim)
+    graph = builder(points)
+    assert isinstance(graph, sparse.csr_array)
+    assert graph.shape == (40, 40) and graph.dtype == np.float64
+    np.testing.assert_array_equal(graph.toarray(), graph.toarray().T)
+    coo = graph.tocoo()
+    np.testing.assert_allclose(coo.data, np.linalg.norm(points[coo.row] - points[coo.col], axis=1), rtol=1e-14)
+    assert np.all(graph.diagonal() == 0)
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("dim", [2, 3])
+def test_emst_subset_gabriel_subset_delaunay(seed, dim):
+    points = _random_points(seed, 60, dim)
+    d, g, e = _edges(delaunay_graph(points)), _edges(gabriel_graph(points)), _edges(emst_graph(points))
+    assert e <= g <= d
+    assert len(e) == 59 and len(g) < len(d)
+
+
+@pytest.mark.parametrize("seed", range(3))
+@pytest.mark.parametrize("dim", [2, 3])
+def test_gabriel_matches_brute_force(seed, dim):
+    points = _random_points(seed, 25, dim)
+    expected = set()
+    for i, j in itertools.combinations(range(len(points)), 2):
+        centre = (points[i] + points[j]) / 2
+        r2 = np.sum((points[i] - centre) ** 2)
+        others = np.delete(np.arange(len(points)), [i, j])
+        if np.all(np.sum((points[others] - centre) ** 2, axis=1) > r2):
+            expected.add((i, j))
+    assert _edges(gabriel_graph(points)) == expected
+
+
+def test_gabriel_three_points_and_cocircular_square():
+    assert _edges(gabriel_graph([[0, 0], [2, 0], [1, 0.2]])) == {(0, 2), (1, 2)}
+    # The diagonals of a square have the other two corners on their circle: not Gabriel.
+    assert _edges(gabriel_graph([[0, 0], [1, 0], [1, 1], [0, 1]])) == {(0, 1), (1, 2), (2, 3), (0, 3)}
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_emst_weight_equals_mst_of_complete_graph(dim):
+    points = _random_points(11, 50, dim)
+    tree = emst_graph(points)
+    assert connected_components(tree)[0] == 1
+    reference = minimum_spanning_tree(complete_graph(points)).sum()
+    assert tree.sum() / 2 == pytest.approx(reference, rel=1e-12)
+
+
+def test_delaunay_edge_count_euler():
+    points = _random_points(5, 100, 2)
+    hull = ConvexHull(points)
+    assert len(_edges(delaunay_graph(points))) == 3 * 100 - 3 - len(hull.vertices)
+
+
+@pytest.mark.parametrize("k", [1, 2, 5])
+def test_knn_degrees_and_neighbours(k):
+    points = _random_points(2, 30, 2)
+    graph = knn_graph(points, k=k)
+    assert np.all(np.diff(graph.indptr) >= k)
+    dist = np.linalg.norm(points[:, None] - points[None], axis=2)
+    np.fill_diagonal(dist, np.inf)
+    dense = graph.toarray() > 0
+    for i in range(30):
+        assert dense[i, np.argsort(dist[i])[:k]].all()
+
+
+def test_complete_graph_edge_count():
+    assert complete_graph(_random_points(0, 12, 3)).nnz == 12 * 11
+
+
+def test_to_networkx_round_trip():
+    points = _random_points(4, 15, 2)
+    graph = delaunay_graph(points)
+    g = to_networkx(graph, points)
+    assert g.number_of_nodes() == 15 and g.number_of_edges() == graph.nnz // 2
+    back = nx.to_scipy_sparse_array(g, nodelist=range(15), weight="weight")
+    np.testing.assert_allclose(back.toarray(), graph.toarray())
+    np.testing.assert_allclose(g.nodes[3]["pos"], points[3])
+
+
+def test_input_not_modified():
+    points = _random_points(1, 20, 2)
+    before = points.copy()
+    for builder in BUILDERS:
+        builder(points)
+    np.testing.assert_array_equal(points, before)
+
+
+@pytest.mark.parametrize("builder", [delaunay_graph, gabriel_graph, emst_graph])
+@pytest.mark.parametrize(
+    ("points", "match"),
+    [
+        ([[0, 0], [1, 1]], "at least 3 points"),
+        ([[0, 0], [1, 1], [np.nan, 2]], "finite"),
+        ([[0, 0], [1, 1], [1, 1], [0, 1]], "duplicate"),
+        ([[0, 0], [1, 1], [2, 2], [3, 3]], "collinear"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], "coplanar"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], "at least 4 points in 3D"),
+        (np.zeros((5, 4)), r"shape \(n_points, 2 or 3\)"),
+        (np.zeros(5), "shape"),
+    ],
+)
+def test_bad_point_sets(builder, points, match):
+    with pytest.raises(ValueError, match=match):
+        builder(points)
+
+
+def test_bad_points_type():
+    with pytest.raises(TypeError, match="`points`"):
+        delaunay_graph([["a", "b"], ["c", "d"], ["e", "f"]])
+
+
+@pytest.mark.parametrize(("k", "error"), [(0, ValueError), (10, ValueError), (2.5, TypeError), (True, TypeError)])
+def test_knn_bad_k(k, error):
+    with pytest.raises(error, match="`k`"):
+        knn_graph(_random_points(0, 10, 2), k=k)
+
+
+def test_to_networkx_bad_points():
+    with pytest.raises(ValueError, match="`points` must have one row per node"):
+        to_networkx(complete_graph(_random_points(0, 4, 2)), _random_points(0, 5, 2))

@@ -1,0 +1,300 @@
+"""Tests of centrality_vision.plotting, on graphs built with scipy directly."""
+
+import subprocess
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.collections import LineCollection, PathCollection  # noqa: E402
+from scipy import sparse  # noqa: E402
+from scipy.spatial import Delaunay  # noqa: E402
+
+from centrality_vision.plotting import plot_centrality_image, plot_graph, save_figure  # noqa: E402
+
+
+@pytest.fixture(autouse=True)
+def _close_figures():
+    yield
+    plt.close("all")
+
+
+def delaunay_graph(points):
+    """Symmetric CSR adjacency of the Delaunay edges, data = Euclidean lengths."""
+    tri = Delaunay(points)
+    pairs = set()
+    for simplex in tri.simplices:
+        for a in range(len(simplex)):
+            for b in range(a + 1, len(simplex)):
+                i, j = sorted((int(simplex[a]), int(simplex[b])))
+                pairs.add((i, j))
+    rows, cols = np.array(sorted(pairs)).T
+    lengths = np.linalg.norm(points[rows] - points[cols], axis=1)
+    n = len(points)
+    upper = sparse.coo_array((lengths, (rows, cols)), shape=(n, n))
+    return (upper + upper.T).tocsr(), pairs
+
+
+@pytest.fixture
+def planar():
+    rng = np.random.default_rng(0)
+    points = rng.random((12, 2))
+    graph, pairs = delaunay_graph(points)
+    return points, graph, pairs
+
+
+@pytest.fixture
+def path3():
+    """P3 as a hand-made csr_array: 0 - 1 - 2 with lengths 1 and 2."""
+    points = np.array([[0.0, 0.0], [1.0, 0.0], [3.0, 0.0]])
+    graph = sparse.csr_array(np.array([[0, 1, 0], [1, 0, 2], [0, 2, 0]], dtype=float))
+    return points, graph
+
+
+# --------------------------------------------------------------------------- plot_graph
+
+
+def test_plot_graph_draws_each_undirected_edge_once(planar):
+    points, graph, pairs = planar
+    ax = plot_graph(points, graph, np.arange(len(points), dtype=float))
+    lines = [c for c in ax.collections if isinstance(c, LineCollection)]
+    assert len(lines) == 1
+    segments = lines[0].get_segments()
+    assert len(segments) == len(pairs) == graph.nnz // 2
+    drawn = set()
+    for seg in segments:
+        i, j = (int(np.flatnonzero(np.all(points == p, axis=1))[0]) for p in seg)
+        drawn.add(tuple(sorted((i, j))))
+    assert drawn == pairs
+
+
+def test_plot_graph_hand_made_path(path3):
+    points, graph = path3
+    ax = plot_graph(points, graph)
+    segments = sorted(tuple(map(tuple, seg)) for seg in ax.collections[0].get_segments())
+    assert segments == [((0.0, 0.0), (1.0, 0.0)), ((1.0, 0.0), (3.0, 0.0))]
+    assert ax.get_aspect() == 1.0  # "equal"
+    assert len(ax.figure.axes) == 1  # no colorbar without values
+
+
+def test_plot_graph_scatter_colours_map_values(planar):
+    points, graph, _ = planar
+    values = np.linspace(0.0, 1.0, len(points)) ** 2
+    ax = plot_graph(points, graph, values, cmap="plasma", label="betweenness", title="Delaunay")
+    ax.figure.canvas.draw()
+    scatter = next(c for c in ax.collections if isinstance(c, PathCollection))
+    np.testing.assert_array_equal(scatter.get_array(), values)
+    np.testing.assert_array_equal(scatter.get_offsets(), points)
+    assert scatter.cmap.name == "plasma"
+    assert (scatter.norm.vmin, scatter.norm.vmax) == (values.min(), values.max())
+    expected = plt.get_cmap("plasma")((values - values.min()) / (values.max() - values.min()))
+    np.testing.assert_allclose(scatter.get_facecolors(), expected)
+    # colorbar added, with its label; title set
+    assert len(ax.figure.axes) == 2
+    assert ax.figure.axes[1].get_ylabel() == "betweenness"
+    assert ax.get_title() == "Delaunay"
+
+
+def test_plot_graph_nodes_above_edges_and_styles(path3):
+    points, graph = path3
+    ax = plot_graph(points, graph, [1, 2, 1], node_size=12, edge_color="red", edge_width=2.5, colorbar=False)
+    lines, nodes = ax.collections
+    assert lines.get_zorder() < nodes.get_zorder()
+    np.testing.assert_allclose(lines.get_linewidths(), [2.5])
+    np.testing.assert_allclose(lines.get_colors(), [[1, 0, 0, 1]])
+    np.testing.assert_allclose(nodes.get_sizes(), [12])
+    assert len(ax.figure.axes) == 1
+
+
+def test_plot_graph_on_given_axes(path3):
+    points, graph = path3
+    fig, ax = plt.subplots()
+    assert plot_graph(points, graph, ax=ax) is ax
+
+
+def test_plot_graph_3d():
+    rng = np.random.default_rng(1)
+    points = rng.random((10, 3))
+    graph, pairs = delaunay_graph(points)
+    ax = plot_graph(points, graph, points[:, 2], label="height")
+    from mpl_toolkits.mplot3d.art3d import Line3DCollection
+
+    assert ax.name == "3d"
+    lines = [c for c in ax.collections if isinstance(c, Line3DCollection)]
+    assert len(lines) == 1
+    assert len(lines[0]._segments3d) == len(pairs) == graph.nnz // 2
+    ax.figure.canvas.draw()  # renders without error
+
+
+def test_plot_graph_does_not_modify_inputs(planar):
+    points, graph, _ = planar
+    values = np.arange(len(points), dtype=float)
+    before = points.copy(), graph.copy(), values.copy()
+    plot_graph(points, graph, values)
+    np.testing.assert_array_equal(points, before[0])
+    assert (graph != before[1]).nnz == 0
+    np.testing.assert_array_equal(values, before[2])
+
+
+def test_plot_graph_graph_with_no_edges():
+    ax = plot_graph([[0, 0], [1, 1]], sparse.csr_array((2, 2)))
+    assert len(ax.collections[0].get_segments()) == 0
+
+
+@pytest.mark.parametrize(
+    ("points", "graph", "values", "match"),
+    [
+        (np.zeros((3, 4)), sparse.csr_array((3, 3)), None, r"`points` must have shape \(n_points, 2 or 3\); got shape \(3, 4\)"),
+        ([[0, 0], [np.nan, 1], [2, 2]], sparse.csr_array((3, 3)), None, r"`points` must be finite"),
+        (np.zeros((3, 2)), sparse.csr_array((4, 4)), None, r"`graph` must have shape .* = \(3, 3\) .*got shape \(4, 4\)"),
+        (np.zeros((3, 2)), sparse.csr_array((3, 4)), None, r"`graph` must be a square adjacency .*got shape \(3, 4\)"),
+        (np.zeros((3, 2)), sparse.csr_array((3, 3)), [1.0, 2.0], r"`values` must have shape \(3,\).*got shape \(2,\)"),
+        (np.zeros((3, 2)), sparse.csr_array((3, 3)), [[1.0, 2.0, 3.0]], r"`values` must have shape \(3,\).*got shape \(1, 3\)"),
+        (np.zeros((3, 2)), sparse.csr_array((3, 3)), [1.0, np.inf, 3.0], r"`values` must be finite; got 1"),
+    ],
+)
+def test_plot_graph_bad_inputs(points, graph, values, match):
+    with pytest.raises(ValueError, match=match):
+        plot_graph(points, graph, values)
+
+
+def test_plot_graph_bad_options(path3):
+    points, graph = path3
+    with pytest.raises(ValueError, match=r"`node_size` must be .*got -1\.0"):
+        plot_graph(points, graph, node_size=-1)
+    with pytest.raises(ValueError, match=r"`edge_width` must be .*got nan"):
+        plot_graph(points, graph, edge_width=float("nan"))
+    fig = plt.figure()
+    ax3d = fig.add_subplot(projection="3d")
+    with pytest.raises(ValueError, match=r"`ax` must be a 2D Axes for points of shape \(n_points, 2\); got a 3D Axes"):
+        plot_graph(points, graph, ax=ax3d)
+    _, ax2d = plt.subplots()
+    with pytest.raises(ValueError, match=r"`ax` must be a 3D Axes"):
+        plot_graph(np.c_[points, np.zeros(3)], graph, ax=ax2d)
+    with pytest.raises(TypeError, match=r"`ax` must be a matplotlib Axes"):
+        plot_graph(points, graph, ax="axes")
+
+
+# --------------------------------------------------------------------------- plot_centrality_image
+
+
+def test_centrality_image_masks_background_and_places_values():
+    mask = np.array(
+        [
+            [0, 1, 1, 0],
+            [0, 1, 0, 0],
+            [1, 1, 1, 0],
+        ],
+        dtype=bool,
+    )
+    nodes = np.flatnonzero(mask)  # row-major, as pixel_graph returns
+    values = np.arange(1.0, nodes.size + 1)
+    ax = plot_centrality_image(values, nodes, mask.shape, label="closeness", title="shape")
+    shown = ax.images[0].get_array()
+    assert isinstance(shown, np.ma.MaskedArray)
+    assert shown.shape == mask.shape
+    np.testing.assert_array_equal(np.ma.getmaskarray(shown), ~mask)
+    np.testing.assert_array_equal(shown[mask], values)
+    assert shown[0, 2] == values[1] and shown[2, 0] == values[3]
+    assert ax.figure.axes[1].get_ylabel() == "closeness"
+    assert ax.get_title() == "shape"
+    norm = ax.images[0].norm
+    assert (norm.vmin, norm.vmax) == (1.0, float(nodes.size))
+
+
+def test_centrality_image_finite_background_is_shown():
+    ax = plot_centrality_image([3.0, 4.0], [0, 3], (2, 2), background=0.0, colorbar=False)
+    shown = ax.images[0].get_array()
+    assert not np.ma.getmaskarray(shown).any()
+    np.testing.assert_array_equal(shown, [[3.0, 0.0], [0.0, 4.0]])
+    assert len(ax.figure.axes) == 1
+
+
+def test_centrality_image_on_given_axes_and_inputs_unchanged():
+    values = np.array([1.0, 2.0])
+    nodes = np.array([2, 1])
+    fig, ax = plt.subplots()
+    assert plot_centrality_image(values, nodes, (1, 3), ax=ax) is ax
+    np.testing.assert_array_equal(values, [1.0, 2.0])
+    np.testing.assert_array_equal(nodes, [2, 1])
+    shown = ax.images[0].get_array()
+    np.testing.assert_array_equal(shown.filled(-1), [[-1, 2.0, 1.0]])
+
+
+@pytest.mark.parametrize(
+    ("values", "nodes", "shape", "match"),
+    [
+        ([1.0, 2.0], [0, 1, 2], (2, 2), r"`values` must have shape \(3,\), one value per row of `nodes`; got shape \(2,\)"),
+        ([1.0, 2.0], [0, 4], (2, 2), r"`nodes` must be flat pixel indices in \[0, 3\] .*got 1 out of range, e.g. 4"),
+        ([1.0, 2.0], [-1, 0], (2, 2), r"`nodes` must be flat pixel indices in \[0, 3\] .*e.g. -1"),
+        ([1.0, 2.0], [1, 1], (2, 2), r"`nodes` must not repeat a pixel; got 1"),
+        ([1.0], [[0]], (2, 2), r"`nodes` must be a 1D array .*got shape \(1, 1\)"),
+        ([], [], (2, 2), r"`nodes` must hold at least one"),
+        ([1.0], [0], (4,), r"`shape` must be a tuple of two positive ints .*got \(4,\)"),
+        ([1.0], [0], (2, 2, 2), r"`shape` must be a tuple of two positive ints .*got \(2, 2, 2\)"),
+        ([1.0], [0], (0, 2), r"`shape` must be a tuple of two positive ints"),
+        ([1.0], [0], (2.0, 2), r"`shape` must be a tuple of two positive ints"),
+        ([np.nan], [0], (2, 2), r"`values` must be finite"),
+    ],
+)
+def test_centrality_image_bad_inputs(values, nodes, shape, match):
+    with pytest.raises(ValueError, match=match):
+        plot_centrality_image(values, nodes, shape)
+
+
+def test_centrality_image_bad_types():
+    with pytest.raises(TypeError, match=r"`nodes` must hold integer"):
+        plot_centrality_image([1.0], [0.5], (2, 2))
+    with pytest.raises(TypeError, match=r"`background` must be a real number"):
+        plot_centrality_image([1.0], [0], (2, 2), background="white")
+    fig = plt.figure()
+    with pytest.raises(ValueError, match=r"`ax` must be a 2D Axes for an image; got a 3D Axes"):
+        plot_centrality_image([1.0], [0], (2, 2), ax=fig.add_subplot(projection="3d"))
+
+
+# --------------------------------------------------------------------------- save_figure
+
+
+def test_save_figure_writes_png_and_closes(tmp_path, path3):
+    points, graph = path3
+    ax = plot_graph(points, graph, [1, 2, 1])
+    fig = ax.figure
+    out = save_figure(fig, tmp_path / "new" / "nested" / "graph.png", dpi=40)
+    assert out == tmp_path / "new" / "nested" / "graph.png"
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert not plt.fignum_exists(fig.number)
+
+
+def test_save_figure_accepts_str_path(tmp_path):
+    ax = plot_centrality_image([1.0, 2.0], [0, 3], (2, 2))
+    out = save_figure(ax.figure, str(tmp_path / "image.png"))
+    assert out.is_file()
+
+
+def test_save_figure_bad_inputs(tmp_path):
+    _, ax = plt.subplots()
+    with pytest.raises(TypeError, match=r"`fig` must be a matplotlib Figure"):
+        save_figure(ax, tmp_path / "x.png")
+    with pytest.raises(ValueError, match=r"`dpi` must be a finite number in \(0, inf\]; got 0\.0"):
+        save_figure(ax.figure, tmp_path / "x.png", dpi=0)
+    with pytest.raises(TypeError, match=r"`path` must be a str or os.PathLike"):
+        save_figure(ax.figure, 3)
+    assert not (tmp_path / "x.png").exists()
+
+
+# --------------------------------------------------------------------------- lazy import
+
+
+def test_importing_plotting_does_not_import_matplotlib():
+    code = (
+        "import sys\n"
+        "import centrality_vision, centrality_vision.plotting, centrality_vision.datasets\n"
+        "bad = sorted(m for m in sys.modules if m == 'matplotlib' or m.startswith('matplotlib.'))\n"
+        "assert not bad, bad\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
+    assert result.returncode == 0, result.stderr
