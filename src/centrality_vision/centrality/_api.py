@@ -59,21 +59,22 @@ def _check_flag(value, name: str) -> bool:
     return bool(value)
 
 
-def _source_batches(n: int, progress: bool, desc: str, *, scale: int = 1):
-    """Split ``range(n)`` into consecutive batches; ``scale`` sources per item for the bar."""
-    n_batches = max(1, min(_MAX_BATCHES, n * scale // _MIN_BATCH))
+def _source_batches(n: int, progress: bool, desc: str, *, scale: int = 1, total: int | None = None):
+    """Split ``range(n)`` into consecutive batches; each item is ``scale`` sources of ``total``."""
+    total = n * scale if total is None else total
+    n_batches = max(1, min(_MAX_BATCHES, total // _MIN_BATCH))
     bounds = np.linspace(0, n, n_batches + 1).astype(np.int64)
     bar = None
     if progress:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=n * scale, desc=desc, unit="source", leave=False)
+        bar = tqdm(total=total, desc=desc, unit="source", leave=False)
     try:
         for lo, hi in zip(bounds[:-1], bounds[1:]):
             if hi > lo:
                 yield np.arange(lo, hi, dtype=np.int64)
                 if bar is not None:
-                    bar.update(int(hi - lo) * scale)
+                    bar.update(min(int(hi - lo) * scale, total - bar.n))
     finally:
         if bar is not None:
             bar.close()
@@ -97,7 +98,7 @@ def _distance_stats(graph, weights: bool, progress: bool, desc: str):
     total, inverse, reached = np.zeros(n), np.zeros(n), np.zeros(n, dtype=np.int64)
     largest = np.zeros(n)
     n_groups = group_ptr.size - 1
-    for groups in _source_batches(n_groups, progress, desc, scale=64):
+    for groups in _source_batches(n_groups, progress, desc, scale=64, total=n):
         t, h, e, r = _kernels.multi_source_stats(
             indptr, indices, members, group_ptr[groups[0] : groups[-1] + 2], _kernels.n_chunks()
         )
