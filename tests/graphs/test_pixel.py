@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from centrality_vision.graphs import pixel_graph, salt_noise
-from centrality_vision.graphs._pixel import pixel_coordinates
+from centrality_vision.graphs import pixel_coordinates
 
 
 def _degrees(graph):

@@ -5,12 +5,13 @@ stored values are Euclidean edge lengths; row ``i`` is node ``i`` (point ``i``, 
 ``i``-th foreground pixel for pixel graphs).
 """
 
-from ._pixel import pixel_graph, salt_noise
+from ._pixel import pixel_coordinates, pixel_graph, salt_noise
 from ._pointsets import complete_graph, delaunay_graph, emst_graph, gabriel_graph, knn_graph
 from ._convert import to_networkx
 
 __all__ = [
     "pixel_graph",
+    "pixel_coordinates",
     "salt_noise",
     "delaunay_graph",
     "gabriel_graph",
