@@ -582,6 +582,7 @@ def main(args):
             print("%s: not available (%s)" % (lib, err))
     print("repeat: %d (median; a single run, marked *, when the first run takes > %g s)"
           % (args.repeat, SINGLE_RUN_S))
+    print(_load_line())
     print("=" * 78)
 
     # graphs
@@ -708,6 +709,7 @@ def main(args):
             print("  note: " + note)
         print()
 
+    print(_load_line())
     if args.json:
         out = {
             "machine": info,
@@ -739,6 +741,17 @@ def main(args):
         Path(args.json).write_text(json.dumps(out, indent=2))
         print("results written to %s" % args.json)
     return 0
+
+
+def _load_line():
+    try:
+        load = os.getloadavg()
+    except OSError:
+        return "load average: unknown"
+    line = "load average (1, 5, 15 min): %.2f %.2f %.2f" % load
+    if load[0] > 0.5 * (os.cpu_count() or 1):
+        line += "  ! the machine is busy: multi-threaded timings (networkit, rustworkx, ours) suffer most"
+    return line
 
 
 def _numba_threads():

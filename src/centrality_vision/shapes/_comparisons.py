@@ -1,0 +1,246 @@
+"""Random binary comparisons of centrality values (thesis 4.3.3) and their forest."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import ndimage
+from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
+
+from .._random import as_generator
+from .._validation import check_choice, check_float, check_int
+from ._cache import as_shape_images, shape_centralities
+from ._histogram import resolve_centralities
+
+__all__ = ["CentralityComparisons", "CentralityComparisonForest", "centrality_map"]
+
+
+def centrality_map(mask: np.ndarray, values: np.ndarray, nodes: np.ndarray, *, reference: str = "centroid"):
+    """Dense centrality image of a shape, its reference point and its size.
+
+    Every pixel takes the value of its nearest foreground pixel, so that a location that
+    falls into a hole made by noise, or just off the outline, still reads the shape.
+
+    Returns
+    -------
+    dense : ndarray, same shape as ``mask``
+    centre : ndarray of shape (2,)
+        (row, col) of the reference point: the centre of mass of the foreground, or the
+        mean position of the graph centre (the nodes of minimum eccentricity) when
+        ``reference="graph-centre"`` (pass eccentricities as ``values`` then).
+    size : float
+        Root-mean-square distance of the foreground pixels from the centre of mass; it
+        is unchanged in expectation when pixels are removed at random.
+    """
+    image = np.zeros(mask.shape)
+    image.flat[nodes] = values
+    _, (rows, cols) = ndimage.distance_transform_edt(~mask, return_indices=True)
+    dense = image[rows, cols]
+    coords = np.argwhere(mask).astype(float)
+    centroid = coords.mean(axis=0)
+    size = float(np.sqrt(np.mean(np.sum((coords - centroid) ** 2, axis=1))))
+    return dense, centroid, max(size, 1.0)
+
+
+class CentralityComparisons(TransformerMixin, BaseEstimator):
+    """Random binary comparisons of centrality values at positions relative to the shape.
+
+    Comparison ``k`` is a pair of offsets ``(a_k, b_k)`` drawn uniformly from
+    ``[-extent, extent]^2`` and an optional centrality; for a shape with reference point
+    ``c`` (centre of mass, or the graph centre) and size ``s`` (RMS radius), it reads the
+    centrality ``v`` at ``x = c + s a_k`` and ``y = c + s b_k`` and outputs
+    ``1.0 if v(x) >= v(y) else 0.0`` (thesis fig. 4.7). Offsets scale with the shape, so
+    the features do not depend on its size or position.
+
+    Parameters
+    ----------
+    centrality : str or list of str, default="closeness"
+        Centralities to compare (``"all"``: the four of the thesis); each comparison
+        uses one of them, drawn at random.
+    n_comparisons : int, default=2000
+    extent : float, default=2.0
+        Largest offset, in units of the shape's RMS radius.
+    reference : {"centroid", "graph-centre"}, default="centroid"
+    connectivity : {8, 4}, default=8
+    seed : int, Generator or None, default=0
+        Seed of the random comparisons.
+    progress : bool, default=False
+
+    Attributes
+    ----------
+    offsets_ : ndarray of shape (n_comparisons, 2, 2)
+        ``offsets_[k, 0]`` and ``offsets_[k, 1]`` are the (row, col) offsets of x and y.
+    which_ : ndarray of shape (n_comparisons,)
+        Index into ``centralities_`` of each comparison.
+    centralities_ : tuple of str
+    """
+
+    def __init__(self, centrality="closeness", n_comparisons: int = 2000, extent: float = 2.0, reference: str = "centroid", connectivity: int = 8, seed=0, progress: bool = False):
+        self.centrality = centrality
+        self.n_comparisons = n_comparisons
+        self.extent = extent
+        self.reference = reference
+        self.connectivity = connectivity
+        self.seed = seed
+        self.progress = progress
+
+    def fit(self, X, y=None):
+        """Draw the comparisons (the images are only checked)."""
+        names = resolve_centralities(self.centrality)
+        n = check_int(self.n_comparisons, name="n_comparisons", low=1)
+        extent = check_float(self.extent, name="extent", low=0.0, low_open=True)
+        check_choice(self.reference, ("centroid", "graph-centre"), name="reference")
+        as_shape_images(X)
+        rng = as_generator(self.seed)
+        self.centralities_ = names
+        self.offsets_ = rng.uniform(-extent, extent, size=(n, 2, 2))
+        self.which_ = rng.integers(0, len(names), size=n)
+        return self
+
+    def transform(self, X) -> np.ndarray:
+        """Binary comparison features, shape (n_images, n_comparisons), values 0.0 or 1.0."""
+        from sklearn.utils.validation import check_is_fitted
+
+        check_is_fitted(self, "offsets_")
+        masks = as_shape_images(X)
+        names = list(self.centralities_)
+        if self.reference == "graph-centre" and "eccentricity" not in names:
+            names.append("eccentricity")
+        records = shape_centralities(masks, names, connectivity=self.connectivity, progress=self.progress)
+        out = np.empty((len(masks), self.offsets_.shape[0]))
+        for i, (mask, record) in enumerate(zip(masks, records)):
+            nodes = record["nodes"]
+            dense = []
+            for name in self.centralities_:
+                image, centre, size = centrality_map(mask, record[name], nodes)
+                dense.append(image)
+            if self.reference == "graph-centre":
+                ecc = record["eccentricity"]
+                centre = np.argwhere(mask)[ecc == ecc.min()].mean(axis=0)
+            stack = np.stack(dense)
+            points = centre + size * self.offsets_  # (n, 2, 2)
+            rows = np.clip(np.rint(points[..., 0]), 0, mask.shape[0] - 1).astype(np.int64)
+            cols = np.clip(np.rint(points[..., 1]), 0, mask.shape[1] - 1).astype(np.int64)
+            vx = stack[self.which_, rows[:, 0], cols[:, 0]]
+            vy = stack[self.which_, rows[:, 1], cols[:, 1]]
+            out[i] = vx >= vy
+        return out
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.input_tags.two_d_array = False
+        tags.requires_fit = True
+        return tags
+
+
+class CentralityComparisonForest(ClassifierMixin, BaseEstimator):
+    """Shape classifier: a random forest over random binary comparisons of centralities.
+
+    The proposal of thesis 4.3.3: features are random comparisons
+    :math:`[v(x) \\ge v(y)]` at positions relative to the shape
+    (:class:`CentralityComparisons`); each tree node chooses, among a random subset of
+    them, the one with the largest information gain (entropy criterion), as in Lepetit
+    and Fua's randomised trees. The trees are scikit-learn's.
+
+    Parameters
+    ----------
+    centrality : str or list of str, default="closeness"
+    n_estimators : int, default=300
+    n_comparisons : int, default=2000
+    max_features : int, float or "sqrt", default="sqrt"
+        Comparisons examined per tree node.
+    max_depth : int or None, default=None
+    extent, reference, connectivity :
+        As in :class:`CentralityComparisons`.
+    seed : int or None, default=0
+        Seeds the comparisons and the trees.
+    progress : bool, default=False
+
+    Attributes
+    ----------
+    classes_ : ndarray
+    comparisons_ : CentralityComparisons
+    forest_ : sklearn.ensemble.RandomForestClassifier
+
+    References
+    ----------
+    .. [1] V. Lepetit and P. Fua, "Keypoint recognition using randomized trees", IEEE
+       PAMI 28(9), 1465-1479, 2006.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> yy, xx = np.mgrid[:30, :30]
+    >>> disk = (yy - 15) ** 2 + (xx - 15) ** 2 < 100
+    >>> bar = (abs(yy - 15) < 3) & (abs(xx - 15) < 12)
+    >>> clf = CentralityComparisonForest(n_estimators=20, n_comparisons=50).fit([disk, bar] * 3, [0, 1] * 3)
+    >>> clf.predict([disk, bar]).tolist()
+    [0, 1]
+    """
+
+    def __init__(self, centrality="closeness", n_estimators: int = 300, n_comparisons: int = 2000, max_features="sqrt", max_depth=None, extent: float = 2.0, reference: str = "centroid", connectivity: int = 8, seed=0, progress: bool = False):
+        self.centrality = centrality
+        self.n_estimators = n_estimators
+        self.n_comparisons = n_comparisons
+        self.max_features = max_features
+        self.max_depth = max_depth
+        self.extent = extent
+        self.reference = reference
+        self.connectivity = connectivity
+        self.seed = seed
+        self.progress = progress
+
+    def _seeds(self) -> tuple[int, int]:
+        rng = as_generator(self.seed)
+        a, b = rng.integers(0, 2**31 - 1, size=2)
+        return int(a), int(b)
+
+    def fit(self, X, y):
+        """Draw the comparisons and grow the forest on the shapes ``X`` with labels ``y``."""
+        from sklearn.ensemble import RandomForestClassifier
+        from sklearn.utils import check_array
+        from sklearn.utils.multiclass import check_classification_targets
+
+        if y is None:
+            raise ValueError("CentralityComparisonForest requires y to be passed, but the target y is None.")
+        y = check_array(y, ensure_2d=False, dtype=None, input_name="y")  # NaN/inf: sklearn's message
+        check_classification_targets(y)
+        masks = as_shape_images(X)
+        if y.ndim != 1 or y.shape[0] != len(masks):
+            raise ValueError(f"`y` must have one label per image ({len(masks)}); got shape {y.shape}.")
+        check_int(self.n_estimators, name="n_estimators", low=1)
+        comparison_seed, forest_seed = self._seeds()
+        self.comparisons_ = CentralityComparisons(
+            centrality=self.centrality,
+            n_comparisons=self.n_comparisons,
+            extent=self.extent,
+            reference=self.reference,
+            connectivity=self.connectivity,
+            seed=comparison_seed,
+            progress=self.progress,
+        ).fit(masks)
+        self.forest_ = RandomForestClassifier(
+            n_estimators=self.n_estimators,
+            criterion="entropy",
+            max_features=self.max_features,
+            max_depth=self.max_depth,
+            random_state=forest_seed,
+        ).fit(self.comparisons_.transform(masks), y)
+        self.classes_ = self.forest_.classes_
+        return self
+
+    def predict_proba(self, X) -> np.ndarray:
+        """Class probabilities (mean of the trees' leaf distributions), shape (n_images, n_classes)."""
+        from sklearn.utils.validation import check_is_fitted
+
+        check_is_fitted(self, "forest_")
+        return self.forest_.predict_proba(self.comparisons_.transform(X))
+
+    def predict(self, X) -> np.ndarray:
+        """Most probable class of each shape."""
+        proba = self.predict_proba(X)
+        return self.classes_[np.argmax(proba, axis=1)]
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.input_tags.two_d_array = False
+        return tags
