@@ -25,3 +25,12 @@ def test_demo_unknown_shape_is_a_one_line_error(tmp_path, capsys):
 def test_no_command_prints_help(capsys):
     assert main([]) == 0
     assert "demo" in capsys.readouterr().out
+
+
+def test_reproduce_rejects_unknown_experiment(capsys):
+    import pytest
+
+    with pytest.raises(SystemExit) as info:
+        main(["reproduce", "table-9.9"])
+    assert info.value.code == 2
+    assert "invalid choice" in capsys.readouterr().err

@@ -78,6 +78,19 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
+_EXPERIMENTS = {"table-4.1": "table_4_1"}
+
+
+def _reproduce(args: argparse.Namespace) -> int:
+    from importlib import import_module
+
+    module = import_module(f"centrality_vision.experiments.{_EXPERIMENTS[args.experiment]}")
+    argv = ["--out", str(Path(args.out) / args.experiment), "--seed", str(args.seed)]
+    if args.quick:
+        argv.append("--quick")
+    return module.main(argv)
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="centrality-vision",
@@ -97,6 +110,16 @@ def _parser() -> argparse.ArgumentParser:
     demo.add_argument("--out", default="demo-output", help="output folder (default: %(default)s)")
     demo.add_argument("--shape", default="cow1", help="Kimia-99 image for the pixel-graph figure (default: %(default)s)")
     demo.set_defaults(run=_demo)
+    reproduce = sub.add_parser(
+        "reproduce",
+        help="Re-run one of the thesis' experiments and print our numbers beside the thesis'.",
+        description="Re-run a thesis experiment; tables and figures are written under --out/<experiment>/.",
+    )
+    reproduce.add_argument("experiment", choices=sorted(_EXPERIMENTS), help="which table or figure")
+    reproduce.add_argument("--quick", action="store_true", help="a small version, for a first look or a test")
+    reproduce.add_argument("--seed", type=int, default=0, help="seed of every random choice (default: %(default)s)")
+    reproduce.add_argument("--out", default="results", help="output folder (default: %(default)s)")
+    reproduce.set_defaults(run=_reproduce)
     return parser
 
 

@@ -74,10 +74,14 @@ def noisy_copies(images, levels, seed: int) -> dict[float, list[np.ndarray]]:
     return out
 
 
-def _forest(centrality, seed):
+FOREST_PARAMETERS = {"n_estimators": 300, "n_comparisons": 2000, "extent": 2.0, "reference": "centroid"}
+QUICK_FOREST_PARAMETERS = {"n_estimators": 60, "n_comparisons": 400, "extent": 2.0, "reference": "centroid"}
+
+
+def _forest(centrality, seed, parameters):
     from ..shapes import CentralityComparisonForest
 
-    return CentralityComparisonForest(centrality=centrality, seed=seed)
+    return CentralityComparisonForest(centrality=centrality, seed=seed, **parameters)
 
 
 def _histogram_nb(centrality):
@@ -95,7 +99,7 @@ def run(*, quick: bool = False, seed: int = 0, n_folds: int = 5, progress: bool 
     Parameters
     ----------
     quick : bool
-        Use 3 images per class (27) instead of 99, for tests.
+        Use 3 images per class (27) instead of 99 and smaller forests, for tests.
     seed : int
         Seeds the noise, the folds, the comparisons and the trees.
     n_folds : int
@@ -128,7 +132,8 @@ def run(*, quick: bool = False, seed: int = 0, n_folds: int = 5, progress: bool 
 
     models = {f"NB {name}": _histogram_nb(name) for name in HISTOGRAM_FEATURES}
     if forest:
-        models.update({f"forest {name}": _forest(name, seed) for name in FOREST_FEATURES})
+        forest_parameters = QUICK_FOREST_PARAMETERS if quick else FOREST_PARAMETERS
+        models.update({f"forest {name}": _forest(name, seed, forest_parameters) for name in FOREST_FEATURES})
 
     n_folds = min(n_folds, int(np.unique(labels, return_counts=True)[1].min()))
     result = Table41(seed=seed, n_images=len(images), noise_levels=NOISE_LEVELS, n_folds=n_folds)
@@ -157,7 +162,7 @@ def run(*, quick: bool = False, seed: int = 0, n_folds: int = 5, progress: bool 
         "connectivity": 8,
         "histogram_scaling": "minmax",
         "classifier": "GaussianNB (scikit-learn defaults)",
-        "forest": {"n_estimators": 300, "n_comparisons": 2000, "extent": 2.0, "reference": "centroid", "criterion": "entropy"},
+        "forest": {**(QUICK_FOREST_PARAMETERS if quick else FOREST_PARAMETERS), "criterion": "entropy", "max_features": "sqrt"},
         "noise_seed": f"numpy default_rng([seed, level_index, image_index]) with seed={seed}",
         "folds": f"StratifiedKFold(n_splits={n_folds}, shuffle=True, random_state={seed})",
         "quick": quick,

@@ -1,0 +1,60 @@
+import json
+
+import numpy as np
+import pytest
+
+from centrality_vision.experiments import table_4_1
+
+
+@pytest.fixture(scope="module")
+def quick_result():
+    return table_4_1.run(quick=True, seed=0, progress=False)
+
+
+def test_quick_run_shapes_and_ranges(quick_result):
+    r = quick_result
+    assert r.n_images == 27 and r.n_folds == 3
+    assert set(r.accuracy) == {f"NB {n}" for n in table_4_1.HISTOGRAM_FEATURES} | {
+        f"forest {n}" for n in table_4_1.FOREST_FEATURES
+    }
+    for row, values in r.accuracy.items():
+        assert len(values) == 4 and all(0 <= v <= 1 for v in values)
+        assert len(r.cv_accuracy[row]) == 4
+        # confusion matrices agree with the accuracies
+        for j, matrix in enumerate(r.confusion[row]):
+            m = np.asarray(matrix)
+            assert m.sum() == 27 and np.trace(m) / 27 == pytest.approx(values[j])
+    # training accuracy of the noiseless histograms is far above chance (1/9)
+    assert r.accuracy["NB closeness"][0] > 0.6
+
+
+def test_quick_run_is_reproducible(quick_result):
+    again = table_4_1.run(quick=True, seed=0, progress=False)
+    assert again.accuracy == quick_result.accuracy and again.cv_accuracy == quick_result.cv_accuracy
+
+
+def test_noise_is_seeded_and_exact():
+    images = [np.ones((10, 10), bool), np.ones((8, 12), bool)]
+    a = table_4_1.noisy_copies(images, (0.0, 0.1), seed=3)
+    b = table_4_1.noisy_copies(images, (0.0, 0.1), seed=3)
+    assert all(np.array_equal(x, y) for x, y in zip(a[0.1], b[0.1]))
+    assert [int(im.sum()) for im in a[0.1]] == [90, 86]
+    assert a[0.0][0] is images[0]
+
+
+def test_table_and_figure_output(quick_result, tmp_path):
+    text = table_4_1.format_table(quick_result)
+    assert "thesis 10%" in text and "0.83" in text  # the thesis' closeness at 10% is printed
+    assert "seed=0" in text
+    for claim in quick_result.claims:
+        assert claim in text
+    path = table_4_1.plot_confusion(quick_result, tmp_path / "fig.png")
+    assert path.stat().st_size > 10_000
+    record = json.loads(quick_result.to_json())
+    assert record["parameters"]["quick"] is True and record["seed"] == 0
+
+
+def test_main_writes_files(tmp_path, capsys):
+    assert table_4_1.main(["--quick", "--no-forest", "--out", str(tmp_path)]) == 0
+    assert {p.name for p in tmp_path.iterdir()} == {"table-4.1.txt", "table-4.1.json", "fig-4.8.png"}
+    assert "NB closeness" in capsys.readouterr().out
