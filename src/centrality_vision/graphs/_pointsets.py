@@ -40,6 +40,16 @@ def edges_to_graph(n_nodes: int, rows, cols, points=None, *, lengths=None) -> sp
     return graph
 
 
+def _triangulable_points(points) -> np.ndarray:
+    """Validated float64 points for a Delaunay-based graph: 2D or 3D, D+1 or more, distinct."""
+    points = as_points(points, name="points", n_dims=(2, 3), min_points=3, allow_duplicates=False)
+    if points.shape[0] < points.shape[1] + 1:
+        raise InputError(
+            f"`points` must have at least {points.shape[1] + 1} points in {points.shape[1]}D; got {points.shape[0]}."
+        )
+    return points
+
+
 def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
     n, dim = points.shape
     centred = points - points.mean(axis=0)
@@ -95,11 +105,7 @@ def delaunay_graph(points, /) -> sparse.csr_array:
     >>> graph.nnz // 2  # four sides and one diagonal
     5
     """
-    points = as_points(points, name="points", n_dims=(2, 3), min_points=3, allow_duplicates=False)
-    if points.shape[0] < points.shape[1] + 1:
-        raise InputError(
-            f"`points` must have at least {points.shape[1] + 1} points in {points.shape[1]}D; got {points.shape[0]}."
-        )
+    points = _triangulable_points(points)
     rows, cols = _delaunay_edges(points)
     return edges_to_graph(points.shape[0], rows, cols, points)
 
@@ -145,11 +151,7 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     >>> gabriel_graph([[0, 0], [2, 0], [1, 0.2]]).nnz // 2  # Delaunay has 3 edges
     2
     """
-    points = as_points(points, name="points", n_dims=(2, 3), min_points=3, allow_duplicates=False)
-    if points.shape[0] < points.shape[1] + 1:
-        raise InputError(
-            f"`points` must have at least {points.shape[1] + 1} points in {points.shape[1]}D; got {points.shape[0]}."
-        )
+    points = _triangulable_points(points)
     rows, cols = _delaunay_edges(points)
     keep = _gabriel_mask(points, rows, cols)
     return edges_to_graph(points.shape[0], rows[keep], cols[keep], points)
