@@ -11,6 +11,7 @@ Subpackages, in the one direction data flows:
 
 from importlib.metadata import PackageNotFoundError, version
 
+from ._parallel import get_num_threads, set_num_threads
 from .exceptions import CentralityVisionError, ConvergenceWarning, InputError
 
 try:
@@ -18,4 +19,4 @@ try:
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0.0.0"
 
-__all__ = ["CentralityVisionError", "ConvergenceWarning", "InputError", "__version__"]
+__all__ = ["CentralityVisionError", "ConvergenceWarning", "InputError", "get_num_threads", "set_num_threads", "__version__"]

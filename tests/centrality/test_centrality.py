@@ -169,7 +169,7 @@ def test_thin_strip_5x1200_is_finite_symmetric_and_exact_in_total():
     n = graph.shape[0]
     _, indptr, indices, data, _ = cen._api._csr(graph)
     sources = np.arange(0, n, 600, dtype=np.int64)
-    _, n_log = _kernels.brandes(indptr, indices, data, sources, False, 1e-10, False, 2)
+    _, n_log = _kernels.brandes(indptr, indices, data, sources, False, 1e-10, False)
     assert n_log > 0, "the case must overflow float64 path counts"
     values = cen.betweenness(graph)
     assert np.all(np.isfinite(values))
@@ -191,8 +191,8 @@ def test_log_space_path_counts_agree_with_float_counts(seed, weights):
     _, graph = _random_case(seed)
     n, indptr, indices, data, _ = cen._api._csr(graph)
     sources = np.arange(n, dtype=np.int64)
-    plain, n_plain = _kernels.brandes(indptr, indices, data, sources, weights, 1e-10, False, 3)
-    logs, n_logs = _kernels.brandes(indptr, indices, data, sources, weights, 1e-10, True, 3)
+    plain, n_plain = _kernels.brandes(indptr, indices, data, sources, weights, 1e-10, False)
+    logs, n_logs = _kernels.brandes(indptr, indices, data, sources, weights, 1e-10, True)
     assert n_plain == 0 and n_logs == n
     np.testing.assert_allclose(logs, plain, rtol=1e-10, atol=1e-10)
 
@@ -337,3 +337,27 @@ def test_accepts_dense_and_other_sparse_formats(table_2_1_graph):
 def test_progress_bar_writes_to_stderr(capsys, table_2_1_graph):
     cen.betweenness(table_2_1_graph, progress=True)
     assert "betweenness" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["betweenness", "closeness", "harmonic", "eccentricity"])
+def test_results_do_not_depend_on_thread_count(name):
+    import centrality_vision as cv
+
+    _, graph = _random_case(3)  # 300 nodes, disconnected: many chunks and groups
+    try:
+        cv.set_num_threads(1)
+        single = cen.compute(graph, name)
+        cv.set_num_threads(3)
+        multi = cen.compute(graph, name, weights=True), cen.compute(graph, name)
+        cv.set_num_threads(1)
+        np.testing.assert_allclose(multi[0], cen.compute(graph, name, weights=True), rtol=1e-12)
+    finally:
+        cv.set_num_threads(None)
+    np.testing.assert_allclose(multi[1], single, rtol=1e-12)
+
+
+def test_set_num_threads_validates():
+    import centrality_vision as cv
+
+    with pytest.raises(ValueError, match=r"`n` must be an int in \[1, inf\]"):
+        cv.set_num_threads(0)

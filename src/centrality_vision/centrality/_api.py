@@ -21,6 +21,7 @@ import numpy as np
 from scipy import sparse
 
 from .._validation import as_graph, check_choice
+from .._parallel import run_chunks
 from . import _kernels
 
 __all__ = [
@@ -36,12 +37,6 @@ __all__ = [
 ]
 
 CENTRALITIES = ("degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity")
-
-# Work is split into batches of sources between calls into compiled code, so that a long
-# computation shows progress and answers Ctrl-C between batches.
-_MAX_BATCHES = 64
-_MIN_BATCH = 512
-
 
 def _csr(graph, *, reorder: bool = False):
     """Validated CSR parts ``(n, indptr, indices, data, perm)`` for the compiled kernels.
@@ -81,49 +76,29 @@ def _check_flag(value, name: str) -> bool:
     return bool(value)
 
 
-def _source_batches(n: int, progress: bool, desc: str, *, scale: int = 1, total: int | None = None):
-    """Split ``range(n)`` into consecutive batches; each item is ``scale`` sources of ``total``."""
-    total = n * scale if total is None else total
-    n_batches = max(1, min(_MAX_BATCHES, total // _MIN_BATCH))
-    bounds = np.linspace(0, n, n_batches + 1).astype(np.int64)
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=total, desc=desc, unit="source", leave=False)
-    try:
-        for lo, hi in zip(bounds[:-1], bounds[1:]):
-            if hi > lo:
-                yield np.arange(lo, hi, dtype=np.int64)
-                if bar is not None:
-                    bar.update(min(int(hi - lo) * scale, total - bar.n))
-    finally:
-        if bar is not None:
-            bar.close()
-
-
 def _distance_stats(graph, weights: bool, progress: bool, desc: str):
     """Per node: sum of distances, sum of inverse distances, eccentricity, nodes reached."""
     n, indptr, indices, data, perm = _csr(graph, reorder=True)
     weights = _check_flag(weights, "weights")
     progress = _check_flag(progress, "progress")
     if weights:
-        parts = [
-            _kernels.distance_stats(indptr, indices, data, sources, True, _kernels.n_chunks())
-            for sources in _source_batches(n, progress, desc)
-        ]
+        # One Dijkstra per source; by symmetry a source's sums are its own.
+        def task(lo, hi):
+            return _kernels.distance_stats(indptr, indices, data, np.arange(lo, hi, dtype=np.int64), True)
+
+        parts = [r for _, _, r in run_chunks(task, n, progress=progress, desc=desc)]
         stats = [np.concatenate(p) for p in zip(*parts)]
     else:
         # Hop distances: bit-parallel search from groups of 64 nearby sources; every node
         # collects its own sums, so the parts of the groups add up.
         members, group_ptr = _kernels.compact_groups(indptr, indices, 64)
-        total, inverse, reached = np.zeros(n), np.zeros(n), np.zeros(n, dtype=np.int64)
-        largest = np.zeros(n)
-        n_groups = group_ptr.size - 1
-        for groups in _source_batches(n_groups, progress, desc, scale=64, total=n):
-            t, h, e, r = _kernels.multi_source_stats(
-                indptr, indices, members, group_ptr[groups[0] : groups[-1] + 2], _kernels.n_chunks()
-            )
+
+        def task(lo, hi):
+            return _kernels.multi_source_stats(indptr, indices, members, group_ptr, lo, hi)
+
+        parts = [r for _, _, r in run_chunks(task, group_ptr.size - 1, progress=progress, desc=desc, weight=64, total=n)]
+        total, inverse, largest, reached = (np.array(p) for p in parts[0])
+        for t, h, e, r in parts[1:]:
             total += t
             inverse += h
             reached += r
@@ -217,11 +192,13 @@ def betweenness(graph, /, *, weights: bool = False, normalized: bool = False, pr
     weights = _check_flag(weights, "weights")
     normalized = _check_flag(normalized, "normalized")
     progress = _check_flag(progress, "progress")
+    def task(lo, hi):
+        return _kernels.brandes(
+            indptr, indices, data, np.arange(lo, hi, dtype=np.int64), weights, _kernels.TIE_RTOL, False
+        )[0]
+
     values = np.zeros(n)
-    for sources in _source_batches(n, progress, "betweenness"):
-        part, _ = _kernels.brandes(
-            indptr, indices, data, sources, weights, _kernels.TIE_RTOL, False, _kernels.n_chunks()
-        )
+    for _, _, part in run_chunks(task, n, progress=progress, desc="betweenness"):
         values += part
     values = 0.5 * _unpermute(values, perm)  # every unordered pair was counted from both ends
     if normalized:

@@ -1,8 +1,10 @@
 """Compiled kernels (numba) for the shortest-path centralities.
 
 All kernels take a CSR adjacency as ``indptr`` (int64), ``indices`` (int32) and
-``data`` (float64 edge lengths) and a list of source nodes, and run the sources in
-parallel chunks, each with its own work arrays.
+``data`` (float64 edge lengths) and a chunk of source nodes, run serially and release
+the GIL; :mod:`._parallel` runs chunks on a pool of threads and adds their parts. (numba's
+own ``prange`` was 8x slower when another process shared the cores, because OpenMP
+threads spin at its barriers; plain threads leave scheduling to the OS.)
 
 Exactness, the point of writing these ourselves:
 
@@ -22,9 +24,9 @@ Exactness, the point of writing these ourselves:
 from __future__ import annotations
 
 import numpy as np
-from numba import get_num_threads, njit, prange
+from numba import njit
 
-__all__ = ["TIE_RTOL", "distance_stats", "multi_source_stats", "compact_groups", "brandes", "n_chunks"]
+__all__ = ["TIE_RTOL", "distance_stats", "multi_source_stats", "compact_groups", "brandes"]
 
 TIE_RTOL = 1e-10
 _OVERFLOW = 1e300
@@ -112,62 +114,51 @@ def _dijkstra(indptr, indices, data, s, dist, done, order, heap_d, heap_v):
     return count
 
 
-@njit(cache=True, parallel=True)
-def distance_stats(indptr, indices, data, sources, weighted, n_chunks):
-    """Per source: sum of distances, sum of inverse distances, largest distance, reached count."""
+@njit(cache=True, nogil=True)
+def distance_stats(indptr, indices, data, sources, weighted):
+    """Per source: sum of distances, sum of inverse distances, largest distance, reached count.
+
+    Serial; the caller runs chunks of sources on several threads (the GIL is released).
+    """
     n = indptr.shape[0] - 1
     k = sources.shape[0]
     total = np.zeros(k)
     inverse = np.zeros(k)
     largest = np.zeros(k)
     reached = np.zeros(k, dtype=np.int64)
-    n_chunks = max(1, min(k, n_chunks))
-    for c in prange(n_chunks):
-        order = np.empty(n, dtype=np.int64)
+    order = np.empty(n, dtype=np.int64)
+    hops = np.full(n, -1, dtype=np.int64)
+    dist = np.full(n, np.inf)
+    done = np.zeros(n, dtype=np.bool_)
+    m = indices.shape[0] + 1 if weighted else 1
+    heap_d = np.empty(m)
+    heap_v = np.empty(m, dtype=np.int64)
+    for i in range(k):
+        s = sources[i]
+        t = 0.0
+        h = 0.0
         if weighted:
-            dist = np.full(n, np.inf)
-            done = np.zeros(n, dtype=np.bool_)
-            heap_d = np.empty(indices.shape[0] + 1)
-            heap_v = np.empty(indices.shape[0] + 1, dtype=np.int64)
+            count = _dijkstra(indptr, indices, data, s, dist, done, order, heap_d, heap_v)
+            for q in range(1, count):
+                d = dist[order[q]]
+                t += d
+                h += 1.0 / d
+            largest[i] = dist[order[count - 1]]
+            for q in range(count):
+                dist[order[q]] = np.inf
+                done[order[q]] = False
         else:
-            hops = np.full(n, -1, dtype=np.int64)
-        for i in range(c * k // n_chunks, (c + 1) * k // n_chunks):
-            s = sources[i]
-            if weighted:
-                count = _dijkstra(indptr, indices, data, s, dist, done, order, heap_d, heap_v)
-                t = 0.0
-                h = 0.0
-                for q in range(1, count):
-                    d = dist[order[q]]
-                    t += d
-                    h += 1.0 / d
-                largest[i] = dist[order[count - 1]]
-                for q in range(count):
-                    dist[order[q]] = np.inf
-                    done[order[q]] = False
-            else:
-                count = _bfs(indptr, indices, s, hops, order)
-                t = 0.0
-                h = 0.0
-                level = 0
-                level_count = 0
-                for q in range(1, count):
-                    d = hops[order[q]]
-                    if d != level:
-                        if level > 0:
-                            h += level_count / level
-                        level = d
-                        level_count = 0
-                    level_count += 1
-                    t += d
-                if level > 0:
-                    h += level_count / level
-                largest[i] = hops[order[count - 1]]
-                for q in range(count):
-                    hops[order[q]] = -1
-            total[i] = t
-            inverse[i] = h
-            reached[i] = count
+            count = _bfs(indptr, indices, s, hops, order)
+            for q in range(1, count):
+                d = hops[order[q]]
+                t += d
+                h += 1.0 / d
+            largest[i] = hops[order[count - 1]]
+            for q in range(count):
+                hops[order[q]] = -1
+        total[i] = t
+        inverse[i] = h
+        reached[i] = count
     return total, inverse, largest, reached
 
 
@@ -229,88 +220,79 @@ def compact_groups(indptr, indices, size):
     return members, group_ptr[: n_groups + 1]
 
 
-@njit(cache=True, parallel=True)
-def multi_source_stats(indptr, indices, members, group_ptr, n_chunks):
-    """Hop-distance sums over all sources in ``members``, accumulated at the reached nodes.
+@njit(cache=True, nogil=True)
+def multi_source_stats(indptr, indices, members, group_ptr, first_group, stop_group):
+    """Hop-distance sums over the sources of groups ``first_group .. stop_group - 1``.
 
     Bit-parallel breadth-first search (Then et al., VLDB 2015): the (at most 64) sources
     of a group advance together, one bit each. For undirected graphs d(s, w) = d(w, s),
     so the sums collected at node ``w`` over all sources are ``w``'s own. Returns per
     node: sum of distances, sum of inverse distances, largest distance and number of
-    sources that reach it (itself included).
+    sources that reach it (itself included). Serial; the caller splits the groups
+    between threads and adds the parts.
     """
     n = indptr.shape[0] - 1
-    n_groups = group_ptr.shape[0] - 1
-    n_chunks = max(1, min(n_groups, n_chunks))
-    total = np.zeros((n_chunks, n))
-    inverse = np.zeros((n_chunks, n))
-    largest = np.zeros((n_chunks, n))
-    reached = np.zeros((n_chunks, n), dtype=np.int64)
+    tot = np.zeros(n)
+    inv = np.zeros(n)
+    big = np.zeros(n)
+    rea = np.zeros(n, dtype=np.int64)
     zero = np.uint64(0)
-    for c in prange(n_chunks):
-        seen = np.zeros(n, dtype=np.uint64)
-        frontier = np.zeros(n, dtype=np.uint64)
-        nxt = np.zeros(n, dtype=np.uint64)
-        active = np.empty(n, dtype=np.int64)
-        touched = np.empty(n, dtype=np.int64)
-        tot = total[c]
-        inv = inverse[c]
-        big = largest[c]
-        rea = reached[c]
-        for g in range(c * n_groups // n_chunks, (c + 1) * n_groups // n_chunks):
+    seen = np.zeros(n, dtype=np.uint64)
+    frontier = np.zeros(n, dtype=np.uint64)
+    nxt = np.zeros(n, dtype=np.uint64)
+    active = np.empty(n, dtype=np.int64)
+    touched = np.empty(n, dtype=np.int64)
+    visited = np.empty(n, dtype=np.int64)
+    for g in range(first_group, stop_group):
+        n_active = 0
+        n_visited = 0
+        for q in range(group_ptr[g], group_ptr[g + 1]):
+            s = members[q]
+            bit = np.uint64(1) << np.uint64(q - group_ptr[g])
+            seen[s] = bit
+            frontier[s] = bit
+            active[n_active] = s
+            n_active += 1
+            visited[n_visited] = s
+            n_visited += 1
+            rea[s] += 1
+        level = 0
+        while n_active > 0:
+            level += 1
+            n_touched = 0
+            for a in range(n_active):
+                v = active[a]
+                f = frontier[v]
+                for j in range(indptr[v], indptr[v + 1]):
+                    w = indices[j]
+                    if f & ~seen[w] == zero:
+                        continue
+                    if nxt[w] == zero:
+                        touched[n_touched] = w
+                        n_touched += 1
+                    nxt[w] |= f
+                frontier[v] = zero
             n_active = 0
-            for q in range(group_ptr[g], group_ptr[g + 1]):
-                s = members[q]
-                bit = np.uint64(1) << np.uint64(q - group_ptr[g])
-                seen[s] = bit
-                frontier[s] = bit
-                active[n_active] = s
+            for t in range(n_touched):
+                w = touched[t]
+                new = nxt[w] & ~seen[w]
+                nxt[w] = zero
+                if seen[w] == zero:
+                    visited[n_visited] = w
+                    n_visited += 1
+                seen[w] |= new
+                frontier[w] = new
+                active[n_active] = w
                 n_active += 1
-                rea[s] += 1
-            level = 0
-            while n_active > 0:
-                level += 1
-                n_touched = 0
-                for a in range(n_active):
-                    v = active[a]
-                    f = frontier[v]
-                    for j in range(indptr[v], indptr[v + 1]):
-                        w = indices[j]
-                        if f & ~seen[w] == zero:
-                            continue
-                        if nxt[w] == zero:
-                            touched[n_touched] = w
-                            n_touched += 1
-                        nxt[w] |= f
-                    frontier[v] = zero
-                n_active = 0
-                for t in range(n_touched):
-                    w = touched[t]
-                    new = nxt[w] & ~seen[w]
-                    nxt[w] = zero
-                    seen[w] |= new
-                    frontier[w] = new
-                    active[n_active] = w
-                    n_active += 1
-                    cnt = _popcount(new)
-                    tot[w] += cnt * level
-                    inv[w] += cnt / level
-                    rea[w] += cnt
-                    if level > big[w]:
-                        big[w] = level
-            seen[:] = zero
-    out_total = np.zeros(n)
-    out_inverse = np.zeros(n)
-    out_largest = np.zeros(n)
-    out_reached = np.zeros(n, dtype=np.int64)
-    for c in range(n_chunks):
-        out_total += total[c]
-        out_inverse += inverse[c]
-        out_reached += reached[c]
-        for i in range(n):
-            if largest[c, i] > out_largest[i]:
-                out_largest[i] = largest[c, i]
-    return out_total, out_inverse, out_largest, out_reached
+                cnt = _popcount(new)
+                tot[w] += cnt * level
+                inv[w] += cnt / level
+                rea[w] += cnt
+                if level > big[w]:
+                    big[w] = level
+        for q in range(n_visited):
+            seen[visited[q]] = zero
+    return tot, inv, big, rea
 
 
 @njit(cache=True, nogil=True)
@@ -467,55 +449,44 @@ def _brandes_source_dijkstra(
     return ok
 
 
-@njit(cache=True, parallel=True)
-def brandes(indptr, indices, data, sources, weighted, rtol, force_log, n_chunks):
+@njit(cache=True, nogil=True)
+def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
     """Betweenness summed over ``sources`` (ordered pairs: halve for undirected graphs).
 
     Returns the per-node sums and the number of sources that needed log-space counts.
+    Serial; the caller runs chunks of sources on several threads and adds the parts.
     """
     n = indptr.shape[0] - 1
-    k = sources.shape[0]
-    n_chunks = max(1, min(k, n_chunks))
-    parts = np.zeros((n_chunks, n))
-    n_log = np.zeros(n_chunks, dtype=np.int64)
-    for c in prange(n_chunks):
-        bc = parts[c]
-        order = np.empty(n, dtype=np.int64)
-        sigma = np.empty(n)
-        delta = np.empty(n)
-        delta[:] = 0.0
-        hops = np.full(n, -1, dtype=np.int64)
-        dist = np.full(n, np.inf)
-        done = np.zeros(n, dtype=np.bool_)
-        m = indices.shape[0] + 1 if weighted else 1
-        heap_d = np.empty(m)
-        heap_v = np.empty(m, dtype=np.int64)
-        for i in range(c * k // n_chunks, (c + 1) * k // n_chunks):
-            s = sources[i]
-            if weighted:
-                ok = False
-                if not force_log:
-                    ok = _brandes_source_dijkstra(
-                        indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, False, rtol
-                    )
-                if not ok:
-                    n_log[c] += 1
-                    _brandes_source_dijkstra(
-                        indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, True, rtol
-                    )
-            else:
-                ok = False
-                if not force_log:
-                    ok = _brandes_source_bfs(indptr, indices, s, hops, order, sigma, delta, bc)
-                if not ok:
-                    n_log[c] += 1
-                    _brandes_source_bfs_log(indptr, indices, s, hops, order, sigma, delta, bc)
-    out = np.zeros(n)
-    for c in range(n_chunks):
-        out += parts[c]
-    return out, n_log.sum()
+    bc = np.zeros(n)
+    n_log = 0
+    order = np.empty(n, dtype=np.int64)
+    sigma = np.empty(n)
+    delta = np.zeros(n)
+    hops = np.full(n, -1, dtype=np.int64)
+    dist = np.full(n, np.inf)
+    done = np.zeros(n, dtype=np.bool_)
+    m = indices.shape[0] + 1 if weighted else 1
+    heap_d = np.empty(m)
+    heap_v = np.empty(m, dtype=np.int64)
+    for i in range(sources.shape[0]):
+        s = sources[i]
+        ok = False
+        if weighted:
+            if not force_log:
+                ok = _brandes_source_dijkstra(
+                    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, False, rtol
+                )
+            if not ok:
+                n_log += 1
+                _brandes_source_dijkstra(
+                    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, True, rtol
+                )
+        else:
+            if not force_log:
+                ok = _brandes_source_bfs(indptr, indices, s, hops, order, sigma, delta, bc)
+            if not ok:
+                n_log += 1
+                _brandes_source_bfs_log(indptr, indices, s, hops, order, sigma, delta, bc)
+    return bc, n_log
 
 
-def n_chunks() -> int:
-    """Number of work chunks per call: a few per thread, for load balance."""
-    return 4 * get_num_threads()
