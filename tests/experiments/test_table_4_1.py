@@ -56,5 +56,5 @@ def test_table_and_figure_output(quick_result, tmp_path):
 
 def test_main_writes_files(tmp_path, capsys):
     assert table_4_1.main(["--quick", "--no-forest", "--out", str(tmp_path)]) == 0
-    assert {p.name for p in tmp_path.iterdir()} == {"table-4.1.txt", "table-4.1.json", "fig-4.8.png"}
+    assert {p.name for p in tmp_path.iterdir()} == {"table-4.1.txt", "table-4.1.json", "fig-4.8.png", "cache"}
     assert "NB closeness" in capsys.readouterr().out

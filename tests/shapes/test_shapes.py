@@ -208,3 +208,16 @@ def test_progress_bar(capsys):
     default_cache.clear()
     CentralityHistogram(progress=True).fit_transform([_disk(6), _disk(7)])
     assert "centralities" in capsys.readouterr().err
+
+
+def test_disk_cache_is_reused_by_a_new_cache(tmp_path):
+    image = _disk(7)
+    first = CentralityCache(directory=tmp_path)
+    values = shape_centralities([image], ["closeness"], cache=first)[0]["closeness"]
+    assert first.misses == 1 and len(list(tmp_path.glob("*.npy"))) == 1
+    second = CentralityCache(directory=tmp_path)  # e.g. a later process
+    again = shape_centralities([image], ["closeness"], cache=second)[0]
+    assert (second.hits, second.misses) == (1, 0)
+    np.testing.assert_array_equal(again["closeness"], values)
+    np.testing.assert_array_equal(again["nodes"], np.flatnonzero(image))
+    assert not list(tmp_path.glob("*.tmp"))

@@ -84,16 +84,25 @@ def _forest(centrality, seed, parameters):
     return CentralityComparisonForest(centrality=centrality, seed=seed, **parameters)
 
 
-def _histogram_nb(centrality):
+def _histogram_nb(centrality, scaling):
     from sklearn.naive_bayes import GaussianNB
     from sklearn.pipeline import make_pipeline
 
     from ..shapes import CentralityHistogram
 
-    return make_pipeline(CentralityHistogram(centrality=centrality, bins=40), GaussianNB())
+    return make_pipeline(CentralityHistogram(centrality=centrality, bins=40, scaling=scaling), GaussianNB())
 
 
-def run(*, quick: bool = False, seed: int = 0, n_folds: int = 5, progress: bool = True, forest: bool = True) -> Table41:
+def run(
+    *,
+    quick: bool = False,
+    seed: int = 0,
+    n_folds: int = 5,
+    progress: bool = True,
+    forest: bool = True,
+    scaling: str = "max",
+    cache_dir=None,
+) -> Table41:
     """Run the experiment and return its results.
 
     Parameters
@@ -108,7 +117,24 @@ def run(*, quick: bool = False, seed: int = 0, n_folds: int = 5, progress: bool 
         Progress bars on stderr.
     forest : bool
         Also evaluate the comparison forests.
+    scaling : {"max", "minmax"}
+        Histogram scaling (see :class:`~centrality_vision.shapes.CentralityHistogram`).
+    cache_dir : path, optional
+        Keep the centralities on disk there: a second run, or a run started again after
+        it was stopped, reads them instead of recomputing.
     """
+    from ..shapes import default_cache
+
+    previous = default_cache.directory
+    if cache_dir is not None:
+        default_cache.directory = Path(cache_dir)
+    try:
+        return _run(quick=quick, seed=seed, n_folds=n_folds, progress=progress, forest=forest, scaling=scaling)
+    finally:
+        default_cache.directory = previous
+
+
+def _run(*, quick, seed, n_folds, progress, forest, scaling) -> Table41:
     from sklearn.base import clone
     from sklearn.metrics import confusion_matrix
     from sklearn.model_selection import StratifiedKFold
@@ -130,7 +156,7 @@ def run(*, quick: bool = False, seed: int = 0, n_folds: int = 5, progress: bool 
     shape_centralities(everything, SHAPE_CENTRALITIES, progress=progress)
     seconds = {"centralities": time.perf_counter() - t0}
 
-    models = {f"NB {name}": _histogram_nb(name) for name in HISTOGRAM_FEATURES}
+    models = {f"NB {name}": _histogram_nb(name, scaling) for name in HISTOGRAM_FEATURES}
     if forest:
         forest_parameters = QUICK_FOREST_PARAMETERS if quick else FOREST_PARAMETERS
         models.update({f"forest {name}": _forest(name, seed, forest_parameters) for name in FOREST_FEATURES})
@@ -160,7 +186,7 @@ def run(*, quick: bool = False, seed: int = 0, n_folds: int = 5, progress: bool 
     result.parameters = {
         "bins": 40,
         "connectivity": 8,
-        "histogram_scaling": "minmax",
+        "histogram_scaling": scaling,
         "classifier": "GaussianNB (scikit-learn defaults)",
         "forest": {**(QUICK_FOREST_PARAMETERS if quick else FOREST_PARAMETERS), "criterion": "entropy", "max_features": "sqrt"},
         "noise_seed": f"numpy default_rng([seed, level_index, image_index]) with seed={seed}",
@@ -248,11 +274,19 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="27 images instead of 99")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="results/table-4.1")
-    parser.add_argument("--no-forest", action="store_true")
+    parser.add_argument("--no-forest", action="store_true", help="only the naive Bayes rows")
+    parser.add_argument("--scaling", choices=("max", "minmax"), default="max", help="histogram scaling (default: %(default)s)")
+    parser.add_argument("--cache", default=None, help="folder for computed centralities (default: OUT/cache)")
     args = parser.parse_args(argv)
-    print(f"Table 4.1: seed={args.seed}, quick={args.quick}", file=sys.stderr)
-    result = run(quick=args.quick, seed=args.seed, forest=not args.no_forest)
     out = Path(args.out)
+    print(f"Table 4.1: seed={args.seed}, quick={args.quick}", file=sys.stderr)
+    result = run(
+        quick=args.quick,
+        seed=args.seed,
+        forest=not args.no_forest,
+        scaling=args.scaling,
+        cache_dir=args.cache or out / "cache",
+    )
     out.mkdir(parents=True, exist_ok=True)
     text = format_table(result)
     print(text)

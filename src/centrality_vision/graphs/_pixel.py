@@ -6,7 +6,7 @@ import numpy as np
 from scipy import sparse
 
 from .._validation import as_binary_image, check_float, check_int
-from .._random import as_generator
+from .._seeding import as_generator
 
 __all__ = ["pixel_graph", "pixel_coordinates", "salt_noise"]
 

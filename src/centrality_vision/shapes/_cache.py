@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import hashlib
+import os
 import threading
 from collections import OrderedDict
+from pathlib import Path
 
 import numpy as np
 
@@ -61,15 +63,41 @@ class CentralityCache:
     Parameters
     ----------
     max_images : int, default=4096
-        How many images to keep (each holds one float64 value per pixel and centrality).
+        How many images to keep in memory (each holds one float64 value per pixel and
+        centrality).
+    directory : path, optional
+        Also keep every computed centrality on disk, one ``.npy`` file per image and
+        centrality, written atomically. A later process (or a run that was stopped and
+        started again) reads them instead of recomputing.
     """
 
-    def __init__(self, max_images: int = 4096):
+    def __init__(self, max_images: int = 4096, directory=None):
         self.max_images = int(max_images)
+        self.directory = None if directory is None else Path(directory)
         self._store: OrderedDict[tuple, dict] = OrderedDict()
         self._lock = threading.Lock()
         self.hits = 0
         self.misses = 0
+
+    def _path(self, key: tuple, name: str) -> Path:
+        (rows, cols), connectivity, digest = key
+        return self.directory / f"{digest}-{rows}x{cols}-c{connectivity}-{name}.npy"
+
+    def _load(self, key: tuple, name: str):
+        if self.directory is None:
+            return None
+        path = self._path(key, name)
+        return np.load(path) if path.exists() else None
+
+    def _save(self, key: tuple, name: str, values: np.ndarray) -> None:
+        if self.directory is None:
+            return
+        self.directory.mkdir(parents=True, exist_ok=True)
+        path = self._path(key, name)
+        tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
+        with open(tmp, "wb") as handle:
+            np.save(handle, values)
+        os.replace(tmp, path)
 
     def __len__(self) -> int:
         return len(self._store)
@@ -90,11 +118,17 @@ class CentralityCache:
                 if name in entry:
                     self.hits += 1
                     return entry[name], entry["nodes"]
-        self.misses += 1
         if entry is None:
-            graph, nodes = pixel_graph(mask, connectivity=connectivity)
-            entry = {"graph": graph, "nodes": nodes}
-        values = compute(entry["graph"], name)
+            entry = {"nodes": np.flatnonzero(mask)}  # pixel_graph's node order: row-major
+        values = self._load(key, name)
+        if values is not None:
+            self.hits += 1
+        else:
+            self.misses += 1
+            if "graph" not in entry:
+                entry["graph"], _ = pixel_graph(mask, connectivity=connectivity)
+            values = compute(entry["graph"], name)
+            self._save(key, name, values)
         values.setflags(write=False)
         entry["nodes"].setflags(write=False)
         with self._lock:

@@ -6,7 +6,7 @@ import numpy as np
 from scipy import ndimage
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 
-from .._random import as_generator
+from .._seeding import as_generator
 from .._validation import check_choice, check_float, check_int
 from ._cache import as_shape_images, shape_centralities
 from ._histogram import resolve_centralities
