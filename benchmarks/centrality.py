@@ -92,7 +92,7 @@ def parse_args(argv=None):
                    help="also run networkx betweenness/closeness/eccentricity on graphs with "
                         "n > %d (many minutes)" % SLOW_NETWORKX_N)
     p.add_argument("--threads", type=int, default=2,
-                   help="threads for networkit, rustworkx (RAYON_NUM_THREADS) and numba "
+                   help="threads for networkit, rustworkx (RAYON_NUM_THREADS) and ours "
                         "(default: %(default)s; igraph and networkx are single-threaded)")
     p.add_argument("--json", metavar="PATH", default=None, help="also write the results as JSON")
     args = p.parse_args(argv)
@@ -554,12 +554,10 @@ def main(args):
     libs = [lib for lib in args.libs if avail[lib]]
     if nk is not None:
         nk.setNumberOfThreads(args.threads)
-    try:
-        import numba
+    if cen is not None:
+        import centrality_vision
 
-        numba.set_num_threads(min(args.threads, numba.config.NUMBA_NUM_THREADS))
-    except Exception:  # noqa: BLE001
-        pass
+        centrality_vision.set_num_threads(args.threads)
 
     info = machine_info(args.threads)
     print("=" * 78)
@@ -570,9 +568,9 @@ def main(args):
     print("networkx %s | networkit %s | rustworkx %s | igraph %s | centrality_vision %s"
           % (info["networkx"], info["networkit"], info["rustworkx"], info["igraph"],
              info["centrality_vision"]))
-    print("threads: networkit %s, rustworkx RAYON_NUM_THREADS=%s, numba %s; networkx, igraph "
+    print("threads: networkit %s, rustworkx RAYON_NUM_THREADS=%s, ours %s; networkx, igraph "
           "and scipy.eigsh single-threaded" % (args.threads, os.environ.get("RAYON_NUM_THREADS"),
-                                               _numba_threads()))
+                                               _our_threads()))
     if cen is None:
         print("ours: not available (%s)" % ours_msg)
     elif ours_msg:
@@ -754,11 +752,11 @@ def _load_line():
     return line
 
 
-def _numba_threads():
+def _our_threads():
     try:
-        import numba
+        import centrality_vision
 
-        return numba.get_num_threads()
+        return centrality_vision.get_num_threads()
     except Exception:  # noqa: BLE001
         return "?"
 

@@ -51,11 +51,11 @@ def test_histogram_hand_case():
     """3x3 square: degrees 3 (4 corners), 5 (4 edges), 8 (centre); min-max to [0, 1] and 2 bins."""
     square = np.zeros((5, 5), dtype=bool)
     square[1:4, 1:4] = True
-    features = CentralityHistogram(centrality="degree", bins=2).fit_transform([square])
+    features = CentralityHistogram(centrality="degree", bins=2, scaling="minmax").fit_transform([square])
     # scaled values: corners 0, edges 0.4, centre 1 -> bins [0, 0.5): 8 pixels, [0.5, 1]: 1 pixel
     np.testing.assert_allclose(features, [[8 / 9, 1 / 9]])
-    features = CentralityHistogram(centrality="degree", bins=2, scaling="max").fit_transform([square])
-    # scaled by max: 3/8, 5/8, 1 -> 4 pixels in the first bin, 5 in the second
+    features = CentralityHistogram(centrality="degree", bins=2).fit_transform([square])
+    # scaled by max (the default): 3/8, 5/8, 1 -> 4 pixels in the first bin, 5 in the second
     np.testing.assert_allclose(features, [[4 / 9, 5 / 9]])
 
 

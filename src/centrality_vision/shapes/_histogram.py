@@ -41,7 +41,7 @@ class CentralityHistogram(TransformerMixin, BaseEstimator):
     """Normalised histograms of pixel-graph centralities, one row per shape.
 
     Each shape's 8-neighbour pixel graph gets the chosen centrality (thesis Algorithm 4.1);
-    its values are scaled to [0, 1] within the shape and counted in ``bins`` equal bins,
+    its values are divided by their largest and counted in ``bins`` equal bins of [0, 1],
     and the counts are divided by the number of pixels, so the feature sums to 1 and does
     not depend on the shape's size. ``centrality="all"`` concatenates betweenness,
     closeness, eigenvector and degree (4 x ``bins`` features).
@@ -58,10 +58,13 @@ class CentralityHistogram(TransformerMixin, BaseEstimator):
         Bins per centrality (the thesis uses 40).
     connectivity : {8, 4}, default=8
         Pixel neighbourhood.
-    scaling : {"minmax", "max"}, default="minmax"
-        ``"minmax"`` maps each shape's smallest value to 0 and largest to 1 (the range
-        MATLAB's ``hist(v, 40)`` bins over, as in thesis fig. 4.4); ``"max"`` divides by
-        the largest value only. A shape whose values are all equal falls in the first bin.
+    scaling : {"max", "minmax"}, default="max"
+        ``"max"`` divides each shape's values by their largest, the normalisation of
+        thesis eq. 2.9 (``d / max d``), so a value means the same in every shape;
+        ``"minmax"`` maps the smallest value to 0 and the largest to 1 (the range
+        MATLAB's ``hist(v, 40)`` bins over). On Kimia-99 "max" is closer to the thesis'
+        Table 4.1 (all 0.98, degree 0.83 noiseless; "minmax": 0.94 and 0.57). A shape
+        whose values are all equal falls in the first bin.
     progress : bool, default=False
         Show a progress bar on stderr while centralities are computed.
 
@@ -80,7 +83,7 @@ class CentralityHistogram(TransformerMixin, BaseEstimator):
     ((2, 40), True)
     """
 
-    def __init__(self, centrality="closeness", bins: int = 40, connectivity: int = 8, scaling: str = "minmax", progress: bool = False):
+    def __init__(self, centrality="closeness", bins: int = 40, connectivity: int = 8, scaling: str = "max", progress: bool = False):
         self.centrality = centrality
         self.bins = bins
         self.connectivity = connectivity
