@@ -341,3 +341,43 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
     fig.savefig(path, dpi=dpi, bbox_inches="tight")
     plt.close(fig)
     return path
+
+
+def plot_matching(moving, fixed, correspondence, *, moving_graph=None, fixed_graph=None, ax=None, title=None):
+    """Two 2D point sets side by side, their graphs, and lines joining matched points (thesis fig. 6.4).
+
+    ``moving`` is drawn on the left and ``fixed`` shifted to its right; line ``i`` joins
+    ``moving[i]`` and ``fixed[correspondence[i]]``. Returns the Axes.
+    """
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import LineCollection
+
+    moving = as_points(moving, name="moving", n_dims=(2,))
+    fixed = as_points(fixed, name="fixed", n_dims=(2,))
+    correspondence = np.asarray(correspondence)
+    if correspondence.shape != (moving.shape[0],) or not np.issubdtype(correspondence.dtype, np.integer):
+        raise ValueError(
+            f"`correspondence` must be an integer array of shape ({moving.shape[0]},); got {correspondence.shape} "
+            f"of dtype {correspondence.dtype}."
+        )
+    if correspondence.size and (correspondence.min() < 0 or correspondence.max() >= fixed.shape[0]):
+        raise ValueError(f"`correspondence` must index into `fixed` (0 .. {fixed.shape[0] - 1}); got out-of-range values.")
+    if ax is None:
+        _, ax = plt.subplots(figsize=(10, 5))
+    span = np.ptp(np.vstack([moving, fixed]), axis=0)
+    right = fixed + np.array([moving[:, 0].max() - fixed[:, 0].min() + 0.3 * max(span[0], 1e-12), 0.0])
+    for pts, graph in ((moving, moving_graph), (right, fixed_graph)):
+        if graph is not None:
+            coo = sparse.triu(sparse.csr_array(graph), k=1).tocoo()
+            ax.add_collection(LineCollection(np.stack([pts[coo.row], pts[coo.col]], axis=1), colors="0.75", linewidths=0.5))
+    ax.add_collection(
+        LineCollection(np.stack([moving, right[correspondence]], axis=1), colors="tab:orange", linewidths=0.8, alpha=0.8)
+    )
+    ax.scatter(moving[:, 0], moving[:, 1], s=12, color="tab:blue", zorder=3, label="moving")
+    ax.scatter(right[:, 0], right[:, 1], s=12, color="tab:green", zorder=3, label="fixed")
+    ax.set_aspect("equal")
+    ax.autoscale_view()
+    ax.legend(loc="upper right")
+    if title:
+        ax.set_title(title)
+    return ax

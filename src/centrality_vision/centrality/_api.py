@@ -387,16 +387,16 @@ def eigenvector(graph, /, *, weights: bool = False, normalized: bool = True) -> 
     weights = _check_flag(weights, "weights")
     normalized = _check_flag(normalized, "normalized")
     if not weights:
-        adjacency = adjacency.copy()
-        adjacency.data[:] = 1.0
+        adjacency.data[:] = 1.0  # as_graph returned our own copy
     n = adjacency.shape[0]
     n_comp, labels = connected_components(adjacency, directed=False)
     if n_comp == 1:
         members = [np.arange(n)]
+        results = [_perron(adjacency)]
     else:
         order = np.argsort(labels, kind="stable")
         members = np.split(order, np.cumsum(np.bincount(labels, minlength=n_comp))[:-1])
-    results = [_perron(adjacency[idx][:, idx]) for idx in members]
+        results = [_perron(adjacency[idx][:, idx]) for idx in members]
     lam_max = max(lam for lam, _ in results)
     values = np.zeros(n)
     for idx, (lam, vec) in zip(members, results):

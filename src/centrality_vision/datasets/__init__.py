@@ -8,10 +8,13 @@
   from pycpd (MIT licence); the face from Myronenko's CPD MATLAB package, distributed
   under the GNU GPL v2.
 
+:func:`contour_points` samples point sets from the outlines of binary shapes.
+
 The files live in ``centrality_vision/datasets/data/``; its ``README.md`` gives the
 provenance and licence notice of each.
 """
 
+from ._contours import contour_points
 from ._loaders import Kimia99, PointSetPair, load_face, load_fish, load_kimia99
 
-__all__ = ["Kimia99", "PointSetPair", "load_face", "load_fish", "load_kimia99"]
+__all__ = ["Kimia99", "PointSetPair", "contour_points", "load_face", "load_fish", "load_kimia99"]

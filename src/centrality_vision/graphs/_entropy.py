@@ -169,11 +169,15 @@ def mwme_graph(points, /, *, method: str = "local", max_passes: int = 50, progre
             )
         order, cost = _k.mwme_exact(dist, joining)
     else:
+        key = dist.sum(axis=1)  # invariant tie-breaker: total distance to all points
         parts = run_chunks(
-            lambda lo, hi: _k.mwme_greedy_starts(dist, joining, lo, hi), n, progress=progress, desc="mwme starts"
+            lambda lo, hi: _k.mwme_greedy_starts(dist, joining, lo, hi, key), n, progress=progress, desc="mwme starts"
         )
-        best_cost, best_start = min((r for _, _, r in parts), key=lambda r: (r[0], r[1]))
-        order, cost = _k.mwme_greedy_order(dist, joining, best_start)
+        best_cost, best_start = np.inf, -1
+        for _, _, (cost, start) in parts:  # same rule as inside the kernel
+            if best_start < 0 or _k._better(cost, key[start], best_cost, key[best_start]):
+                best_cost, best_start = cost, start
+        order, cost = _k.mwme_greedy_order(dist, joining, best_start, key)
         if method == "local":
             order, cost, _ = _k.mwme_local(dist, joining, order, max_passes)
     order = np.asarray(order, dtype=np.int64)

@@ -71,14 +71,30 @@ def mwme_exact(dist, joining):
     return order, dp[full - 1]
 
 
+_TIE = 1e-9  # relative: values closer than this are ties, broken by the invariant key
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _better(value, key, best_value, best_key):
+    """``value`` beats ``best_value``, ties (to 1e-9 relative) going to the smaller ``key``."""
+    tol = _TIE * max(abs(value), abs(best_value))
+    if value < best_value - tol:
+        return True
+    if value <= best_value + tol and key < best_key - _TIE * abs(best_key):
+        return True
+    return False
+
+
 @njit(cache=True, nogil=True)
-def mwme_greedy_order(dist, joining, start):
+def mwme_greedy_order(dist, joining, start, key):
     """The corrected n1graph greedy from one start point; returns (order, cost).
 
     A joining position takes the point with the least total distance to the points
     placed so far (it is joined to all of them); an isolated position takes the point
     nearest to the last one placed (the thesis' "edge to the last node" rule, used only
-    to choose the point: the graph is always Algorithm 6.1's NHDD graph).
+    to choose the point: the graph is always Algorithm 6.1's NHDD graph). Near-ties are
+    broken by ``key`` (each point's total distance to all points), which, unlike point
+    indices, does not change under similarity transforms and permutations.
     """
     n = dist.shape[0]
     order = np.empty(n, dtype=np.int64)
@@ -97,7 +113,7 @@ def mwme_greedy_order(dist, joining, start):
             if used[q]:
                 continue
             value = acc[q] if joining[k] else dist[q, last]
-            if value < best_value:
+            if best < 0 or _better(value, key[q], best_value, key[best]):
                 best_value = value
                 best = q
         if joining[k]:
@@ -111,13 +127,13 @@ def mwme_greedy_order(dist, joining, start):
 
 
 @njit(cache=True, nogil=True)
-def mwme_greedy_starts(dist, joining, first, stop):
+def mwme_greedy_starts(dist, joining, first, stop, key):
     """Best (cost, start) of the greedy over start points ``first .. stop - 1``."""
     best_cost = np.inf
-    best_start = first
+    best_start = -1
     for start in range(first, stop):
-        _, cost = mwme_greedy_order(dist, joining, start)
-        if cost < best_cost:
+        _, cost = mwme_greedy_order(dist, joining, start, key)
+        if best_start < 0 or _better(cost, key[start], best_cost, key[best_start]):
             best_cost = cost
             best_start = start
     return best_cost, best_start
@@ -133,6 +149,7 @@ def mwme_local(dist, joining, order, max_passes):
     """
     n = order.shape[0]
     order = order.copy()
+    tol = _TIE * dist.sum() / (n * n)  # relative to the mean distance
     passes = 0
     for _ in range(max_passes):
         passes += 1
@@ -151,7 +168,7 @@ def mwme_local(dist, joining, order, max_passes):
                         pk = order[k]
                         change = dist[pb, pk] - dist[pa, pk]
                         delta += change if adj_a else -change
-                if delta < -1e-12:
+                if delta < -tol:
                     order[a] = pb
                     order[b] = pa
                     improved = True

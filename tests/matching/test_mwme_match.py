@@ -1,0 +1,91 @@
+import numpy as np
+import pytest
+
+from centrality_vision.datasets import contour_points, load_kimia99
+from centrality_vision.matching import mwme_match
+from centrality_vision.transforms import SimilarityTransform, fit_similarity
+
+
+def _rotation(angle):
+    return np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+
+
+@pytest.mark.parametrize("method", ["exact", "greedy", "local"])
+@pytest.mark.parametrize("seed", range(5))
+def test_recovers_random_similarity_transforms(seed, method):
+    rng = np.random.default_rng(seed)
+    fixed = rng.random((12, 2))
+    perm = rng.permutation(12)
+    scale, angle, shift = rng.uniform(0.5, 2), rng.uniform(0, 2 * np.pi), rng.uniform(-5, 5, 2)
+    moving = scale * fixed[perm] @ _rotation(angle).T + shift
+    correspondence, transform = mwme_match(moving, fixed, method=method)
+    np.testing.assert_array_equal(correspondence, perm)
+    np.testing.assert_allclose(transform(moving), fixed[perm], atol=1e-9)
+    assert transform.scale == pytest.approx(1 / scale)
+
+
+def test_kimia_outlines_50_points():
+    data = load_kimia99()
+    rng = np.random.default_rng(0)
+    correct = []
+    for name in ("cow1", "dog1", "f16", "bunny04"):
+        fixed = contour_points(data.image(name), 50)
+        perm = rng.permutation(50)
+        moving = 1.7 * fixed[perm] @ _rotation(rng.uniform(0, 6.28)).T + 40.0
+        correspondence, _ = mwme_match(moving, fixed)
+        correct.append(np.mean(correspondence == perm))
+    assert np.mean(correct) >= 0.95
+
+
+def test_3d_and_rigid():
+    rng = np.random.default_rng(3)
+    fixed = rng.random((10, 3))
+    q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    q *= np.sign(np.linalg.det(q))
+    correspondence, transform = mwme_match(fixed @ q.T + 1.0, fixed, scale=False)
+    np.testing.assert_array_equal(correspondence, np.arange(10))
+    assert transform.scale == 1.0 and np.linalg.det(transform.rotation) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize(
+    ("moving", "fixed", "match"),
+    [
+        (np.zeros((4, 2)) + np.arange(4)[:, None] * [1, 0.5], np.random.default_rng(0).random((5, 2)), "same shape"),
+        ([[0, 0], [1, 1]], [[0, 0], [1, 1]], "at least 3 points"),
+        ([[0, 0], [1, 1], [0, 0]], [[0, 0], [1, 1], [2, 0]], "duplicate"),
+        ([[0, 0], [1, np.nan], [2, 0]], [[0, 0], [1, 1], [2, 0]], "finite"),
+    ],
+)
+def test_errors(moving, fixed, match):
+    with pytest.raises(ValueError, match=match):
+        mwme_match(moving, fixed)
+
+
+def test_similarity_transform_inverse_and_matrix():
+    t = SimilarityTransform(_rotation(0.4), np.array([1.0, -2.0]), 1.5)
+    pts = np.random.default_rng(0).random((5, 2))
+    np.testing.assert_allclose(t.inverse()(t(pts)), pts)
+    homogeneous = np.c_[pts, np.ones(5)] @ t.matrix.T
+    np.testing.assert_allclose(homogeneous[:, :2], t(pts))
+    fitted = fit_similarity(pts, t(pts))
+    np.testing.assert_allclose(fitted.matrix, t.matrix, atol=1e-12)
+    with pytest.raises(ValueError, match="`scale`"):
+        SimilarityTransform(np.eye(2), np.zeros(2), -1.0)
+
+
+def test_fit_similarity_never_reflects():
+    pts = np.random.default_rng(1).random((6, 2))
+    mirrored = pts * [-1, 1]
+    assert np.linalg.det(fit_similarity(pts, mirrored).rotation) == pytest.approx(1.0)
+
+
+def test_contour_points_spacing():
+    yy, xx = np.mgrid[:60, :60]
+    disk = (yy - 30) ** 2 + (xx - 30) ** 2 < 20**2
+    pts = contour_points(disk, 40)
+    radius = np.linalg.norm(pts - 30, axis=1)
+    assert np.all(np.abs(radius - 20) < 1.0)
+    steps = np.linalg.norm(np.diff(np.vstack([pts, pts[:1]]), axis=0), axis=1)
+    assert steps.std() / steps.mean() < 0.1
+    with pytest.raises(ValueError, match="`n_points`"):
+        contour_points(disk, 2)
