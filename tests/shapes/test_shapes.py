@@ -221,3 +221,12 @@ def test_disk_cache_is_reused_by_a_new_cache(tmp_path):
     np.testing.assert_array_equal(again["closeness"], values)
     np.testing.assert_array_equal(again["nodes"], np.flatnonzero(image))
     assert not list(tmp_path.glob("*.tmp"))
+
+
+def test_memory_hits_are_written_to_a_directory_set_later(tmp_path):
+    cache = CentralityCache()
+    image = _disk(6)
+    shape_centralities([image], ["degree"], cache=cache)
+    cache.directory = tmp_path
+    shape_centralities([image], ["degree"], cache=cache)
+    assert len(list(tmp_path.glob("*-degree.npy"))) == 1

@@ -117,7 +117,10 @@ class CentralityCache:
                 self._store.move_to_end(key)
                 if name in entry:
                     self.hits += 1
-                    return entry[name], entry["nodes"]
+                    values = entry[name]
+                    if self.directory is not None and not self._path(key, name).exists():
+                        self._save(key, name, values)  # computed before a directory was set
+                    return values, entry["nodes"]
         if entry is None:
             entry = {"nodes": np.flatnonzero(mask)}  # pixel_graph's node order: row-major
         values = self._load(key, name)
