@@ -26,15 +26,14 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args()
 
-    import numba
-
+    import centrality_vision as cv
     from centrality_vision import centrality as cen
     from centrality_vision.datasets import load_kimia99
     from centrality_vision.experiments import table_4_1
     from centrality_vision.graphs import pixel_graph, salt_noise
     from centrality_vision.shapes import SHAPE_CENTRALITIES, default_cache
 
-    print(f"cpus={os.cpu_count()} numba threads={numba.get_num_threads()}")
+    print(f"cpus={os.cpu_count()} threads={cv.get_num_threads()}")
     data = load_kimia99()
     images = data.images[:: 11 if args.quick else 1]
     # warm-up: compile the kernels

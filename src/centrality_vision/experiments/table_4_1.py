@@ -265,7 +265,7 @@ def plot_confusion(result: Table41, path) -> Path:
             ax.set_xticks(range(len(short)), short if r == len(rows) - 1 else [], rotation=90, fontsize=6)
             ax.set_yticks(range(len(short)), short if j == 0 else [], fontsize=6)
     fig.suptitle("Kimia-99 confusion matrices (rows: true class; thesis fig. 4.8)")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 0.985))
     return save_figure(fig, path)
 
 
