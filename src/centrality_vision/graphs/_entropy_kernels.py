@@ -214,6 +214,16 @@ def _entropy_after(counts, n, h, a, b):
     return out
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _move_degrees(degree, counts, a, b, step):
+    """Add (step=1) or remove (step=-1) the edge a-b in the degree and count arrays."""
+    for d in (degree[a], degree[b]):
+        counts[d] -= 1
+        counts[d + step] += 1
+    degree[a] += step
+    degree[b] += step
+
+
 @njit(cache=True, nogil=True)
 def mstme_greedy(weight, lam):
     """Algorithm 7.1: n-1 times add the cycle-free edge minimising w_e - lam H(T + e).
@@ -257,11 +267,7 @@ def mstme_greedy(weight, lam):
                     bv = v
         edges[it, 0] = bu
         edges[it, 1] = bv
-        for d in (degree[bu], degree[bv]):
-            counts[d] -= 1
-            counts[d + 1] += 1
-        degree[bu] += 1
-        degree[bv] += 1
+        _move_degrees(degree, counts, bu, bv, 1)
         max_degree = max(max_degree, degree[bu], degree[bv])
         h = _entropy(counts, n)
         keep, drop = label[bu], label[bv]
@@ -338,13 +344,7 @@ def mstme_exchange(weight, lam, edges, max_passes):
         for e in range(edges.shape[0]):
             u0, v0 = edges[e, 0], edges[e, 1]
             label = _tree_components(n, edges, e)
-            # remove e
-            counts[degree[u0]] -= 1
-            counts[degree[u0] - 1] += 1
-            degree[u0] -= 1
-            counts[degree[v0]] -= 1
-            counts[degree[v0] - 1] += 1
-            degree[v0] -= 1
+            _move_degrees(degree, counts, u0, v0, -1)  # remove e
             h = _entropy(counts, n)
             base = weight[u0, v0] - lam * _entropy_after(counts, n, h, degree[u0], degree[v0])
             best = base
@@ -361,18 +361,13 @@ def mstme_exchange(weight, lam, edges, max_passes):
                         best = score
                         bu = u
                         bv = v
-            if bu != u0 or bv != v0:
-                if not ((bu == v0 and bv == u0)):
-                    improved = True
-                    exchanges += 1
             a, b = min(bu, bv), max(bu, bv)
+            if a != min(u0, v0) or b != max(u0, v0):
+                improved = True
+                exchanges += 1
             edges[e, 0] = a
             edges[e, 1] = b
-            for d in (degree[a], degree[b]):
-                counts[d] -= 1
-                counts[d + 1] += 1
-            degree[a] += 1
-            degree[b] += 1
+            _move_degrees(degree, counts, a, b, 1)
         if not improved:
             break
     return edges, passes, exchanges
