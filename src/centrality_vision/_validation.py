@@ -15,7 +15,10 @@ from scipy import sparse
 
 from .exceptions import InputError
 
-__all__ = ["as_points", "as_graph", "as_binary_image", "check_choice", "check_int", "check_float"]
+#: ``n_dims`` for functions that accept points of any (reasonable) dimension.
+ANY_DIMS = tuple(range(1, 65))
+
+__all__ = ["ANY_DIMS", "as_points", "as_graph", "as_binary_image", "check_choice", "check_int", "check_float"]
 
 
 def _describe(value) -> str:

@@ -84,7 +84,7 @@ def _distance_stats(graph, weights: bool, progress: bool, desc: str):
     if weights:
         # One Dijkstra per source; by symmetry a source's sums are its own.
         def task(lo, hi):
-            return _kernels.distance_stats(indptr, indices, data, np.arange(lo, hi, dtype=np.int64), True)
+            return _kernels.dijkstra_stats(indptr, indices, data, np.arange(lo, hi, dtype=np.int64))
 
         parts = [r for _, _, r in run_chunks(task, n, progress=progress, desc=desc)]
         stats = [np.concatenate(p) for p in zip(*parts)]

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["TIE_RTOL", "distance_stats", "multi_source_stats", "compact_groups", "brandes"]
+__all__ = ["TIE_RTOL", "dijkstra_stats", "multi_source_stats", "compact_groups", "brandes"]
 
 TIE_RTOL = 1e-10
 _OVERFLOW = 1e300
@@ -115,10 +115,18 @@ def _dijkstra(indptr, indices, data, s, dist, done, order, heap_d, heap_v):
 
 
 @njit(cache=True, nogil=True)
-def distance_stats(indptr, indices, data, sources, weighted):
-    """Per source: sum of distances, sum of inverse distances, largest distance, reached count.
+def _dijkstra_workspace(n, n_arcs):
+    """Work arrays of :func:`_dijkstra`: distances (inf), done flags and a lazy heap."""
+    return np.full(n, np.inf), np.zeros(n, dtype=np.bool_), np.empty(n_arcs + 1), np.empty(n_arcs + 1, dtype=np.int64)
+
+
+@njit(cache=True, nogil=True)
+def dijkstra_stats(indptr, indices, data, sources):
+    """Per source, by edge length: sum of distances, sum of inverse distances, largest
+    distance, reached count (the source included).
 
     Serial; the caller runs chunks of sources on several threads (the GIL is released).
+    Hop distances go through :func:`multi_source_stats` instead.
     """
     n = indptr.shape[0] - 1
     k = sources.shape[0]
@@ -127,35 +135,19 @@ def distance_stats(indptr, indices, data, sources, weighted):
     largest = np.zeros(k)
     reached = np.zeros(k, dtype=np.int64)
     order = np.empty(n, dtype=np.int64)
-    hops = np.full(n, -1, dtype=np.int64)
-    dist = np.full(n, np.inf)
-    done = np.zeros(n, dtype=np.bool_)
-    m = indices.shape[0] + 1 if weighted else 1
-    heap_d = np.empty(m)
-    heap_v = np.empty(m, dtype=np.int64)
+    dist, done, heap_d, heap_v = _dijkstra_workspace(n, indices.shape[0])
     for i in range(k):
-        s = sources[i]
+        count = _dijkstra(indptr, indices, data, sources[i], dist, done, order, heap_d, heap_v)
         t = 0.0
         h = 0.0
-        if weighted:
-            count = _dijkstra(indptr, indices, data, s, dist, done, order, heap_d, heap_v)
-            for q in range(1, count):
-                d = dist[order[q]]
-                t += d
-                h += 1.0 / d
-            largest[i] = dist[order[count - 1]]
-            for q in range(count):
-                dist[order[q]] = np.inf
-                done[order[q]] = False
-        else:
-            count = _bfs(indptr, indices, s, hops, order)
-            for q in range(1, count):
-                d = hops[order[q]]
-                t += d
-                h += 1.0 / d
-            largest[i] = hops[order[count - 1]]
-            for q in range(count):
-                hops[order[q]] = -1
+        for q in range(1, count):
+            d = dist[order[q]]
+            t += d
+            h += 1.0 / d
+        largest[i] = dist[order[count - 1]]
+        for q in range(count):
+            dist[order[q]] = np.inf
+            done[order[q]] = False
         total[i] = t
         inverse[i] = h
         reached[i] = count
@@ -463,11 +455,7 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
     sigma = np.empty(n)
     delta = np.zeros(n)
     hops = np.full(n, -1, dtype=np.int64)
-    dist = np.full(n, np.inf)
-    done = np.zeros(n, dtype=np.bool_)
-    m = indices.shape[0] + 1 if weighted else 1
-    heap_d = np.empty(m)
-    heap_v = np.empty(m, dtype=np.int64)
+    dist, done, heap_d, heap_v = _dijkstra_workspace(n, indices.shape[0] if weighted else 0)
     for i in range(sources.shape[0]):
         s = sources[i]
         ok = False

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import as_graph, as_points
+from .._validation import ANY_DIMS, as_graph, as_points
 
 __all__ = ["to_networkx"]
 
@@ -45,7 +45,7 @@ def to_networkx(graph, /, points=None, *, weight: str = "weight"):
         zip(coo.row[upper].tolist(), coo.col[upper].tolist(), coo.data[upper].tolist()), weight=weight
     )
     if points is not None:
-        pts = as_points(points, name="points", n_dims=tuple(range(1, 65)))
+        pts = as_points(points, name="points", n_dims=ANY_DIMS)
         if pts.shape[0] != n:
             raise ValueError(f"`points` must have one row per node ({n}); got {pts.shape[0]} rows.")
         nx.set_node_attributes(out, {i: tuple(p) for i, p in enumerate(pts.tolist())}, "pos")

@@ -17,7 +17,7 @@ from scipy import sparse
 from scipy.spatial.distance import pdist, squareform
 
 from .._parallel import run_chunks
-from .._validation import as_points, check_choice, check_float, check_int
+from .._validation import ANY_DIMS, as_points, check_choice, check_float, check_int
 from ..exceptions import InputError
 from . import _entropy_kernels as _k
 from ._pointsets import edges_to_graph
@@ -84,7 +84,7 @@ def nhdd_graph(n: int, /, *, connected: bool = True) -> sparse.csr_array:
 
 
 def _distance_matrix(points) -> tuple[np.ndarray, np.ndarray]:
-    pts = as_points(points, name="points", n_dims=tuple(range(1, 65)), min_points=3, allow_duplicates=False)
+    pts = as_points(points, name="points", n_dims=ANY_DIMS, min_points=3, allow_duplicates=False)
     return pts, squareform(pdist(pts))
 
 

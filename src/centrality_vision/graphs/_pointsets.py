@@ -7,7 +7,7 @@ from scipy import sparse
 from scipy.spatial import Delaunay, QhullError, cKDTree
 from scipy.spatial.distance import pdist, squareform
 
-from .._validation import as_points, check_int
+from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import InputError
 
 __all__ = ["delaunay_graph", "gabriel_graph", "emst_graph", "knn_graph", "complete_graph", "edges_to_graph"]
@@ -211,7 +211,7 @@ def knn_graph(points, /, *, k: int) -> sparse.csr_array:
     >>> sorted(map(tuple, np.argwhere(graph.toarray() > 0).tolist()))[:3]
     [(0, 1), (1, 0), (1, 2)]
     """
-    points = as_points(points, name="points", n_dims=tuple(range(1, 65)), min_points=2, allow_duplicates=False)
+    points = as_points(points, name="points", n_dims=ANY_DIMS, min_points=2, allow_duplicates=False)
     n = points.shape[0]
     k = check_int(k, name="k", low=1, high=n - 1)
     _, idx = cKDTree(points).query(points, k=k + 1)
@@ -239,7 +239,7 @@ def complete_graph(points, /) -> sparse.csr_array:
            [3., 0., 5.],
            [4., 5., 0.]])
     """
-    points = as_points(points, name="points", n_dims=tuple(range(1, 65)), min_points=2, allow_duplicates=False)
+    points = as_points(points, name="points", n_dims=ANY_DIMS, min_points=2, allow_duplicates=False)
     graph = sparse.csr_array(squareform(pdist(points)))
     graph.sort_indices()
     graph.indices = graph.indices.astype(np.int32, copy=False)
