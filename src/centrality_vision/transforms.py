@@ -14,7 +14,20 @@ import numpy as np
 from ._validation import as_points
 from .exceptions import InputError
 
-__all__ = ["SimilarityTransform", "fit_similarity"]
+__all__ = [
+    "RigidTransform",
+    "SimilarityTransform",
+    "AffineTransform",
+    "NonRigidTransform",
+    "fit_similarity",
+    "random_rotation",
+]
+
+
+def _frozen(array) -> np.ndarray:
+    array = np.array(array, dtype=float)
+    array.setflags(write=False)
+    return array
 
 
 @dataclass(frozen=True)
@@ -53,6 +66,12 @@ class SimilarityTransform:
             )
         if not np.isfinite(self.scale) or self.scale <= 0:
             raise InputError(f"`scale` must be a finite number > 0; got {self.scale!r}.")
+        if not np.all(np.isfinite(rotation)) or not np.all(np.isfinite(translation)):
+            raise InputError("`rotation` and `translation` must be finite; got NaN or inf.")
+        if not np.allclose(rotation @ rotation.T, np.eye(dim), atol=1e-8) or np.linalg.det(rotation) < 0:
+            raise InputError(
+                f"`rotation` must be a proper rotation (orthogonal, det +1); got det {np.linalg.det(rotation):.6g}."
+            )
         rotation.setflags(write=False)
         translation.setflags(write=False)
         object.__setattr__(self, "rotation", rotation)
@@ -75,6 +94,166 @@ class SimilarityTransform:
     def inverse(self) -> "SimilarityTransform":
         rotation = self.rotation.T
         return SimilarityTransform(rotation, -(rotation @ self.translation) / self.scale, 1.0 / self.scale)
+
+
+@dataclass(frozen=True)
+class RigidTransform(SimilarityTransform):
+    """``x -> rotation @ x + translation``: a :class:`SimilarityTransform` with scale 1.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = RigidTransform(np.array([[0.0, -1.0], [1.0, 0.0]]), np.array([1.0, 0.0]))
+    >>> t(np.array([[1.0, 0.0]]))
+    array([[1., 1.]])
+    >>> t.inverse()(t(np.array([[3.0, 4.0]])))
+    array([[3., 4.]])
+    """
+
+    scale: float = 1.0
+
+    def __post_init__(self):
+        if self.scale != 1.0:
+            raise InputError(f"`scale` of a RigidTransform must be 1; got {self.scale!r}.")
+        super().__post_init__()
+
+    def inverse(self) -> "RigidTransform":
+        rotation = self.rotation.T
+        return RigidTransform(rotation, -(rotation @ self.translation))
+
+
+@dataclass(frozen=True)
+class AffineTransform:
+    """``x -> linear @ x + translation``.
+
+    Attributes
+    ----------
+    linear : ndarray of shape (D, D)
+    translation : ndarray of shape (D,)
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = AffineTransform(np.array([[2.0, 1.0], [0.0, 1.0]]), np.array([0.0, 1.0]))
+    >>> t(np.array([[1.0, 1.0]]))
+    array([[3., 2.]])
+    >>> t.inverse()(np.array([[3.0, 2.0]]))
+    array([[1., 1.]])
+    """
+
+    linear: np.ndarray
+    translation: np.ndarray
+
+    def __post_init__(self):
+        linear = _frozen(self.linear)
+        translation = _frozen(np.ravel(self.translation))
+        dim = linear.shape[0] if linear.ndim == 2 else -1
+        if linear.shape != (dim, dim) or translation.shape != (dim,):
+            raise InputError(
+                f"`linear` must be (D, D) and `translation` (D,); got {linear.shape} and {translation.shape}."
+            )
+        if not (np.all(np.isfinite(linear)) and np.all(np.isfinite(translation))):
+            raise InputError("`linear` and `translation` must be finite; got NaN or inf.")
+        object.__setattr__(self, "linear", linear)
+        object.__setattr__(self, "translation", translation)
+
+    @property
+    def matrix(self) -> np.ndarray:
+        """Homogeneous matrix of shape (D+1, D+1)."""
+        dim = self.linear.shape[0]
+        out = np.eye(dim + 1)
+        out[:dim, :dim] = self.linear
+        out[:dim, dim] = self.translation
+        return out
+
+    def __call__(self, points) -> np.ndarray:
+        points = as_points(points, name="points", n_dims=(self.linear.shape[0],))
+        return points @ self.linear.T + self.translation
+
+    def inverse(self) -> "AffineTransform":
+        """The inverse map; raises ``InputError`` when ``linear`` is singular."""
+        if np.linalg.cond(self.linear) > 1e14:
+            raise InputError(f"This affine transform is not invertible: `linear` is singular (cond {np.linalg.cond(self.linear):.3g}).")
+        inv = np.linalg.inv(self.linear)
+        return AffineTransform(inv, -(inv @ self.translation))
+
+
+@dataclass(frozen=True)
+class NonRigidTransform:
+    """CPD's motion-coherent displacement field ``z -> z + sum_m W[m] exp(-|z - y_m|^2 / (2 beta^2))``.
+
+    The field is defined everywhere, so it can be applied to points other than the control
+    points ``y_m`` (the moving set it was fitted on). It has no closed-form inverse.
+
+    Attributes
+    ----------
+    control_points : ndarray of shape (M, D)
+        The moving points ``y_m`` the kernel is centred on.
+    coefficients : ndarray of shape (M, D)
+        ``W`` of the CPD paper.
+    beta : float
+        Width of the Gaussian kernel.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> t = NonRigidTransform(np.zeros((1, 2)), np.array([[1.0, 0.0]]), beta=1.0)
+    >>> t(np.array([[0.0, 0.0], [10.0, 0.0]])).round(6)
+    array([[ 1.,  0.],
+           [10.,  0.]])
+    """
+
+    control_points: np.ndarray
+    coefficients: np.ndarray
+    beta: float
+
+    def __post_init__(self):
+        control = _frozen(self.control_points)
+        coefficients = _frozen(self.coefficients)
+        if control.ndim != 2 or coefficients.shape != control.shape:
+            raise InputError(
+                f"`control_points` and `coefficients` must both be (M, D); got {control.shape} and {coefficients.shape}."
+            )
+        if not np.isfinite(self.beta) or self.beta <= 0:
+            raise InputError(f"`beta` must be a finite number > 0; got {self.beta!r}.")
+        object.__setattr__(self, "control_points", control)
+        object.__setattr__(self, "coefficients", coefficients)
+        object.__setattr__(self, "beta", float(self.beta))
+
+    def displacement(self, points) -> np.ndarray:
+        """The displacement ``T(z) - z`` at each row of ``points``, in blocks of rows."""
+        points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
+        out = np.empty_like(points)
+        step = max(1, 2**22 // max(1, self.control_points.shape[0]))
+        for lo in range(0, points.shape[0], step):
+            block = points[lo : lo + step]
+            d2 = np.sum((block[:, None, :] - self.control_points[None, :, :]) ** 2, axis=2)
+            out[lo : lo + step] = np.exp(-d2 / (2.0 * self.beta**2)) @ self.coefficients
+        return out
+
+    def __call__(self, points) -> np.ndarray:
+        points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
+        return points + self.displacement(points)
+
+
+def random_rotation(n_dims: int, seed=None) -> np.ndarray:
+    """A uniformly distributed proper rotation matrix of shape (n_dims, n_dims).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> r = random_rotation(3, seed=0)
+    >>> bool(np.allclose(r @ r.T, np.eye(3))), round(float(np.linalg.det(r)), 12)
+    (True, 1.0)
+    """
+    from ._seeding import as_generator
+
+    rng = as_generator(seed)
+    q, r = np.linalg.qr(rng.standard_normal((n_dims, n_dims)))
+    q = q * np.sign(np.diag(r))
+    if np.linalg.det(q) < 0:
+        q[:, 0] = -q[:, 0]
+    return q
 
 
 def fit_similarity(source, target, *, scale: bool = True) -> SimilarityTransform:

@@ -1,0 +1,34 @@
+"""Point-set registration: CPD (rigid, similarity, affine, non-rigid), GPD and ICP.
+
+Every estimator takes ``fit(moving, fixed)``: the moving set Y (M x D) is transformed onto
+the fixed set X (N x D). CPD's variants share one EM loop and one E-step computed in log
+space; GPD (the thesis' Graph-based Point Drift) is any CPD with a centrality prior fed into
+that same E-step (SPEC section 3).
+"""
+
+from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, SimilarityTransform, random_rotation
+from ._cpd import AffineCPD, IterationInfo, NonRigidCPD, RigidCPD, alignment_error, initial_sigma2
+from ._estep import CentralityPrior, Posteriors
+from ._gpd import GPD, GRAPHS, centrality_prior, normalize_centrality
+from ._icp import ICP
+
+__all__ = [
+    "RigidCPD",
+    "AffineCPD",
+    "NonRigidCPD",
+    "GPD",
+    "ICP",
+    "GRAPHS",
+    "IterationInfo",
+    "Posteriors",
+    "CentralityPrior",
+    "centrality_prior",
+    "normalize_centrality",
+    "initial_sigma2",
+    "alignment_error",
+    "RigidTransform",
+    "SimilarityTransform",
+    "AffineTransform",
+    "NonRigidTransform",
+    "random_rotation",
+]

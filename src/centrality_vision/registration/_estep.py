@@ -1,0 +1,266 @@
+"""The one E-step shared by every CPD variant and by GPD.
+
+``_e_step(moving_t, fixed, sigma2, w, log_prior=None)`` returns the sufficient statistics of
+the posterior matrix ``P`` (M x N) of CPD [1]_ (or of GPD's, SPEC section 3) without ever
+forming it: ``P1 = P 1``, ``Pt1 = P^T 1``, ``PX = P X``, ``Np = 1^T P 1``, the negative
+log-likelihood and, for each fixed point, its most probable moving point. Everything is
+computed in log space (each row is shifted by its largest exponent before ``exp``), so a
+tiny ``sigma2`` neither underflows to 0/0 nor overflows.
+
+References
+----------
+.. [1] A. Myronenko and X. Song, "Point set registration: coherent point drift",
+   IEEE TPAMI 32(12), 2262-2275, 2010.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._parallel import get_num_threads, run_chunks
+from . import _kernels as K
+
+__all__ = ["Posteriors", "CentralityPrior", "E_STEP_METHODS", "_e_step", "dense_posterior"]
+
+E_STEP_METHODS = ("auto", "dense", "truncated")
+
+# Above this many pairs "auto" considers the truncated path.
+_DENSE_PAIRS = 4_000_000
+# Elements per dense block: 128k doubles = 1 MiB, which stays in a core's L2 cache.
+_BLOCK = 1 << 17
+
+
+@dataclass(frozen=True)
+class CentralityPrior:
+    """GPD's log prior ``scale * (log_weight[m] - (v_fixed[n] - v_moving[m])^2 / (2 phi2))``.
+
+    Kept in this separable form so that no M x N array is ever built. ``inv2phi2`` is
+    ``1 / (2 phi2)`` (0 drops the Gaussian term), ``scale`` weighs the prior against the
+    spatial term (1 = the thesis' eq. 5.10, 0 = CPD).
+    """
+
+    log_weight: np.ndarray
+    v_moving: np.ndarray
+    v_fixed: np.ndarray
+    inv2phi2: float
+    scale: float = 1.0
+
+    def bounds(self) -> tuple[float, float]:
+        """Lower and upper bound of the prior over all pairs (for the truncated search)."""
+        if self.scale == 0 or self.log_weight.size == 0:
+            return 0.0, 0.0
+        span = (max(self.v_fixed.max(), self.v_moving.max()) - min(self.v_fixed.min(), self.v_moving.min())) ** 2
+        low = self.scale * (self.log_weight.min() - span * self.inv2phi2)
+        return float(low), float(self.scale * self.log_weight.max())
+
+    def matrix(self) -> np.ndarray:
+        """The dense (M, N) prior, for tests and small problems."""
+        dv = self.v_fixed[None, :] - self.v_moving[:, None]
+        return self.scale * (self.log_weight[:, None] - dv * dv * self.inv2phi2)
+
+
+@dataclass(frozen=True)
+class Posteriors:
+    """Sufficient statistics of one E-step.
+
+    Attributes
+    ----------
+    p1 : ndarray of shape (M,)
+        ``P 1``: the expected number of fixed points each moving point explains.
+    pt1 : ndarray of shape (N,)
+        ``P^T 1``: the probability that each fixed point is not an outlier.
+    px : ndarray of shape (M, D)
+        ``P X``.
+    n_p : float
+        ``1^T P 1``.
+    neg_log_likelihood : float
+        ``-sum_n log(sum_m exp(s_mn) + c) + N D/2 log sigma2`` (constants dropped), CPD's
+        objective up to a constant.
+    best : ndarray of shape (N,)
+        For each fixed point, the moving point of largest posterior, or -1 where the outlier
+        component is more probable than any moving point.
+    """
+
+    p1: np.ndarray
+    pt1: np.ndarray
+    px: np.ndarray
+    n_p: float
+    neg_log_likelihood: float
+    best: np.ndarray
+    method: str = "dense"
+
+
+def log_outlier_constant(sigma2: float, w: float, n_dims: int, n_moving: int, n_fixed: int) -> float:
+    """``log c`` with ``c = (2 pi sigma2)^(D/2) w/(1-w) M/N``; ``-inf`` for ``w = 0``."""
+    if w == 0:
+        return -math.inf
+    return 0.5 * n_dims * math.log(2 * math.pi * sigma2) + math.log(w / (1 - w)) + math.log(n_moving / n_fixed)
+
+
+def _prior_arrays(prior: CentralityPrior | None):
+    if prior is None or prior.scale == 0:
+        empty = np.empty(0)
+        return empty, empty, empty, 0.0, 0.0
+    return prior.log_weight, prior.v_moving, prior.v_fixed, float(prior.scale), float(prior.inv2phi2)
+
+
+def _dense(moving_t, fixed, inv2s2, log_c, prior):
+    n_moving, n_dims = moving_t.shape
+    n_fixed = fixed.shape[0]
+    yt = np.ascontiguousarray(moving_t.T)
+    lw, vy, vx, scale, inv2phi2 = _prior_arrays(prior)
+    pt1 = np.empty(n_fixed)
+    log_den = np.empty(n_fixed)
+    best = np.empty(n_fixed, dtype=np.int64)
+    rows = max(1, _BLOCK // max(n_moving, 1))
+
+    def task(lo, hi):
+        p1 = np.zeros(n_moving)
+        pxt = np.zeros((n_dims, n_moving))
+        block = np.empty((rows, n_moving))
+        ref = np.empty(rows)
+        for a in range(lo, hi, rows):
+            b = min(a + rows, hi)
+            out = block[: b - a]
+            K.dense_scores(fixed, yt, a, b, inv2s2, log_c, lw, vy, vx, scale, inv2phi2, out, ref, best)
+            np.exp(out, out=out)
+            K.dense_accumulate(out, fixed, a, b, ref, log_c, p1, pxt, pt1, log_den)
+        return p1, pxt
+
+    parts = run_chunks(task, n_fixed)
+    p1 = sum(part[2][0] for part in parts)
+    pxt = sum(part[2][1] for part in parts)
+    return p1, pxt.T.copy(), pt1, log_den, best
+
+
+class _Grid:
+    """Moving points sorted into cubic cells of side ``cell`` (for the truncated path)."""
+
+    def __init__(self, points: np.ndarray, cell: float):
+        lo = points.min(axis=0)
+        extent = points.max(axis=0) - lo
+        # at most 2**20 cells per axis keeps keys far from int64 overflow in 3D
+        cell = max(cell, float(extent.max()) / 2**20, 1e-300)
+        self.origin = lo
+        self.cell = cell
+        self.dims = (np.floor(extent / cell).astype(np.int64) + 1)
+        keys = K.grid_keys(points, lo, cell, self.dims)
+        self.order = np.argsort(keys, kind="stable")
+        self.keys = keys[self.order]
+        self.points = np.ascontiguousarray(points[self.order])
+
+
+def _nearest_d2(moving_t, fixed):
+    from scipy.spatial import cKDTree
+
+    dist, _ = cKDTree(moving_t).query(fixed, k=1, workers=get_num_threads())
+    return dist * dist
+
+
+def _truncation_extra(sigma2, tau, prior):
+    low, high = (0.0, 0.0) if prior is None else prior.bounds()
+    return 2.0 * sigma2 * (tau + (high - low))
+
+
+def _truncated(moving_t, fixed, sigma2, inv2s2, log_c, prior, tau, grid=None, d2_min=None):
+    n_moving, n_dims = moving_t.shape
+    n_fixed = fixed.shape[0]
+    if d2_min is None:
+        d2_min = _nearest_d2(moving_t, fixed)
+    extra = _truncation_extra(sigma2, tau, prior)
+    if grid is None:
+        grid = _Grid(moving_t, math.sqrt(extra))
+    lw, vy, vx, scale, inv2phi2 = _prior_arrays(prior)
+    if lw.size:  # the prior follows the moving points into grid order
+        lw, vy = lw[grid.order], vy[grid.order]
+    pt1 = np.empty(n_fixed)
+    log_den = np.empty(n_fixed)
+    best = np.empty(n_fixed, dtype=np.int64)
+    capacity = max(n_moving, _BLOCK)
+
+    def task(lo, hi):
+        p1 = np.zeros(n_moving)
+        pxt = np.zeros((n_dims, n_moving))
+        index = np.empty(capacity, dtype=np.int64)
+        value = np.empty(capacity)
+        row_ptr = np.empty(capacity + 1, dtype=np.int64)
+        ref = np.empty(capacity)
+        a = lo
+        while a < hi:
+            b = K.truncated_scores(
+                fixed, grid.points, grid.keys, grid.origin, grid.cell, grid.dims, a, hi, d2_min, extra,
+                inv2s2, log_c, lw, vy, vx, scale, inv2phi2, index, value, row_ptr, ref, best,
+            )
+            if b <= a:  # pragma: no cover - capacity >= M makes this impossible
+                raise RuntimeError("truncated E-step: a row did not fit its buffer")
+            used = row_ptr[b - a]
+            e = value[:used]
+            np.exp(e, out=e)
+            K.sparse_accumulate(index, e, row_ptr, fixed, a, b, ref, log_c, p1, pxt, pt1, log_den)
+            a = b
+        return p1, pxt
+
+    parts = run_chunks(task, n_fixed)
+    p1_sorted = sum(part[2][0] for part in parts)
+    pxt_sorted = sum(part[2][1] for part in parts)
+    p1 = np.empty(n_moving)
+    p1[grid.order] = p1_sorted
+    px = np.empty((n_moving, n_dims))
+    px[grid.order] = pxt_sorted.T
+    best = np.where(best >= 0, grid.order[np.maximum(best, 0)], -1)
+    return p1, px, pt1, log_den, best
+
+
+def _choose(moving_t, fixed, sigma2, prior, tau):
+    """Dense or truncated: estimate the pairs the truncated path would visit on 256 rows."""
+    n_moving, n_fixed = moving_t.shape[0], fixed.shape[0]
+    if n_moving * n_fixed <= _DENSE_PAIRS:
+        return "dense", None
+    d2_min = _nearest_d2(moving_t, fixed)
+    extra = _truncation_extra(sigma2, tau, prior)
+    grid = _Grid(moving_t, math.sqrt(extra))
+    rows = np.linspace(0, n_fixed - 1, min(256, n_fixed)).astype(np.int64)
+    visited = K.count_candidates(fixed, rows, grid.keys, grid.origin, grid.cell, grid.dims, d2_min, extra, grid.points)
+    # the truncated path costs about twice a dense pair per visited pair (index, gather)
+    if 2.0 * visited.mean() < n_moving:
+        return "truncated", (grid, d2_min)
+    return "dense", None
+
+
+def _e_step(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None, *, method="auto", tau=None):
+    """The shared E-step; see the module docstring. ``tau`` is the truncation depth."""
+    n_moving, n_dims = moving_t.shape
+    n_fixed = fixed.shape[0]
+    inv2s2 = 1.0 / (2.0 * sigma2)
+    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    if tau is None:
+        # keep every term above 1e-16 of its row's largest, summed over all M of them
+        tau = 36.8 + math.log(n_moving)
+    cached = None
+    if method == "auto":
+        method, cached = _choose(moving_t, fixed, sigma2, log_prior, tau)
+    if method == "dense":
+        p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, log_prior)
+    else:
+        grid, d2_min = cached if cached is not None else (None, None)
+        p1, px, pt1, log_den, best = _truncated(moving_t, fixed, sigma2, inv2s2, log_c, log_prior, tau, grid, d2_min)
+    nll = float(-np.sum(log_den) + 0.5 * n_fixed * n_dims * math.log(sigma2))
+    return Posteriors(p1=p1, pt1=pt1, px=px, n_p=float(np.sum(pt1)), neg_log_likelihood=nll, best=best, method=method)
+
+
+def dense_posterior(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None) -> np.ndarray:
+    """The full posterior matrix ``P`` of shape (M, N), computed in log space (small sets only)."""
+    n_moving, n_dims = moving_t.shape
+    n_fixed = fixed.shape[0]
+    d2 = np.sum((moving_t[:, None, :] - fixed[None, :, :]) ** 2, axis=2)
+    s = -d2 / (2.0 * sigma2)
+    if log_prior is not None and log_prior.scale != 0:
+        s = s + log_prior.matrix()
+    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    ref = np.maximum(s.max(axis=0), log_c)
+    e = np.exp(s - ref)
+    den = e.sum(axis=0) + np.exp(log_c - ref)
+    return e / den

@@ -1,0 +1,246 @@
+"""Graph-based Point Drift (thesis ch. 5): CPD with a centrality prior in the shared E-step."""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from .. import graphs as _graphs
+from .._validation import ANY_DIMS, as_graph, as_points, check_choice, check_float, check_int
+from ..centrality import CENTRALITIES, compute
+from ..exceptions import InputError
+from ._cpd import RigidCPD, _CPD
+from ._estep import CentralityPrior
+
+__all__ = ["GPD", "GRAPHS", "centrality_prior", "normalize_centrality"]
+
+GRAPHS = ("delaunay", "gabriel", "emst", "knn", "complete", "edgeless")
+
+
+def _edgeless(points):
+    from scipy import sparse
+
+    n = points.shape[0]
+    return sparse.csr_array((n, n))
+
+
+def _build_graph(points: np.ndarray, graph, k: int):
+    if callable(graph):
+        return as_graph(graph(points), name="graph(points)")
+    if points.shape[0] < 3 and graph in ("delaunay", "gabriel"):
+        return _graphs.complete_graph(points) if points.shape[0] > 1 else _edgeless(points)
+    if graph == "delaunay":
+        return _graphs.delaunay_graph(points)
+    if graph == "gabriel":
+        return _graphs.gabriel_graph(points)
+    if graph == "emst":
+        return _graphs.emst_graph(points) if points.shape[0] > 1 else _edgeless(points)
+    if graph == "knn":
+        return _graphs.knn_graph(points, k=min(k, points.shape[0] - 1)) if points.shape[0] > 1 else _edgeless(points)
+    if graph == "complete":
+        return _graphs.complete_graph(points) if points.shape[0] > 1 else _edgeless(points)
+    return _edgeless(points)
+
+
+def normalize_centrality(values, *, name: str = "values") -> np.ndarray:
+    """Min-max scale centrality values to [0, 1]; a constant vector (to 1e-9) becomes zeros.
+
+    Examples
+    --------
+    >>> normalize_centrality([2.0, 4.0, 3.0])
+    array([0. , 1. , 0.5])
+    >>> normalize_centrality([1.0, 1.0 + 1e-15])
+    array([0., 0.])
+    """
+    v = np.asarray(values, dtype=float)
+    if v.ndim != 1 or v.size == 0:
+        raise InputError(f"`{name}` must be a non-empty 1D array of centrality values; got shape {v.shape}.")
+    if not np.all(np.isfinite(v)):
+        raise InputError(f"`{name}` must be finite; got NaN or inf.")
+    lo, hi = float(v.min()), float(v.max())
+    if hi - lo <= 1e-9 * max(abs(hi), abs(lo), 1e-300):
+        return np.zeros_like(v)
+    return (v - lo) / (hi - lo)
+
+
+def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=0.5) -> CentralityPrior:
+    """GPD's prior from normalised centralities of the moving and fixed sets (SPEC section 3).
+
+    ``h(m)`` is the share of moving points whose centrality falls in the histogram bin of
+    ``v(y_m)`` (``bins`` equal bins on [0, 1], or any ``numpy.histogram`` rule name). It is
+    the thesis' bin count divided by M: a constant factor that cancels when ``w = 0`` and
+    otherwise keeps the outlier constant ``c`` on CPD's scale, so that a constant centrality
+    gives exactly CPD (Theorem 1). ``phi2`` defaults to the variance of the fixed set's
+    centralities; when that is 0 the Gaussian term carries no information and is dropped.
+    ``kappa`` weighs geometry against topology as ``kappa A + (1 - kappa) B``, with the
+    overall factor absorbed in sigma2 (which CPD re-estimates): the prior is multiplied by
+    ``(1 - kappa) / kappa``, so 0.5 is the thesis' equal weighting and 1 is plain CPD.
+
+    Examples
+    --------
+    >>> p = centrality_prior([0.0, 0.0, 1.0], [0.0, 1.0], bins=2)
+    >>> p.log_weight.round(4)  # two of three moving values share the first bin
+    array([-0.4055, -0.4055, -1.0986])
+    >>> round(p.inv2phi2, 6)  # phi2 = var([0, 1]) = 0.25
+    2.0
+    """
+    vy = np.asarray(v_moving, dtype=float)
+    vx = np.asarray(v_fixed, dtype=float)
+    for name, v in (("v_moving", vy), ("v_fixed", vx)):
+        if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)):
+            raise InputError(f"`{name}` must be a non-empty 1D finite array; got shape {v.shape}.")
+        if v.min() < -1e-12 or v.max() > 1 + 1e-12:
+            raise InputError(f"`{name}` must be normalised to [0, 1]; got range [{v.min():.6g}, {v.max():.6g}].")
+    if isinstance(bins, str):
+        edges = np.histogram_bin_edges(vy, bins=bins, range=(0.0, 1.0))
+    else:
+        edges = np.linspace(0.0, 1.0, check_int(bins, name="bins", low=1) + 1)
+    counts, _ = np.histogram(vy, bins=edges)
+    which = np.clip(np.searchsorted(edges, vy, side="right") - 1, 0, counts.size - 1)
+    log_weight = np.log(counts[which] / vy.size)
+    if phi is None:
+        phi2 = float(np.var(vx))
+    else:
+        phi2 = check_float(phi, name="phi", low=0.0, low_open=True) ** 2
+    inv2phi2 = 0.0 if phi2 <= 0 else 1.0 / (2.0 * phi2)
+    kappa = check_float(kappa, name="kappa", low=0.0, high=1.0, low_open=True)
+    return CentralityPrior(log_weight, vy.copy(), vx.copy(), inv2phi2, (1.0 - kappa) / kappa)
+
+
+class GPD:
+    """Graph-based Point Drift: any CPD whose E-step is weighted by a centrality prior.
+
+    Builds a data-graph on each set, computes a centrality on each, normalises it to [0, 1]
+    and runs ``base_cpd`` with the posterior of thesis eq. 5.10 (SPEC section 3):
+    ``P_g(m | x_n) = h(m) exp(psi(x_n, m)) / (sum_k h(k) exp(psi(x_n, k)) + c)``,
+    ``psi = -(|x_n - T(y_m)|^2 / (2 sigma2) + (v(x_n) - v(y_m))^2 / (2 phi^2))``.
+    The M-steps are the base CPD's, unchanged. The graphs and centralities are computed once,
+    on the sets as given (topology does not move with the transform).
+
+    Parameters
+    ----------
+    base_cpd : RigidCPD, AffineCPD or NonRigidCPD, optional
+        The CPD whose loop, M-step and stopping rule are used (default ``RigidCPD()``).
+        It is copied, never fitted itself.
+    centrality : str or callable, default='closeness'
+        One of :data:`centrality_vision.centrality.CENTRALITIES`, or ``f(graph) -> values``.
+    graph : str or callable, default='delaunay'
+        One of :data:`GRAPHS` or ``f(points) -> sparse graph``.
+    bins : int or str, default=10
+        Histogram bins for ``h(m)`` (see :func:`centrality_prior`).
+    phi : float, optional
+        Width of the Gaussian on centrality differences; default: the standard deviation of
+        the fixed set's centralities.
+    kappa : float in (0, 1], default=0.5
+        Geometry-vs-topology balance; 0.5 is the thesis, 1 is plain CPD.
+    weights : bool, default=False
+        Use edge lengths in the centrality (shortest paths by length) instead of hop counts.
+    k : int, default=6
+        Neighbours for ``graph='knn'``.
+
+    Attributes
+    ----------
+    The fitted attributes of the base CPD (``transform_``, ``moving_transformed_``,
+    ``sigma2_``, ``n_iter_``, ``converged_``, ``history_``, ``correspondence_``,
+    ``posteriors_``), plus ``moving_centrality_`` and ``fixed_centrality_`` (normalised),
+    ``prior_`` (:class:`CentralityPrior`) and ``estimator_`` (the fitted copy of base_cpd).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from centrality_vision.registration import GPD, RigidCPD
+    >>> y = np.random.default_rng(0).random((60, 2))
+    >>> r = np.array([[np.cos(0.5), -np.sin(0.5)], [np.sin(0.5), np.cos(0.5)]])
+    >>> x = y @ r.T + 0.5
+    >>> gpd = GPD(RigidCPD(scale=False, tol=1e-10), centrality="closeness").fit(y, x)
+    >>> bool(np.allclose(gpd.moving_transformed_, x, atol=1e-6))
+    True
+    """
+
+    _FITTED = ("transform_", "moving_transformed_", "sigma2_", "n_iter_", "converged_", "history_", "correspondence_", "posteriors_")
+
+    def __init__(self, base_cpd=None, *, centrality="closeness", graph="delaunay", bins=10, phi=None, kappa=0.5, weights=False, k=6):
+        self.base_cpd = base_cpd
+        self.centrality = centrality
+        self.graph = graph
+        self.bins = bins
+        self.phi = phi
+        self.kappa = kappa
+        self.weights = weights
+        self.k = k
+
+    def __repr__(self) -> str:
+        return (
+            f"GPD({self.base_cpd!r}, centrality={self.centrality!r}, graph={self.graph!r}, bins={self.bins!r}, "
+            f"phi={self.phi!r}, kappa={self.kappa!r}, weights={self.weights!r}, k={self.k!r})"
+        )
+
+    def _check_params(self):
+        if self.base_cpd is not None and not isinstance(self.base_cpd, _CPD):
+            raise TypeError(f"`base_cpd` must be a RigidCPD, AffineCPD or NonRigidCPD; got {self.base_cpd!r}.")
+        if not callable(self.centrality):
+            check_choice(self.centrality, CENTRALITIES, name="centrality")
+        if not callable(self.graph):
+            check_choice(self.graph, GRAPHS, name="graph")
+        if not isinstance(self.weights, (bool, np.bool_)):
+            raise TypeError(f"`weights` must be a bool; got {self.weights!r}.")
+        check_int(self.k, name="k", low=1)
+
+    def _centrality(self, points, graph, given, name):
+        if given is not None:
+            values = np.asarray(given, dtype=float)
+            if values.shape != (points.shape[0],):
+                raise InputError(f"`{name}_centrality` must have shape ({points.shape[0]},); got {values.shape}.")
+            return normalize_centrality(values, name=f"{name}_centrality"), None
+        if graph is None:
+            graph = _build_graph(points, self.graph, self.k)
+        else:
+            graph = as_graph(graph, name=f"{name}_graph")
+            if graph.shape[0] != points.shape[0]:
+                raise InputError(f"`{name}_graph` must have {points.shape[0]} nodes, one per point; got {graph.shape[0]}.")
+        if callable(self.centrality):
+            values = np.asarray(self.centrality(graph), dtype=float)
+            if values.shape != (points.shape[0],):
+                raise InputError(f"`centrality(graph)` must return shape ({points.shape[0]},); got {values.shape}.")
+        else:
+            values = compute(graph, self.centrality, weights=bool(self.weights))
+        return normalize_centrality(values, name=f"{name} centrality"), graph
+
+    def fit(self, moving, fixed, *, true_moving=None, moving_graph=None, fixed_graph=None, moving_centrality=None, fixed_centrality=None):
+        """Register ``moving`` onto ``fixed``; returns ``self``.
+
+        ``moving_graph``/``fixed_graph`` (sparse adjacency, one node per point) or
+        ``moving_centrality``/``fixed_centrality`` (raw values, normalised here) replace the
+        ones GPD would build. ``true_moving`` as in :meth:`RigidCPD.fit`.
+        """
+        self._check_params()
+        base = RigidCPD() if self.base_cpd is None else self.base_cpd
+        moving_arr = as_points(moving, name="moving", n_dims=ANY_DIMS)
+        fixed_arr = as_points(fixed, name="fixed", n_dims=ANY_DIMS)
+        vy, gy = self._centrality(moving_arr, moving_graph, moving_centrality, "moving")
+        vx, gx = self._centrality(fixed_arr, fixed_graph, fixed_centrality, "fixed")
+        prior = centrality_prior(vy, vx, bins=self.bins, phi=self.phi, kappa=self.kappa)
+        estimator = copy.copy(base)
+        estimator._fit(moving_arr, fixed_arr, true_moving=true_moving, prior=prior)
+        for name in self._FITTED:
+            setattr(self, name, getattr(estimator, name))
+        self.moving_centrality_ = vy
+        self.fixed_centrality_ = vx
+        self.moving_graph_ = gy
+        self.fixed_graph_ = gx
+        self.prior_ = prior
+        self.estimator_ = estimator
+        return self
+
+    def transform(self, points) -> np.ndarray:
+        """Apply the fitted transform to new points."""
+        if not hasattr(self, "estimator_"):
+            raise InputError("This GPD is not fitted yet; call fit(moving, fixed) first.")
+        return self.estimator_.transform(points)
+
+    def posterior(self) -> np.ndarray:
+        """The full GPD posterior matrix (M x N) of the final state; see :meth:`RigidCPD.posterior`."""
+        if not hasattr(self, "estimator_"):
+            raise InputError("This GPD is not fitted yet; call fit(moving, fixed) first.")
+        return self.estimator_.posterior()

@@ -1,0 +1,141 @@
+"""CPD's M-steps [1]_: pure functions of the E-step statistics, returning a transform and sigma2.
+
+Notation as in the paper: ``mu_x = X^T P^T 1 / Np``, ``mu_y = Y^T P 1 / Np``,
+``A = (X - mu_x)^T P^T (Y - mu_y) = (P X)^T Y - Np mu_x mu_y^T`` (D x D). Points are rows,
+so a transform maps ``y -> L y + t`` as ``Y @ L.T + t``.
+
+References
+----------
+.. [1] A. Myronenko and X. Song, "Point set registration: coherent point drift",
+   IEEE TPAMI 32(12), 2262-2275, 2010, figs. 2-4.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import linalg
+
+from ..transforms import AffineTransform, RigidTransform, SimilarityTransform
+from ._estep import Posteriors
+
+__all__ = ["rigid_m_step", "affine_m_step", "nonrigid_m_step", "gaussian_kernel", "LowRankKernel"]
+
+
+def _moments(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
+    n_p = post.n_p
+    mu_x = fixed.T @ post.pt1 / n_p
+    mu_y = moving.T @ post.p1 / n_p
+    a = post.px.T @ moving - n_p * np.outer(mu_x, mu_y)
+    x_hat = fixed - mu_x
+    y_hat = moving - mu_y
+    x_px = float(post.pt1 @ np.einsum("ij,ij->i", x_hat, x_hat))
+    return n_p, mu_x, mu_y, a, x_hat, y_hat, x_px
+
+
+def rigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, scale: bool = True):
+    """Rigid (``scale=False``) or similarity M-step: ``(transform, sigma2)``.
+
+    The rotation is the proper one closest to ``A`` (SVD with the last singular vector's sign
+    fixed so that det R = +1); ``s = tr(A^T R) / tr(Yh^T d(P1) Yh)``.
+    """
+    n_p, mu_x, mu_y, a, _, y_hat, x_px = _moments(post, moving, fixed)
+    n_dims = moving.shape[1]
+    u, sv, vt = np.linalg.svd(a)
+    c = np.ones(n_dims)
+    c[-1] = 1.0 if np.linalg.det(u @ vt) >= 0 else -1.0
+    rotation = (u * c) @ vt
+    tr_ar = float(np.sum(sv * c))
+    y_py = float(post.p1 @ np.einsum("ij,ij->i", y_hat, y_hat))
+    s = tr_ar / y_py if scale and y_py > 0 and tr_ar > 0 else 1.0
+    sigma2 = (x_px - 2 * s * tr_ar + s * s * y_py) / (n_p * n_dims)
+    translation = mu_x - s * rotation @ mu_y
+    transform = SimilarityTransform(rotation, translation, s) if scale else RigidTransform(rotation, translation)
+    return transform, float(sigma2)
+
+
+def affine_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
+    """Affine M-step: ``B = A (Yh^T d(P1) Yh)^-1``; returns ``(transform, sigma2)``.
+
+    A singular ``Yh^T d(P1) Yh`` (collinear moving points) takes the minimum-norm solution.
+    """
+    n_p, mu_x, mu_y, a, _, y_hat, x_px = _moments(post, moving, fixed)
+    n_dims = moving.shape[1]
+    y_py = (y_hat * post.p1[:, None]).T @ y_hat
+    linear = np.linalg.lstsq(y_py.T, a.T, rcond=None)[0].T
+    sigma2 = (x_px - float(np.sum(a * linear))) / (n_p * n_dims)
+    return AffineTransform(linear, mu_x - linear @ mu_y), float(sigma2)
+
+
+def gaussian_kernel(a: np.ndarray, b: np.ndarray, beta: float) -> np.ndarray:
+    """``G[i, j] = exp(-|a_i - b_j|^2 / (2 beta^2))``."""
+    sq = np.einsum("ij,ij->i", a, a)[:, None] + np.einsum("ij,ij->i", b, b)[None, :] - 2.0 * a @ b.T
+    np.maximum(sq, 0.0, out=sq)
+    sq *= -1.0 / (2.0 * beta * beta)
+    return np.exp(sq, out=sq)
+
+
+class LowRankKernel:
+    """``G ~ Q diag(values) Q^T`` from the ``rank`` largest eigenpairs of the kernel matrix.
+
+    The kernel is never formed for large sets: ARPACK works with blocked products ``G v``.
+    """
+
+    def __init__(self, moving: np.ndarray, beta: float, rank: int, seed: int = 0):
+        from scipy.sparse.linalg import LinearOperator, eigsh
+
+        n = moving.shape[0]
+        if n <= 6000:
+            op = gaussian_kernel(moving, moving, beta)
+        else:
+            step = max(1, 2**24 // n)
+
+            def matvec(v):
+                v = np.asarray(v).reshape(n, -1)
+                out = np.empty_like(v)
+                for lo in range(0, n, step):
+                    out[lo : lo + step] = gaussian_kernel(moving[lo : lo + step], moving, beta) @ v
+                return out
+
+            op = LinearOperator((n, n), matvec=matvec, matmat=matvec, dtype=float)
+        v0 = np.random.default_rng(seed).standard_normal(n)
+        values, vectors = eigsh(op, k=rank, which="LM", v0=v0)
+        keep = values > 0
+        self.values = values[keep]
+        self.vectors = vectors[:, keep]
+
+    def apply(self, w: np.ndarray) -> np.ndarray:
+        """``G w``."""
+        return self.vectors @ (self.values[:, None] * (self.vectors.T @ w))
+
+    def penalty(self, w: np.ndarray) -> float:
+        """``tr(w^T G w)``."""
+        qw = self.vectors.T @ w
+        return float(np.sum(self.values[:, None] * qw * qw))
+
+
+def nonrigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, kernel, lam: float, sigma2: float):
+    """Non-rigid M-step: solve ``(d(P1) G + lam sigma2 I) W = P X - d(P1) Y``.
+
+    ``kernel`` is the dense ``G`` (exact) or a :class:`LowRankKernel` (the Woodbury form of
+    the CPD paper's section 5). Returns ``(W, T(Y), sigma2_new)``.
+    """
+    n_dims = moving.shape[1]
+    p1 = post.p1
+    rhs = post.px - p1[:, None] * moving
+    ls2 = lam * sigma2
+    if isinstance(kernel, LowRankKernel):
+        q, values = kernel.vectors, kernel.values
+        dpq = p1[:, None] * q
+        inner = ls2 * np.diag(1.0 / values) + q.T @ dpq
+        w = (rhs - dpq @ linalg.solve(inner, q.T @ rhs, assume_a="sym")) / ls2
+        moved = moving + kernel.apply(w)
+    else:
+        system = p1[:, None] * kernel
+        system[np.diag_indices_from(system)] += ls2
+        w = linalg.solve(system, rhs, overwrite_a=True, check_finite=False)
+        moved = moving + kernel @ w
+    x_px = float(post.pt1 @ np.einsum("ij,ij->i", fixed, fixed))
+    y_py = float(p1 @ np.einsum("ij,ij->i", moved, moved))
+    tr_pxy = float(np.sum(moved * post.px))
+    sigma2_new = (x_px - 2 * tr_pxy + y_py) / (post.n_p * n_dims)
+    return w, moved, float(sigma2_new)
