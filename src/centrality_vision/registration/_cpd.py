@@ -80,8 +80,9 @@ class _CPD:
     def get_params(self) -> dict:
         import inspect
 
-        names = [p for c in type(self).__mro__ if "__init__" in c.__dict__ for p in inspect.signature(c.__init__).parameters]
-        return {name: getattr(self, name) for name in dict.fromkeys(names) if name not in ("self", "kwargs")}
+        classes = [c for c in type(self).__mro__ if issubclass(c, _CPD) and "__init__" in c.__dict__]
+        names = [p for c in classes for p in inspect.signature(c.__init__).parameters if p != "self"]
+        return {name: getattr(self, name) for name in dict.fromkeys(names)}
 
     def __repr__(self) -> str:
         params = ", ".join(f"{k}={v!r}" for k, v in self.get_params().items())

@@ -157,7 +157,8 @@ def _nearest_d2(moving_t, fixed):
     from scipy.spatial import cKDTree
 
     dist, _ = cKDTree(moving_t).query(fixed, k=1, workers=get_num_threads())
-    return dist * dist
+    # slack so that rounding (the tree's sqrt vs our squared sum) never drops the nearest point
+    return dist * dist * (1.0 + 1e-9) + 1e-300
 
 
 def _truncation_extra(sigma2, tau, prior):

@@ -1,0 +1,114 @@
+"""The shared E-step: both paths against the dense posterior, log-space robustness."""
+
+import numpy as np
+import pytest
+
+from centrality_vision.registration._estep import CentralityPrior, _e_step, dense_posterior, log_outlier_constant
+
+
+def _brute(moving, fixed, sigma2, w, prior=None):
+    """Posterior straight from the formula of SPEC section 3, in plain float64."""
+    m, d = moving.shape
+    n = fixed.shape[0]
+    d2 = ((moving[:, None, :] - fixed[None, :, :]) ** 2).sum(-1)
+    k = np.exp(-d2 / (2 * sigma2))
+    if prior is not None:
+        k = k * np.exp(prior.matrix())
+    c = (2 * np.pi * sigma2) ** (d / 2) * w / (1 - w) * m / n
+    den = k.sum(0) + c
+    nll = -np.log(den).sum() + n * d / 2 * np.log(sigma2)
+    return k / den, nll
+
+
+def _prior(rng, m, n, scale=1.0):
+    return CentralityPrior(np.log(rng.uniform(0.1, 1, m)), rng.random(m), rng.random(n), 2.5, scale)
+
+
+@pytest.mark.parametrize("method", ["dense", "truncated"])
+@pytest.mark.parametrize(
+    ("m", "n", "d", "w", "sigma2"),
+    [(30, 40, 2, 0.0, 0.3), (50, 35, 3, 0.2, 0.05), (80, 60, 2, 0.5, 0.002), (1, 1, 2, 0.0, 1.0), (1, 7, 3, 0.1, 0.5)],
+)
+@pytest.mark.parametrize("with_prior", [False, True])
+def test_statistics_equal_brute_force(method, m, n, d, w, sigma2, with_prior):
+    rng = np.random.default_rng(m * 100 + n)
+    moving, fixed = rng.random((m, d)), rng.random((n, d))
+    prior = _prior(rng, m, n) if with_prior else None
+    p, nll = _brute(moving, fixed, sigma2, w, prior)
+    post = _e_step(moving, fixed, sigma2, w, prior, method=method)
+    assert post.method == method
+    np.testing.assert_allclose(post.p1, p.sum(1), atol=1e-13)
+    np.testing.assert_allclose(post.pt1, p.sum(0), atol=1e-13)
+    np.testing.assert_allclose(post.px, p @ fixed, atol=1e-13)
+    assert post.n_p == pytest.approx(p.sum(), abs=1e-12)
+    assert post.neg_log_likelihood == pytest.approx(nll, rel=1e-12, abs=1e-10)
+    np.testing.assert_allclose(dense_posterior(moving, fixed, sigma2, w, prior), p, atol=1e-14)
+    # best: the argmax of each column, -1 where the outlier term c beats every moving point
+    expect = p.argmax(0)
+    expect[(1 - p.sum(0)) > p.max(0)] = -1  # the outlier term c / den beats every moving point
+    np.testing.assert_array_equal(post.best, expect)
+
+
+def test_log_outlier_constant_is_log_of_c():
+    c = (2 * np.pi * 0.3) ** 1.5 * 0.2 / 0.8 * 40 / 50
+    assert log_outlier_constant(0.3, 0.2, 3, 40, 50) == pytest.approx(np.log(c), rel=1e-14)
+    assert log_outlier_constant(0.3, 0.0, 3, 40, 50) == -np.inf
+
+
+def test_columns_sum_to_one_without_outliers():
+    rng = np.random.default_rng(1)
+    post = _e_step(rng.random((20, 2)), rng.random((25, 2)), 0.1, 0.0)
+    np.testing.assert_allclose(post.pt1, 1.0, atol=1e-14)
+    assert post.n_p == pytest.approx(25)
+
+
+@pytest.mark.parametrize("method", ["dense", "truncated"])
+def test_tiny_sigma2_gives_hard_assignments_not_nan(method):
+    rng = np.random.default_rng(2)
+    moving, fixed = rng.random((15, 2)), rng.random((12, 2))
+    post = _e_step(moving, fixed, 1e-200, 0.0, method=method)
+    nearest = ((moving[:, None] - fixed[None]) ** 2).sum(-1).argmin(0)
+    assert np.all(np.isfinite(post.p1)) and np.isfinite(post.neg_log_likelihood)
+    np.testing.assert_array_equal(post.best, nearest)
+    np.testing.assert_allclose(post.px, np.array([fixed[nearest == j].sum(0) for j in range(15)]), atol=1e-12)
+    np.testing.assert_allclose(post.p1, np.bincount(nearest, minlength=15), atol=1e-12)
+    # with an outlier weight, a tiny sigma2 makes every fixed point an outlier: P -> 0, still finite
+    post = _e_step(moving, fixed, 1e-200, 0.3, method=method)
+    assert np.all(post.p1 == 0) and np.all(post.best == -1) and np.isfinite(post.neg_log_likelihood)
+
+
+def test_huge_sigma2_gives_uniform_posterior():
+    rng = np.random.default_rng(3)
+    post = _e_step(rng.random((10, 3)), rng.random((8, 3)), 1e12, 0.0)
+    np.testing.assert_allclose(post.p1, 8 / 10, rtol=1e-9)
+
+
+def test_truncated_path_matches_dense_on_a_large_set():
+    rng = np.random.default_rng(4)
+    moving, fixed = rng.random((3000, 2)), rng.random((2500, 2)) * 1.1
+    prior = _prior(rng, 3000, 2500)
+    for sigma2, w in ((1e-4, 0.0), (1e-3, 0.1), (0.05, 0.2)):
+        dense = _e_step(moving, fixed, sigma2, w, prior, method="dense")
+        trunc = _e_step(moving, fixed, sigma2, w, prior, method="truncated")
+        for name in ("p1", "pt1", "px"):
+            np.testing.assert_allclose(getattr(trunc, name), getattr(dense, name), atol=1e-12)
+        assert trunc.neg_log_likelihood == pytest.approx(dense.neg_log_likelihood, rel=1e-13)
+        np.testing.assert_array_equal(trunc.best, dense.best)
+
+
+def test_auto_picks_truncated_only_when_it_visits_few_pairs():
+    rng = np.random.default_rng(5)
+    moving, fixed = rng.random((2500, 2)), rng.random((2500, 2))
+    assert _e_step(moving, fixed, 1e-5, 0.0, method="auto").method == "truncated"
+    assert _e_step(moving, fixed, 1.0, 0.0, method="auto").method == "dense"
+    assert _e_step(moving[:100], fixed[:100], 1e-5, 0.0, method="auto").method == "dense"
+
+
+def test_far_fixed_points_keep_their_nearest_moving_point():
+    # a fixed point far from every moving point must still be explained (w = 0): the
+    # truncation radius is relative to each point's nearest neighbour, not absolute
+    moving = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    fixed = np.array([[0.1, 0.0], [100.0, 0.0]])
+    post = _e_step(moving, fixed, 1e-3, 0.0, method="truncated")
+    np.testing.assert_allclose(post.pt1, 1.0)
+    assert post.best.tolist() == [0, 1]
