@@ -298,3 +298,23 @@ def test_importing_plotting_does_not_import_matplotlib():
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=False)
     assert result.returncode == 0, result.stderr
+
+
+def test_registration_figures():
+    from centrality_vision.plotting import plot_alignment_errors, plot_registration_snapshots
+
+    x = np.random.default_rng(0).random((15, 2))
+    fig = plot_registration_snapshots(x, {"A": {0: x, 3: x + 0.1}, "B": {0: x}}, iterations=[0, 3])
+    assert len(fig.axes) == 4
+    # B stopped at iteration 0: its second panel shows that frame and says so
+    assert fig.axes[3].get_title() == "B: 0"
+    fig3 = plot_registration_snapshots(np.random.default_rng(1).random((10, 3)), {"A": {1: np.zeros((4, 3))}})
+    assert fig3.axes[0].name == "3d"
+    ax = plot_alignment_errors({"A": [3.0, 1.0], "B": [3.0, 2.0, 0.5]}, log=True)
+    assert [line.get_xdata().tolist() for line in ax.lines] == [[0, 1], [0, 1, 2]]
+    with pytest.raises(TypeError, match="snapshots"):
+        plot_registration_snapshots(x, {})
+    with pytest.raises(ValueError, match="true_moving"):
+        plot_alignment_errors({"A": None})
+    with pytest.raises(ValueError, match="snapshots"):
+        plot_registration_snapshots(x, {"A": {0: np.zeros((3, 3))}})

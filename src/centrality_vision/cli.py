@@ -78,7 +78,7 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
-_EXPERIMENTS = {"table-4.1": "table_4_1", "fig-6.4": "fig_6_4", "fig-7.4": "fig_7_4"}
+_EXPERIMENTS = {"table-4.1": "table_4_1", "fig-5.3": "fig_5_3", "fig-6.4": "fig_6_4", "fig-7.4": "fig_7_4"}
 
 
 def _reproduce(args: argparse.Namespace) -> int:

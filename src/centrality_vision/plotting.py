@@ -18,7 +18,14 @@ from scipy import sparse
 from ._validation import _describe, as_graph, as_points, check_float
 from .exceptions import InputError
 
-__all__ = ["plot_graph", "plot_centrality_image", "save_figure"]
+__all__ = [
+    "plot_graph",
+    "plot_centrality_image",
+    "plot_matching",
+    "plot_registration_snapshots",
+    "plot_alignment_errors",
+    "save_figure",
+]
 
 
 def _as_values(values, *, n: int, other: str) -> np.ndarray:
@@ -378,6 +385,129 @@ def plot_matching(moving, fixed, correspondence, *, moving_graph=None, fixed_gra
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.legend(loc="upper right")
+    if title:
+        ax.set_title(title)
+    return ax
+
+
+def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, title=None):
+    """A grid of registrations: one column per method, one row per iteration (thesis figs. 5.4, 5.5).
+
+    Parameters
+    ----------
+    fixed : array_like of shape (N, D), D in {2, 3}
+        Drawn as red stars in every panel.
+    snapshots : dict
+        ``{method label: {iteration: moving points (M, D)}}``, e.g. from
+        :class:`centrality_vision.registration.Snapshots`; drawn as blue circles.
+    iterations : sequence of int, optional
+        Rows to draw; by default every iteration any method recorded. A method that stopped
+        earlier shows its last recorded state, titled with the iteration it is from.
+    fig : matplotlib Figure, optional
+    title : str, optional
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> import numpy as np
+    >>> x = np.random.default_rng(0).random((20, 2))
+    >>> fig = plot_registration_snapshots(x, {"CPD": {1: x + 0.1, 2: x}, "GPD": {1: x}})
+    >>> len(fig.axes)
+    4
+    """
+    import matplotlib.pyplot as plt
+
+    fixed = as_points(fixed, name="fixed", n_dims=(2, 3))
+    dim = fixed.shape[1]
+    if not isinstance(snapshots, dict) or not snapshots:
+        raise TypeError(f"`snapshots` must be a non-empty dict {{label: {{iteration: points}}}}; got {_describe(snapshots)}.")
+    frames = {}
+    for label, record in snapshots.items():
+        if not isinstance(record, dict) or not record:
+            raise InputError(f"`snapshots[{label!r}]` must be a non-empty dict {{iteration: points}}; got {_describe(record)}.")
+        frames[label] = {int(k): as_points(v, name=f"snapshots[{label!r}][{k}]", n_dims=(dim,)) for k, v in record.items()}
+    rows = sorted({k for record in frames.values() for k in record}) if iterations is None else [int(i) for i in iterations]
+    if not rows:
+        raise InputError("`iterations` must name at least one iteration.")
+    cols = list(frames)
+    if fig is None:
+        span = np.ptp(fixed, axis=0)
+        aspect = float(span[1] / span[0]) if dim == 2 and span[0] > 0 else 1.0
+        fig = plt.figure(figsize=(2.6 * len(cols), 0.6 + 2.6 * min(max(aspect, 0.4), 1.5) * len(rows)))
+    kw = {"projection": "3d"} if dim == 3 else {}
+    for r, iteration in enumerate(rows):
+        for c, label in enumerate(cols):
+            ax = fig.add_subplot(len(rows), len(cols), r * len(cols) + c + 1, **kw)
+            record = frames[label]
+            shown = max((k for k in record if k <= iteration), default=min(record))
+            moving = record[shown]
+            ax.scatter(*fixed.T, marker="*", s=14, color="tab:red", label="fixed")
+            ax.scatter(*moving.T, marker="o", s=10, facecolors="none", edgecolors="tab:blue", label="moving")
+            if dim == 2:
+                ax.set_aspect("equal")
+            ax.set_xticks([])
+            ax.set_yticks([])
+            if dim == 3:
+                ax.set_zticks([])
+            heading = f"{label}: {shown}" if shown != iteration else label
+            ax.set_title(heading if r == 0 or shown != iteration else "", fontsize=9)
+            if c == 0:
+                ax.text2D(-0.1, 0.5, f"{iteration}", transform=ax.transAxes, rotation=90, va="center") if dim == 3 else ax.set_ylabel(f"iteration {iteration}")
+    if title:
+        fig.suptitle(title)
+    fig.tight_layout()
+    return fig
+
+
+def plot_alignment_errors(errors, *, ax=None, title=None, log=False):
+    """Alignment error per iteration for several methods on one plot (thesis figs. 5.3, 5.6, 5.8).
+
+    Parameters
+    ----------
+    errors : dict
+        ``{method label: sequence of errors}``, entry ``k`` after ``k`` iterations
+        (e.g. ``estimator.history_["error"]``).
+    ax : matplotlib Axes, optional
+    title : str, optional
+    log : bool, default=False
+        Logarithmic error axis.
+
+    Returns
+    -------
+    ax : matplotlib Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> ax = plot_alignment_errors({"CPD": [4.0, 2.0, 1.0], "GPD (closeness)": [4.0, 1.0, 0.5]})
+    >>> len(ax.lines)
+    2
+    """
+    import matplotlib.pyplot as plt
+
+    if not isinstance(errors, dict) or not errors:
+        raise TypeError(f"`errors` must be a non-empty dict {{label: errors per iteration}}; got {_describe(errors)}.")
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5, 3.5))
+    else:
+        _check_ax(ax, three_d=False, why="for error curves")
+    for label, values in errors.items():
+        if values is None:
+            raise InputError(f"`errors[{label!r}]` is None: fit with `true_moving=` to record alignment errors.")
+        v = _as_values(values, n=len(values), other=f"errors[{label!r}]")
+        ax.plot(np.arange(v.size), v, label=str(label), lw=1.5)
+    ax.set_xlabel("iteration")
+    ax.set_ylabel(r"$\|X - T(Y)\|$")
+    if log:
+        ax.set_yscale("log")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
     if title:
         ax.set_title(title)
     return ax

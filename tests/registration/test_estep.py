@@ -3,7 +3,13 @@
 import numpy as np
 import pytest
 
-from centrality_vision.registration._estep import CentralityPrior, _e_step, dense_posterior, log_outlier_constant
+from centrality_vision.registration._estep import (
+    CentralityPrior,
+    _e_step,
+    dense_posterior,
+    gauss_transform,
+    log_outlier_constant,
+)
 
 
 def _brute(moving, fixed, sigma2, w, prior=None):
@@ -74,7 +80,7 @@ def test_tiny_sigma2_gives_hard_assignments_not_nan(method):
     np.testing.assert_allclose(post.p1, np.bincount(nearest, minlength=15), atol=1e-12)
     # with an outlier weight, a tiny sigma2 makes every fixed point an outlier: P -> 0, still finite
     post = _e_step(moving, fixed, 1e-200, 0.3, method=method)
-    assert np.all(post.p1 == 0) and np.all(post.best == -1) and np.isfinite(post.neg_log_likelihood)
+    assert np.all(post.p1 < 1e-290) and np.all(post.best == -1) and np.isfinite(post.neg_log_likelihood)
 
 
 def test_huge_sigma2_gives_uniform_posterior():
@@ -100,7 +106,9 @@ def test_auto_picks_truncated_only_when_it_visits_few_pairs():
     rng = np.random.default_rng(5)
     moving, fixed = rng.random((2500, 2)), rng.random((2500, 2))
     assert _e_step(moving, fixed, 1e-5, 0.0, method="auto").method == "truncated"
-    assert _e_step(moving, fixed, 1.0, 0.0, method="auto").method == "dense"
+    assert _e_step(moving, fixed, 1.0, 0.0, method="auto").method in ("dense", "fgt")
+    prior = _prior(rng, 2500, 2500)
+    assert _e_step(moving, fixed, 1.0, 0.0, prior, method="auto").method == "dense"  # no FGT with a prior
     assert _e_step(moving[:100], fixed[:100], 1e-5, 0.0, method="auto").method == "dense"
 
 
@@ -112,3 +120,34 @@ def test_far_fixed_points_keep_their_nearest_moving_point():
     post = _e_step(moving, fixed, 1e-3, 0.0, method="truncated")
     np.testing.assert_allclose(post.pt1, 1.0)
     assert post.best.tolist() == [0, 1]
+
+
+@pytest.mark.parametrize("dim", [1, 2, 3])
+def test_gauss_transform_matches_the_direct_sum(dim):
+    rng = np.random.default_rng(dim)
+    src, tgt = rng.normal(size=(400, dim)), rng.normal(size=(300, dim)) * 1.5
+    q = rng.random((400, 2))
+    for h in (0.3, 1.0, 5.0):
+        direct = np.exp(-((tgt[:, None] - src[None]) ** 2).sum(-1) / h**2) @ q
+        fast = gauss_transform(src, q, tgt, h, eps=1e-10)
+        assert np.abs(fast - direct).max() <= 1e-10 * q.sum(0).max()
+
+
+def test_fgt_e_step_matches_dense():
+    rng = np.random.default_rng(6)
+    moving, fixed = rng.normal(size=(3000, 2)), rng.normal(size=(2800, 2)) * 1.1 + 0.2
+    fixed[:3] += 40.0  # far points: their rows are redone exactly
+    for sigma2, w in ((2.0, 0.0), (0.2, 0.1), (0.02, 0.3)):
+        dense = _e_step(moving, fixed, sigma2, w, method="dense")
+        fgt = _e_step(moving, fixed, sigma2, w, method="fgt", eps=1e-10)
+        for name in ("p1", "pt1", "px"):
+            ref = getattr(dense, name)
+            assert np.abs(getattr(fgt, name) - ref).max() <= 1e-8 * np.abs(ref).max()
+        assert fgt.neg_log_likelihood == pytest.approx(dense.neg_log_likelihood, rel=1e-10)
+        np.testing.assert_array_equal(fgt.best, dense.best)
+
+
+def test_fgt_refuses_a_prior():
+    rng = np.random.default_rng(7)
+    with pytest.raises(ValueError, match="fgt"):
+        _e_step(rng.random((5, 2)), rng.random((5, 2)), 1.0, 0.0, _prior(rng, 5, 5), method="fgt")

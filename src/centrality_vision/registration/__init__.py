@@ -7,7 +7,7 @@ that same E-step (SPEC section 3).
 """
 
 from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, SimilarityTransform, random_rotation
-from ._cpd import AffineCPD, IterationInfo, NonRigidCPD, RigidCPD, alignment_error, initial_sigma2
+from ._cpd import AffineCPD, IterationInfo, NonRigidCPD, RigidCPD, Snapshots, alignment_error, initial_sigma2
 from ._estep import CentralityPrior, Posteriors
 from ._gpd import GPD, GRAPHS, centrality_prior, normalize_centrality
 from ._icp import ICP
@@ -20,6 +20,7 @@ __all__ = [
     "ICP",
     "GRAPHS",
     "IterationInfo",
+    "Snapshots",
     "Posteriors",
     "CentralityPrior",
     "centrality_prior",

@@ -14,7 +14,7 @@ from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, Sim
 from ._estep import E_STEP_METHODS, CentralityPrior, Posteriors, _e_step, dense_posterior
 from ._mstep import LowRankKernel, affine_m_step, gaussian_kernel, nonrigid_m_step, rigid_m_step
 
-__all__ = ["RigidCPD", "AffineCPD", "NonRigidCPD", "IterationInfo", "initial_sigma2", "alignment_error"]
+__all__ = ["RigidCPD", "AffineCPD", "NonRigidCPD", "IterationInfo", "Snapshots", "initial_sigma2", "alignment_error"]
 
 # sigma2 below this fraction of the data's spread means the sets coincide: stop, converged.
 _SIGMA2_FLOOR = 1e-14
@@ -30,6 +30,34 @@ class IterationInfo:
     sigma2: float
     objective: float
     error: float | None
+
+
+class Snapshots:
+    """A ``callback`` that keeps the moving set at chosen iterations (for thesis figs. 5.4, 5.5, 5.7).
+
+    ``frames`` maps each recorded iteration to a copy of the moving points; the final state is
+    always kept too, so a method that converged early still has a last frame.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> y = np.random.default_rng(0).random((30, 2))
+    >>> snaps = Snapshots([0, 2])
+    >>> reg = RigidCPD(tol=1e-3, callback=snaps).fit(y, y + 0.1)
+    >>> sorted(snaps.frames)[:2]
+    [0, 2]
+    """
+
+    def __init__(self, iterations):
+        self.iterations = {check_int(i, name="iterations[i]", low=0) for i in iterations}
+        self.frames = {}
+        self._last = None
+
+    def __call__(self, info: IterationInfo):
+        if self._last is not None and self._last not in self.iterations:
+            self.frames.pop(self._last, None)  # an earlier "last" frame that was not asked for
+        self.frames[info.iteration] = info.moving_transformed
+        self._last = info.iteration
 
 
 def initial_sigma2(moving, fixed) -> float:

@@ -34,6 +34,8 @@ __all__ = [
 # Terms more than this far below a row's largest one are below exp(-50) ~ 2e-22 of it and
 # are skipped when accumulating (they change no sum at double precision).
 _SKIP = np.exp(-50.0)
+# Exponents are clamped here before ``exp`` (see dense_scores).
+_FLOOR = -700.0
 
 
 @njit(nogil=True, cache=True)
@@ -68,7 +70,9 @@ def dense_scores(x, yt, lo, hi, inv2s2, log_c, log_weight, v_moving, v_fixed, pr
                 arg = m
         r = max(smax, log_c)
         for m in range(n_moving):
-            row[m] -= r
+            # clamp: exp(-700) ~ 1e-304 adds nothing, and numpy's SIMD exp is 2-3x slower
+            # on inputs that underflow to subnormals or zero
+            row[m] = max(row[m] - r, _FLOOR)
         ref[i] = r
         best[n] = arg if smax >= log_c else -1
 
@@ -202,7 +206,7 @@ def truncated_scores(
         if r == -np.inf:
             r = 0.0
         for k in range(start, used):
-            value[k] -= r
+            value[k] = max(value[k] - r, _FLOOR)
         ref[n - lo] = r
         best[n] = arg if (arg >= 0 and smax >= log_c) else -1
         row_ptr[n - lo + 1] = used
@@ -279,3 +283,222 @@ def count_candidates(x, rows, keys_sorted, origin, cell, dims, d2_min, extra, y_
                 break
         out[i] = total
     return out
+
+
+# ---------------------------------------------------------------------------------------------
+# Fast Gauss transform (Hermite expansions about source boxes, evaluated directly at targets)
+#
+#   G(t)_r = sum_j q_jr exp(-|t - s_j|^2 / h^2)
+#          = sum_boxes sum_alpha A_alpha,r h_alpha((t - c_B) / h),
+#   A_alpha,r = sum_{j in B} q_jr ((s_j - c_B) / h)^alpha / alpha!,
+#   h_a(v) = H_a(v) exp(-v^2) (physicists' Hermite H), per dimension; the identity is the
+#   generating function exp(2uv - u^2) = sum_a H_a(v) u^a / a!.
+# Boxes are cubes of side h (|u_d| <= 1/2); a target sums the boxes within ``reach`` box
+# widths in every dimension. The multi-index alpha runs over [0, p)^D, flattened with the
+# last dimension fastest.
+
+
+@njit(nogil=True, cache=True, inline="always")
+def _tensor(per_dim, prod):
+    """``prod`` = the flattened outer product of the rows of ``per_dim`` (D x p), last fastest."""
+    n_dims, p = per_dim.shape
+    size = 1
+    prod[0] = 1.0
+    for d in range(n_dims):
+        # expand in place from the back so that earlier entries are read before overwritten
+        for k in range(size - 1, -1, -1):
+            base = prod[k]
+            for a in range(p - 1, -1, -1):
+                prod[k * p + a] = base * per_dim[d, a]
+        size *= p
+
+
+_FAST = {"reassoc", "contract"}  # reassociated dot products vectorise; no other IEEE liberty
+
+
+@njit(nogil=True, cache=True, fastmath=_FAST)
+def fgt_coefficients(src, weights, box_of, centers, inv_h, p, coeffs):
+    """Add each source's monomials into its box: ``coeffs[box, r, alpha]``."""
+    n_src, n_dims = src.shape
+    n_rhs = weights.shape[1]
+    mono = np.empty((n_dims, p))
+    n_terms = p**n_dims
+    prod = np.empty(n_terms)
+    for j in range(n_src):
+        b = box_of[j]
+        for d in range(n_dims):
+            u = (src[j, d] - centers[b, d]) * inv_h
+            mono[d, 0] = 1.0
+            for a in range(1, p):
+                mono[d, a] = mono[d, a - 1] * u / a
+        _tensor(mono, prod)
+        for r in range(n_rhs):
+            wr = weights[j, r]
+            cbr = coeffs[b, r]
+            for k in range(n_terms):
+                cbr[k] += wr * prod[k]
+
+
+@njit(nogil=True, cache=True, fastmath=_FAST)
+def fgt_evaluate(targets, lo, hi, box_keys, box_coords, centers, coeffs, origin, side, dims, inv_h, p, reach, out):
+    """``out[t, r] = sum_boxes sum_alpha coeffs[box, r, alpha] h_alpha((t - c_box) / h)`` for rows lo..hi."""
+    n_dims = targets.shape[1]
+    n_rhs = coeffs.shape[1]
+    n_terms = p**n_dims
+    herm = np.empty((n_dims, p))
+    prod = np.empty(n_terms)
+    lo_c = np.empty(n_dims, dtype=np.int64)
+    hi_c = np.empty(n_dims, dtype=np.int64)
+    cur = np.empty(n_dims, dtype=np.int64)
+    acc = np.empty(n_rhs)
+    for t in range(lo, hi):
+        for r in range(n_rhs):
+            acc[r] = 0.0
+        span = 1
+        for d in range(n_dims):
+            c = int(np.floor((targets[t, d] - origin[d]) / side))
+            lo_c[d] = max(c - reach, 0)
+            hi_c[d] = min(c + reach, dims[d] - 1)
+            span *= max(hi_c[d] - lo_c[d] + 1, 0)
+        if span > 0:
+            for d in range(n_dims):
+                cur[d] = lo_c[d]
+            while True:
+                key = 0
+                for d in range(n_dims):
+                    key = key * dims[d] + cur[d]
+                b = np.searchsorted(box_keys, key)
+                if b < box_keys.shape[0] and box_keys[b] == key:
+                    for d in range(n_dims):
+                        v = (targets[t, d] - centers[b, d]) * inv_h
+                        g = np.exp(-v * v)
+                        herm[d, 0] = g
+                        if p > 1:
+                            herm[d, 1] = 2.0 * v * g
+                        for a in range(1, p - 1):
+                            herm[d, a + 1] = 2.0 * v * herm[d, a] - 2.0 * a * herm[d, a - 1]
+                    _tensor(herm, prod)
+                    for r in range(n_rhs):
+                        cbr = coeffs[b, r]
+                        total = 0.0
+                        for k in range(n_terms):
+                            total += cbr[k] * prod[k]
+                        acc[r] += total
+                d = n_dims - 1
+                while d >= 0:
+                    cur[d] += 1
+                    if cur[d] <= hi_c[d]:
+                        break
+                    cur[d] = lo_c[d]
+                    d -= 1
+                if d < 0:
+                    break
+        for r in range(n_rhs):
+            out[t, r] = acc[r]
+
+
+@njit(nogil=True, cache=True)
+def hermite_translation_matrices(reach, p):
+    """``T[o, b, a] = (-1)^b / b! h_(a+b)(o - reach)``: Hermite -> Taylor for a box offset o - reach.
+
+    With boxes of side h on one grid, a source box and a target box are a whole number of
+    box widths apart in each dimension, so these (2 reach + 1) matrices serve every pair.
+    """
+    out = np.empty((2 * reach + 1, p, p))
+    herm = np.empty(2 * p)
+    for o in range(2 * reach + 1):
+        w = float(o - reach)
+        g = np.exp(-w * w)
+        herm[0] = g
+        herm[1] = 2.0 * w * g
+        for a in range(1, 2 * p - 1):
+            herm[a + 1] = 2.0 * w * herm[a] - 2.0 * a * herm[a - 1]
+        fact = 1.0
+        for b in range(p):
+            if b > 0:
+                fact *= b
+            sign = -1.0 if b % 2 else 1.0
+            for a in range(p):
+                out[o, b, a] = sign / fact * herm[a + b]
+    return out
+
+
+@njit(nogil=True, cache=True, fastmath=_FAST)
+def _mode_product(tensor, matrix, axis, n_dims, p, out):
+    """``out`` = ``tensor`` (flattened p^D) multiplied along ``axis`` by ``matrix`` (p x p)."""
+    inner = p ** (n_dims - 1 - axis)
+    outer = p**axis
+    for o in range(outer):
+        for i in range(inner):
+            base = o * p * inner + i
+            for b in range(p):
+                total = 0.0
+                for a in range(p):
+                    total += matrix[b, a] * tensor[base + a * inner]
+                out[base + b * inner] = total
+
+
+@njit(nogil=True, cache=True, fastmath=_FAST)
+def fgt_translate_evaluate(
+    targets, t_start, t_order, t_box_keys, t_coords, s_box_keys, s_coords, coeffs, origin, side, dims, inv_h, p,
+    reach, trans, lo, hi, out,
+):
+    """For target boxes lo..hi: sum the source boxes' Hermite series as one Taylor series about
+    the box centre (separable translation, D p^(D+1) per pair), then evaluate it at each target."""
+    n_dims = targets.shape[1]
+    n_rhs = coeffs.shape[1]
+    n_terms = p**n_dims
+    local = np.empty((n_rhs, n_terms))
+    buf_a = np.empty(n_terms)
+    buf_b = np.empty(n_terms)
+    mono = np.empty((n_dims, p))
+    prod = np.empty(n_terms)
+    cur = np.empty(n_dims, dtype=np.int64)
+    lo_c = np.empty(n_dims, dtype=np.int64)
+    hi_c = np.empty(n_dims, dtype=np.int64)
+    for c in range(lo, hi):
+        local[:, :] = 0.0
+        for d in range(n_dims):
+            lo_c[d] = max(t_coords[c, d] - reach, 0)
+            hi_c[d] = min(t_coords[c, d] + reach, dims[d] - 1)
+            cur[d] = lo_c[d]
+        while True:
+            key = 0
+            for d in range(n_dims):
+                key = key * dims[d] + cur[d]
+            b = np.searchsorted(s_box_keys, key)
+            if b < s_box_keys.shape[0] and s_box_keys[b] == key:
+                for r in range(n_rhs):
+                    src = coeffs[b, r]
+                    for k in range(n_terms):
+                        buf_a[k] = src[k]
+                    for d in range(n_dims):
+                        # offset of the target centre from the source centre, in box widths
+                        o = t_coords[c, d] - s_coords[b, d] + reach
+                        _mode_product(buf_a, trans[o], d, n_dims, p, buf_b)
+                        for k in range(n_terms):
+                            buf_a[k] = buf_b[k]
+                    for k in range(n_terms):
+                        local[r, k] += buf_a[k]
+            d = n_dims - 1
+            while d >= 0:
+                cur[d] += 1
+                if cur[d] <= hi_c[d]:
+                    break
+                cur[d] = lo_c[d]
+                d -= 1
+            if d < 0:
+                break
+        for j in range(t_start[c], t_start[c + 1]):
+            t = t_order[j]
+            for d in range(n_dims):
+                v = (targets[t, d] - (origin[d] + (t_coords[c, d] + 0.5) * side)) * inv_h
+                mono[d, 0] = 1.0
+                for a in range(1, p):
+                    mono[d, a] = mono[d, a - 1] * v
+            _tensor(mono, prod)
+            for r in range(n_rhs):
+                total = 0.0
+                for k in range(n_terms):
+                    total += local[r, k] * prod[k]
+                out[t, r] = total

@@ -1,0 +1,793 @@
+#!/usr/bin/env python
+"""Benchmark our Coherent Point Drift against pycpd and cycpd (rigid and non-rigid, 2D).
+
+One process, the same seeded data for every library. For each size n the moving set Y
+(n x 2) is n points sampled inside a Kimia-99 silhouette (``--shape``, default ``dog1``:
+uniformly among the shape's pixels, with a uniform jitter of half a pixel), or, with
+``--shape gmm``, from a Gaussian mixture of 4 anisotropic clusters; it is centred and
+scaled so that its extent (the longer side of its bounding box) is ``--extent`` (3 units),
+so that the default kernel width beta = 2 is sensible. The fixed set X (n x 2, rows
+shuffled) is
+
+* rigid:     ``X = s Y R^T + t + noise``, R a 30 degree rotation, s = 1.2, t = (0.3, -0.2);
+* non-rigid: ``X = Y + 0.05 extent (sin(y_2), sin(y_1)) + noise`` (a smooth field);
+
+with Gaussian noise of standard deviation ``0.005 extent``. ``true_moving`` (where each
+moving point truly belongs) is the noiseless transformed Y. The final error is the RMS
+``|true_moving - T(Y)|_F / sqrt(n)``, in the units of the data.
+
+==========  =================================================================================
+library     calls (all with w = 0, the same numeric ``--tol`` and ``--max-iter``)
+==========  =================================================================================
+ours        ``RigidCPD(scale=True, w=0, tol, max_iter).fit(Y, X)``,
+            ``NonRigidCPD(beta, lam, low_rank="auto", w=0, tol, max_iter).fit(Y, X)``
+pycpd       ``RigidRegistration(X=X, Y=Y, tolerance, max_iterations, w=0).register()``,
+            ``DeformableRegistration(X=X, Y=Y, alpha=lam, beta=beta, ...).register()``
+cycpd       ``rigid_registration(X=X, Y=Y, scale=True, tolerance, max_iterations, w=0,
+            verbose=False, print_reg_params=False).register()``,
+            ``deformable_registration(X=X, Y=Y, alpha=lam, beta=beta, low_rank=True,
+            num_eig=K, ...).register()``
+==========  =================================================================================
+
+The timed part is the constructor plus ``fit``/``register`` (pycpd and cycpd compute the
+initial variance and the kernel G in their constructors).
+
+The stopping criteria differ; the same numbers mean different things
+--------------------------------------------------------------------------
+Let ``L = -sum_n log(sum_m exp(-|x_n - T(y_m)|^2 / (2 sigma2)) + c) + N D/2 log sigma2``
+be CPD's negative log-likelihood (c = 0 for w = 0).
+
+* ours: stops when ``|L_k - L_{k-1}| <= tol * |L_k|`` (RELATIVE change of L between two
+  E-steps; for non-rigid, L includes ``lam/2 tr(W^T G W)``), after ``max_iter`` M-steps,
+  or when sigma2 falls to 1e-14 of the data's spread.
+* pycpd 2.0.0 rigid: stops when ``|q_k - q_{k-1}| <= tolerance`` (ABSOLUTE) where
+  ``q = (xPx - 2 s tr(A R) + s^2 yPy) / (2 sigma2) + D Np/2 log sigma2`` is the EM bound
+  Q (expected complete-data negative log-likelihood) evaluated after the M-step with the
+  new (s, R, t) and the sigma2 of the E-step (q_0 = inf, so at least 2 iterations), or
+  after ``max_iterations``.
+* pycpd 2.0.0 deformable: stops when ``|sigma2_k - sigma2_{k-1}| <= tolerance``: the
+  ABSOLUTE change of the variance (squared data units), or after ``max_iterations``. It
+  always solves the exact M x M system (no low-rank option in 2.0.0).
+* cycpd 0.28 rigid: stops when ``|E_k - E_{k-1}| <= tolerance`` (ABSOLUTE) where E_k is
+  L computed in the k-th E-step (the same quantity as ours; E_0 = 0, so the first change
+  is |E_1|), when sigma2 <= machine epsilon (absolute), or after ``max_iterations``.
+* cycpd 0.28 deformable (``low_rank=True``): the same, with E_k = L + ``alpha/2 tr(W^T Q S
+  Q^T W)`` (the penalty with the new W). Its ``low_rank=False`` path is not usable in 0.28:
+  it raises AttributeError (``A_times``) and never updates its error, so it would always
+  run ``max_iterations``. We therefore use the low-rank path with ``num_eig`` = K =
+  ``--cycpd-num-eig`` (default: the rank ours uses above 1,500 points,
+  ``max(50, ceil(sqrt(n)))``); cycpd computes it with a full ``numpy.linalg.eigh`` of G.
+
+With w = 0 and the same tol, ours (relative) stops much earlier than cycpd (absolute) when
+|L| >> 1, and pycpd's quantities are on other scales altogether: this is why the tables
+report iterations and the final error next to the seconds, not seconds alone.
+``--ours-tol`` sets ours' tolerance on its own (e.g. to match an absolute tolerance).
+
+Ours' NonRigidCPD (``low_rank="auto"``) is exact up to 1,500 moving points and keeps
+``max(50, ceil(sqrt(M)))`` eigenpairs of G above (``--low-rank`` overrides); pycpd is
+always exact (an M x M solve per iteration).
+
+One workaround: cycpd 0.28's rigid ``update_variance`` leaves sigma2 as a 1x1 ndarray,
+which its Cython E-step rejects under NumPy 2 (``TypeError: only 0-dimensional arrays``)
+unless ``verbose=True`` (whose printing unwraps it); we subclass it to turn sigma2 into a
+float after each update (no measurable cost), instead of timing the printing.
+
+Threads: ours via ``centrality_vision.set_num_threads(--threads)`` (default: all the
+cores this process may use). numpy/BLAS threads (used by pycpd, cycpd and our non-rigid
+M-step) are left at their defaults; the header prints them when threadpoolctl is
+installed, and ``--blas-threads N`` limits them (through threadpoolctl) for every library.
+On a loaded machine OpenBLAS' spinning threads can slow small BLAS calls tenfold; watch the
+load average printed at the start and the end.
+
+Usage::
+
+    python benchmarks/registration.py --quick                      # 500 points, one run
+    python benchmarks/registration.py                              # 1,000 and 5,000 points
+    python benchmarks/registration.py --sizes 1000 2000 --only ours,cycpd --repeat 5
+    python benchmarks/registration.py --with-large                 # + ours rigid at 100,000
+    python benchmarks/registration.py --json results.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import statistics
+import sys
+import time
+import traceback
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+LIBRARIES = ("ours", "pycpd", "cycpd")
+CASES = ("rigid", "nonrigid")
+DEFAULT_SIZES = (1000, 5000)
+QUICK_SIZES = (500,)
+DEFAULT_LARGE = 100_000
+SLOW_N = 5000  # --repeat defaults to 1 from this size (3 below)
+SINGLE_RUN_S = 20.0  # a first run longer than this is not repeated
+
+ANGLE_DEG = 30.0
+SCALE = 1.2
+SHIFT = (0.3, -0.2)
+NOISE = 0.005  # noise standard deviation, times the extent
+DEFORM = 0.05  # non-rigid displacement amplitude, times the extent
+OURS_EXACT_MAX = 1500  # NonRigidCPD(low_rank="auto") is exact up to this many moving points
+
+
+def _cores():
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def parse_args(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--sizes", type=int, nargs="+", default=None,
+                   help="numbers of points n (default: %s; --quick: %s)"
+                        % (" ".join(map(str, DEFAULT_SIZES)), " ".join(map(str, QUICK_SIZES))))
+    p.add_argument("--cases", default=",".join(CASES), help="comma list of cases (default: %(default)s)")
+    p.add_argument("--only", default=",".join(LIBRARIES),
+                   help="comma list of libraries (default: %(default)s)")
+    p.add_argument("--tol", type=float, default=1e-5,
+                   help="tolerance given to every library (default: %(default)g; the criteria differ, "
+                        "see the module docstring)")
+    p.add_argument("--ours-tol", type=float, default=None,
+                   help="ours' tolerance on the relative change of L (default: --tol)")
+    p.add_argument("--max-iter", type=int, default=150, help="iteration cap for every library (default: %(default)s)")
+    p.add_argument("--beta", type=float, default=2.0, help="non-rigid kernel width (default: %(default)g)")
+    p.add_argument("--lam", type=float, default=2.0,
+                   help="non-rigid regularisation (pycpd/cycpd alpha; default: %(default)g)")
+    p.add_argument("--low-rank", default="auto",
+                   help="ours' NonRigidCPD low_rank: auto, none (exact) or a number of eigenpairs "
+                        "(default: %(default)s)")
+    p.add_argument("--cycpd-num-eig", type=int, default=None,
+                   help="cycpd deformable num_eig (default: max(50, ceil(sqrt(n))), capped at n - 1)")
+    p.add_argument("--extent", type=float, default=3.0,
+                   help="the moving set is scaled to this extent (default: %(default)g units)")
+    p.add_argument("--shape", default="dog1",
+                   help="Kimia-99 silhouette to sample (default: %(default)s) or 'gmm' for a Gaussian mixture")
+    p.add_argument("--seed", type=int, default=0, help="data seed (default: %(default)s)")
+    p.add_argument("--repeat", type=int, default=None,
+                   help="runs per measurement, median reported (default: 3 for n < %d, 1 above)" % SLOW_N)
+    p.add_argument("--quick", action="store_true",
+                   help="smoke run: sizes %s unless --sizes is given, one run, no large case"
+                        % " ".join(map(str, QUICK_SIZES)))
+    p.add_argument("--large", type=int, default=None, metavar="N",
+                   help="also run ours alone, rigid, on N points")
+    p.add_argument("--with-large", action="store_true",
+                   help="same as --large %d" % DEFAULT_LARGE)
+    p.add_argument("--threads", type=int, default=_cores(),
+                   help="threads for ours (default: all cores, %(default)s); numpy/BLAS stay at their defaults")
+    p.add_argument("--blas-threads", type=int, default=None,
+                   help="limit numpy/BLAS threads (all libraries) via threadpoolctl; default: leave "
+                        "them at their defaults")
+    p.add_argument("--max-gib", type=float, default=8.0,
+                   help="skip a run whose estimated dense arrays exceed this many GiB (default: %(default)g)")
+    p.add_argument("--json", metavar="PATH", default=None, help="also write all raw rows as JSON")
+    args = p.parse_args(argv)
+
+    def split(s, allowed, what):
+        items = [x.strip() for x in s.split(",") if x.strip()]
+        bad = [x for x in items if x not in allowed]
+        if bad or not items:
+            p.error("unknown or empty %s: %s (choose from %s)" % (what, ", ".join(bad), ", ".join(allowed)))
+        return list(dict.fromkeys(items))
+
+    args.only = split(args.only, LIBRARIES, "library")
+    args.cases = split(args.cases, CASES, "case")
+    if args.sizes is None:
+        args.sizes = list(QUICK_SIZES if args.quick else DEFAULT_SIZES)
+    if any(n < 10 for n in args.sizes):
+        p.error("--sizes must be >= 10")
+    if args.repeat is not None and args.repeat < 1:
+        p.error("--repeat must be >= 1")
+    if args.quick and args.repeat is None:
+        args.repeat = 1
+    if args.with_large and args.large is None:
+        args.large = DEFAULT_LARGE
+    if args.quick and args.large is not None:
+        print("--quick: the large case (%d points) is skipped" % args.large)
+        args.large = None
+    if args.large is not None and args.large < 10:
+        p.error("--large must be >= 10")
+    if args.threads < 1:
+        p.error("--threads must be >= 1")
+    if args.blas_threads is not None and args.blas_threads < 1:
+        p.error("--blas-threads must be >= 1")
+    if args.ours_tol is None:
+        args.ours_tol = args.tol
+    lr = str(args.low_rank).lower()
+    if lr == "auto":
+        args.low_rank = "auto"
+    elif lr == "none":
+        args.low_rank = None
+    else:
+        try:
+            args.low_rank = int(lr)
+        except ValueError:
+            p.error("--low-rank must be auto, none or an int")
+    return args
+
+
+# --------------------------------------------------------------------------- imports
+
+
+def _try_import(name):
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # pycpd: SyntaxWarning "is not" with a literal
+            return __import__(name), None
+    except Exception as exc:  # noqa: BLE001 - any failure means "not installed"
+        return None, "%s: %s" % (type(exc).__name__, exc)
+
+
+def _import_ours():
+    def attempt():
+        import centrality_vision
+        from centrality_vision.exceptions import ConvergenceWarning
+        from centrality_vision.registration import NonRigidCPD, RigidCPD
+
+        return centrality_vision, RigidCPD, NonRigidCPD, ConvergenceWarning
+
+    try:
+        return attempt(), None
+    except ModuleNotFoundError as exc:
+        if "centrality_vision" not in str(exc):
+            return None, "%s: %s" % (type(exc).__name__, exc)
+        src = Path(__file__).resolve().parents[1] / "src"
+        if src.is_dir():
+            sys.path.insert(0, str(src))
+            try:
+                return attempt(), None
+            except Exception as exc2:  # noqa: BLE001
+                return None, "%s: %s" % (type(exc2).__name__, exc2)
+        return None, "%s: %s" % (type(exc).__name__, exc)
+    except Exception as exc:  # noqa: BLE001
+        return None, "%s: %s" % (type(exc).__name__, exc)
+
+
+OURS, _ours_err = _import_ours()
+pycpd, _pycpd_err = _try_import("pycpd")
+cycpd, _cycpd_err = _try_import("cycpd")
+IMPORT_ERRORS = {"ours": _ours_err, "pycpd": _pycpd_err, "cycpd": _cycpd_err}
+AVAILABLE = {"ours": OURS is not None, "pycpd": pycpd is not None, "cycpd": cycpd is not None}
+
+
+# --------------------------------------------------------------------------- data
+
+
+@dataclass
+class Problem:
+    case: str
+    n: int
+    moving: np.ndarray  # Y
+    fixed: np.ndarray  # X (rows shuffled)
+    true_moving: np.ndarray  # noiseless T(Y), aligned with Y
+    extent: float
+    noise_sigma: float
+    shape: str
+
+    @property
+    def initial_rms(self):
+        return rms(self.true_moving, self.moving)
+
+
+def rms(a, b):
+    return float(np.linalg.norm(np.asarray(a) - np.asarray(b)) / math.sqrt(len(a)))
+
+
+_SHAPE_CACHE = {}
+
+
+def _kimia_pixels(name):
+    if name not in _SHAPE_CACHE:
+        from centrality_vision.datasets import load_kimia99
+
+        mask = load_kimia99().image(name)
+        rows, cols = np.nonzero(mask)
+        _SHAPE_CACHE[name] = np.column_stack([cols, -rows]).astype(np.float64)  # x right, y up
+    return _SHAPE_CACHE[name]
+
+
+def base_shape(n, seed, shape, extent):
+    """(n x 2 moving set, description): the same for both cases at a given n."""
+    rng = np.random.default_rng([seed, n])
+    pts = None
+    desc = None
+    if shape != "gmm":
+        try:
+            pix = _kimia_pixels(shape)
+            pts = pix[rng.integers(0, len(pix), n)] + rng.uniform(-0.5, 0.5, (n, 2))
+            desc = "Kimia-99 '%s' (%d pixels), points uniform inside" % (shape, len(pix))
+        except Exception as exc:  # noqa: BLE001
+            print("  ! Kimia-99 shape %r unavailable (%s: %s); using a Gaussian mixture"
+                  % (shape, type(exc).__name__, exc))
+            pts = None
+    if pts is None:
+        crng = np.random.default_rng([seed, 0])  # the mixture itself does not depend on n
+        centres = crng.uniform(-1.0, 1.0, (4, 2))
+        scales = crng.uniform(0.1, 0.35, (4, 2))
+        angles = crng.uniform(0.0, np.pi, 4)
+        k = rng.integers(0, 4, n)
+        z = rng.standard_normal((n, 2)) * scales[k]
+        c, s = np.cos(angles[k]), np.sin(angles[k])
+        pts = centres[k] + np.column_stack([c * z[:, 0] - s * z[:, 1], s * z[:, 0] + c * z[:, 1]])
+        desc = "Gaussian mixture of 4 anisotropic clusters"
+    pts = pts - pts.mean(axis=0)
+    pts *= extent / np.ptp(pts, axis=0).max()
+    return pts, desc
+
+
+def make_problem(case, n, args):
+    y, desc = base_shape(n, args.seed, args.shape, args.extent)
+    rng = np.random.default_rng([args.seed, n, 1 + CASES.index(case)])
+    sigma = NOISE * args.extent
+    if case == "rigid":
+        a = math.radians(ANGLE_DEG)
+        rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+        true = SCALE * y @ rot.T + np.asarray(SHIFT)
+    else:
+        true = y + DEFORM * args.extent * np.column_stack([np.sin(y[:, 1]), np.sin(y[:, 0])])
+    fixed = true + rng.normal(0.0, sigma, true.shape)
+    fixed = fixed[rng.permutation(n)]
+    return Problem(case, n, np.ascontiguousarray(y), np.ascontiguousarray(fixed), true,
+                   args.extent, sigma, desc)
+
+
+# --------------------------------------------------------------------------- the calls
+# Each runner takes (Y, X) and returns (T(Y), iterations, stop reason); it is timed whole.
+
+
+def _cycpd_num_eig(n, args):
+    k = args.cycpd_num_eig if args.cycpd_num_eig is not None else max(50, math.ceil(math.sqrt(n)))
+    return max(1, min(k, n - 1))
+
+
+def _ours_rank(n, args):
+    if args.low_rank is None:
+        return None
+    if args.low_rank == "auto":
+        return None if n <= OURS_EXACT_MAX else max(50, math.ceil(math.sqrt(n)))
+    return None if args.low_rank >= n - 1 else args.low_rank
+
+
+def _cycpd_rigid_class():
+    class Rigid(cycpd.rigid_registration):
+        """cycpd 0.28's rigid registration with sigma2 kept a Python float (see docstring)."""
+
+        def update_variance(self):
+            super().update_variance()
+            self.sigma2 = float(np.asarray(self.sigma2).reshape(-1)[0])
+
+    return Rigid
+
+
+_CYCPD_RIGID = None
+
+
+def make_runner(lib, case, n, args, method="auto"):
+    """(callable(Y, X) -> (TY, n_iter, stop), parameters dict)."""
+    tol, max_iter = args.tol, args.max_iter
+    if lib == "ours":
+        _, RigidCPD, NonRigidCPD, ConvergenceWarning = OURS
+        if case == "rigid":
+            def make():
+                return RigidCPD(scale=True, w=0.0, tol=args.ours_tol, max_iter=max_iter, method=method)
+            params = {"scale": True, "w": 0.0, "tol": args.ours_tol, "max_iter": max_iter}
+        else:
+            def make():
+                return NonRigidCPD(beta=args.beta, lam=args.lam, low_rank=args.low_rank, w=0.0,
+                                   tol=args.ours_tol, max_iter=max_iter, method=method)
+            params = {"beta": args.beta, "lam": args.lam, "low_rank": args.low_rank,
+                      "rank_used": _ours_rank(n, args) or "exact", "w": 0.0, "tol": args.ours_tol,
+                      "max_iter": max_iter}
+
+        def run(y, x):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ConvergenceWarning)
+                est = make().fit(y, x)
+            return est.moving_transformed_, int(est.n_iter_), "tol" if est.converged_ else "max_iter"
+
+        return run, params
+
+    if lib == "pycpd":
+        if case == "rigid":
+            def make(y, x):
+                return pycpd.RigidRegistration(X=x, Y=y, tolerance=tol, max_iterations=max_iter, w=0)
+            params = {"tolerance": tol, "max_iterations": max_iter, "w": 0}
+        else:
+            def make(y, x):
+                return pycpd.DeformableRegistration(X=x, Y=y, alpha=args.lam, beta=args.beta, tolerance=tol,
+                                                    max_iterations=max_iter, w=0)
+            params = {"alpha": args.lam, "beta": args.beta, "tolerance": tol, "max_iterations": max_iter,
+                      "w": 0, "exact": True}
+
+        def run(y, x):
+            reg = make(y, x)
+            ty, _ = reg.register()
+            stop = "tol" if reg.diff <= reg.tolerance else "max_iter"
+            return ty, int(reg.iteration), stop
+
+        return run, params
+
+    if lib == "cycpd":
+        global _CYCPD_RIGID
+        common = {"tolerance": tol, "max_iterations": max_iter, "w": 0.0, "verbose": False,
+                  "print_reg_params": False}
+        if case == "rigid":
+            if _CYCPD_RIGID is None:
+                _CYCPD_RIGID = _cycpd_rigid_class()
+            cls = _CYCPD_RIGID
+
+            def make(y, x):
+                return cls(X=x, Y=y, scale=True, **common)
+            params = dict(common, scale=True)
+        else:
+            k = _cycpd_num_eig(n, args)
+
+            def make(y, x):
+                return cycpd.deformable_registration(X=x, Y=y, alpha=args.lam, beta=args.beta,
+                                                     low_rank=True, num_eig=k, **common)
+            params = dict(common, alpha=args.lam, beta=args.beta, low_rank=True, num_eig=k)
+
+        def run(y, x):
+            reg = make(y, x)
+            ty, _ = reg.register()
+            if reg.err <= reg.tolerance:
+                stop = "tol"
+            elif float(np.asarray(reg.sigma2).reshape(-1)[0]) <= np.finfo(float).eps:
+                stop = "sigma2"
+            else:
+                stop = "max_iter"
+            return ty, int(reg.iteration), stop
+
+        return run, {k: v for k, v in params.items() if k not in ("verbose", "print_reg_params")}
+
+    raise ValueError(lib)
+
+
+def estimated_gib(lib, case, n, args):
+    """Rough peak of the dense arrays a run allocates (M = N = n, D = 2)."""
+    d = 2
+    if lib == "pycpd":  # M x N x D differences, M x N P / den / exp
+        b = 8.0 * n * n * (2 * d + 3)
+        if case == "nonrigid":  # G via tiled M x M x D arrays, diag(P1), A
+            b += 8.0 * n * n * (3 * d + 4)
+    elif lib == "cycpd":
+        b = 64.0 * n * d
+        if case == "nonrigid":  # G via M x M x D differences, eigh
+            b += 8.0 * n * n * (2 * d + 4)
+    else:
+        b = 64.0 * n * d
+        if case == "nonrigid" and _ours_rank(n, args) is None:
+            b += 8.0 * n * n * 4
+    return b / 1024**3
+
+
+# --------------------------------------------------------------------------- measurement
+
+
+@dataclass
+class Row:
+    case: str
+    n: int
+    library: str
+    status: str  # ok | not installed | skipped | error
+    times: list = field(default_factory=list)
+    n_iter: int | None = None
+    stop: str | None = None
+    error: float | None = None
+    note: str = ""
+    params: dict = field(default_factory=dict)
+    warnings: list = field(default_factory=list)
+    ratio: float | None = None
+
+    @property
+    def median(self):
+        return statistics.median(self.times) if self.times else float("nan")
+
+
+def measure(lib, problem, args, repeat):
+    if not AVAILABLE[lib]:
+        return Row(problem.case, problem.n, lib, "not installed", note=IMPORT_ERRORS[lib] or "")
+    gib = estimated_gib(lib, problem.case, problem.n, args)
+    if gib > args.max_gib:
+        return Row(problem.case, problem.n, lib, "skipped",
+                   note="needs ~%.1f GiB of dense arrays (> --max-gib %g)" % (gib, args.max_gib))
+    run, params = make_runner(lib, problem.case, problem.n, args)
+    row = Row(problem.case, problem.n, lib, "ok", params=params)
+    caught = []
+    try:
+        for i in range(repeat):
+            with warnings.catch_warnings(record=True) as w:
+                warnings.simplefilter("always")
+                t0 = time.perf_counter()
+                ty, n_iter, stop = run(problem.moving, problem.fixed)
+                row.times.append(time.perf_counter() - t0)
+            caught.extend("%s: %s" % (x.category.__name__, x.message) for x in w)
+            if i == 0 and row.times[0] > SINGLE_RUN_S:
+                break
+    except Exception as exc:  # noqa: BLE001
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        return Row(problem.case, problem.n, lib, "error", note="%s: %s" % (type(exc).__name__, msg),
+                   params=params)
+    row.n_iter, row.stop = n_iter, stop
+    row.error = rms(problem.true_moving, np.asarray(ty, dtype=np.float64))
+    row.warnings = sorted(set(caught))
+    return row
+
+
+def warm_up(libs, cases, args):
+    """Run every selected call once on 60 points: numba compiles our kernels (dense and
+    truncated E-step paths), the other libraries load their extension modules."""
+    small = argparse.Namespace(**vars(args))
+    small.max_iter = 5
+    t0 = time.perf_counter()
+    msgs = []
+    for case in cases:
+        prob = make_problem(case, 60, small)
+        for lib in libs:
+            methods = ("dense", "truncated") if lib == "ours" else ("auto",)
+            for method in methods:
+                try:
+                    run, _ = make_runner(lib, case, 60, small, method=method)
+                    with warnings.catch_warnings():
+                        warnings.simplefilter("ignore")
+                        run(prob.moving, prob.fixed)
+                except Exception as exc:  # noqa: BLE001
+                    msgs.append("%s %s (%s): %s: %s" % (lib, case, method, type(exc).__name__, exc))
+    return time.perf_counter() - t0, msgs
+
+
+# --------------------------------------------------------------------------- output
+
+
+def table(headers, rows, align=None):
+    cols = list(zip(*([headers] + rows))) if rows else [[h] for h in headers]
+    widths = [max(len(str(x)) for x in col) for col in cols]
+    align = align or ["<"] + [">"] * (len(headers) - 1)
+    line = lambda r: "  ".join(("{:%s%d}" % (a, w)).format(str(x)) for x, w, a in zip(r, widths, align))
+    out = [line(headers), "  ".join("-" * w for w in widths)]
+    out += [line(r) for r in rows]
+    return "\n".join(out)
+
+
+def fmt_s(row):
+    if row.status != "ok":
+        return row.status
+    s = row.median
+    txt = "%.4f" % s if s < 10 else "%.2f" % s
+    return txt + ("*" if len(row.times) == 1 else "")
+
+
+def _blas_info():
+    try:
+        from threadpoolctl import threadpool_info
+
+        pools = threadpool_info()
+        if not pools:
+            return "no BLAS/OpenMP pool found"
+        return ", ".join("%s %s: %s threads" % (p.get("internal_api"), p.get("user_api"), p.get("num_threads"))
+                         for p in pools)
+    except Exception:  # noqa: BLE001
+        env = {k: os.environ[k] for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+               if k in os.environ}
+        return "library defaults (threadpoolctl not installed; env %s)" % (env or "unset")
+
+
+def _mem_total():
+    try:
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemTotal:"):
+                    return "%.1f GiB" % (int(line.split()[1]) / 1024**2)
+    except OSError:
+        pass
+    return "?"
+
+
+def _load_line():
+    try:
+        load = os.getloadavg()
+    except OSError:
+        return "load average: unknown"
+    line = "load average (1, 5, 15 min): %.2f %.2f %.2f" % load
+    if load[0] > 0.5 * (os.cpu_count() or 1):
+        line += "  ! the machine is busy: timings are unreliable"
+    return line
+
+
+def machine_info(args):
+    import scipy
+
+    def ver(mod, dist=None):
+        if mod is None:
+            return "not installed"
+        v = getattr(mod, "__version__", None)
+        if v is None and dist:
+            try:
+                from importlib.metadata import version
+
+                v = version(dist)
+            except Exception:  # noqa: BLE001
+                v = "?"
+        return v
+
+    try:
+        import numba
+
+        numba_v = numba.__version__
+    except Exception:  # noqa: BLE001
+        numba_v = "not installed"
+    return {
+        "python": platform.python_version(),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpu_count": os.cpu_count(),
+        "cores_available": _cores(),
+        "memory": _mem_total(),
+        "numpy": np.__version__,
+        "scipy": scipy.__version__,
+        "numba": numba_v,
+        "centrality_vision": OURS[0].__version__ if OURS is not None else "not importable",
+        "pycpd": ver(pycpd, "pycpd"),
+        "cycpd": ver(cycpd, "cycpd"),
+        "ours_threads": OURS[0].get_num_threads() if OURS is not None else None,
+        "blas": _blas_info(),
+    }
+
+
+def _limit_blas(n):
+    """Keep a threadpoolctl limit alive for the whole run; None when not requested."""
+    if n is None:
+        return None, None
+    try:
+        from threadpoolctl import threadpool_limits
+
+        return threadpool_limits(limits=n, user_api="blas"), None
+    except Exception as exc:  # noqa: BLE001
+        return None, "%s: %s" % (type(exc).__name__, exc)
+
+
+def main(args):
+    if OURS is not None:
+        OURS[0].set_num_threads(args.threads)
+    blas_limit, blas_err = _limit_blas(args.blas_threads)  # noqa: F841 - held until exit
+    info = machine_info(args)
+    libs = list(args.only)
+
+    print("=" * 78)
+    print("CPD registration benchmark: ours vs pycpd vs cycpd (2D, w = 0)")
+    print("machine: %s, %s, os.cpu_count() = %s (%s usable), memory %s"
+          % (info["platform"], info["processor"], info["cpu_count"], info["cores_available"], info["memory"]))
+    print("python %s | numpy %s | scipy %s | numba %s" % (info["python"], info["numpy"], info["scipy"],
+                                                         info["numba"]))
+    print("centrality_vision %s | pycpd %s | cycpd %s" % (info["centrality_vision"], info["pycpd"],
+                                                           info["cycpd"]))
+    print("threads: ours %s (centrality_vision.set_num_threads); numpy/BLAS (pycpd, cycpd and our "
+          "non-rigid M-step) %s: %s" % (info["ours_threads"],
+                                        "at their defaults" if args.blas_threads is None
+                                        else "limited by --blas-threads %d" % args.blas_threads,
+                                        info["blas"]))
+    if blas_err:
+        print("  ! --blas-threads ignored: threadpoolctl unavailable (%s)" % blas_err)
+    for lib in libs:
+        if not AVAILABLE[lib]:
+            print("%s: not installed (%s)" % (lib, IMPORT_ERRORS[lib]))
+    print("tol %g (ours %g, relative change of L; pycpd: absolute change of Q (rigid) / sigma2 "
+          "(deformable); cycpd: absolute change of L) | max_iter %d" % (args.tol, args.ours_tol, args.max_iter))
+    print("non-rigid: beta %g, lam (alpha) %g; ours low_rank=%r (exact up to %d points), pycpd exact, "
+          "cycpd low-rank num_eig=%s" % (args.beta, args.lam, args.low_rank, OURS_EXACT_MAX,
+                                         args.cycpd_num_eig or "max(50, ceil(sqrt(n)))"))
+    print("repeat: %s (median; a single run, marked *, when the first run takes > %g s)"
+          % (args.repeat if args.repeat is not None else "3 for n < %d, 1 above" % SLOW_N, SINGLE_RUN_S))
+    print(_load_line())
+    print("=" * 78)
+
+    # data
+    print("\ndata (seed %d, built once, the same arrays for every library):" % args.seed)
+    problems = []
+    for case in args.cases:
+        for n in args.sizes:
+            problems.append(make_problem(case, n, args))
+    if (args.large is not None and args.large not in args.sizes and "rigid" in args.cases
+            and "ours" in libs):
+        problems.append(make_problem("rigid", args.large, args))
+    for pr in problems:
+        what = ("s=%g, %g deg, t=%s" % (SCALE, ANGLE_DEG, SHIFT) if pr.case == "rigid"
+                else "%g*extent*(sin y2, sin y1)" % DEFORM)
+        print("  %-8s n = %7d  %s; extent %.3g, noise sigma %.3g; %s; initial RMS |true - Y| = %.4f"
+              % (pr.case, pr.n, pr.shape, pr.extent, pr.noise_sigma, what, pr.initial_rms))
+
+    # warm-up
+    avail = [lib for lib in libs if AVAILABLE[lib]]
+    dt, msgs = warm_up(avail, args.cases, args)
+    print("\nwarm-up: every call run once on 60 points before timing (numba compiles ours' kernels): "
+          "%.2f s" % dt)
+    for m in msgs:
+        print("  ! warm-up failed: %s" % m)
+
+    # runs
+    rows = []
+    for pr in problems:
+        large = pr.n == args.large and pr.n not in args.sizes
+        repeat = 1 if large else (args.repeat or (1 if pr.n >= SLOW_N else 3))
+        for lib in (["ours"] if large else libs):
+            print("  running %-8s n = %7d  %-6s" % (pr.case, pr.n, lib), end="", flush=True)
+            row = measure(lib, pr, args, repeat)
+            rows.append(row)
+            print(" %s" % (fmt_s(row) + (" s, %d iterations, RMS %.2e" % (row.n_iter, row.error)
+                                         if row.status == "ok" else "")), flush=True)
+
+    # ratios
+    for row in rows:
+        ours = next((r for r in rows if r.case == row.case and r.n == row.n and r.library == "ours"
+                     and r.status == "ok"), None)
+        if row.status == "ok" and ours is not None:
+            row.ratio = row.median / ours.median
+
+    # tables
+    print()
+    for case in args.cases:
+        crows = [r for r in rows if r.case == case]
+        if not crows:
+            continue
+        body = []
+        notes = []
+        for r in crows:
+            ok = r.status == "ok"
+            body.append([
+                r.n, r.library, fmt_s(r), len(r.times) if ok else "-",
+                r.n_iter if ok else "-", r.stop if ok else "-",
+                "%.2e" % r.error if ok else "-",
+                "%.2f" % r.ratio if r.ratio is not None else "-",
+            ])
+            if r.note and r.status != "not installed":
+                notes.append("n=%d %s: %s: %s" % (r.n, r.library, r.status, r.note))
+            for w in r.warnings:
+                notes.append("n=%d %s: warning %s" % (r.n, r.library, w[:200]))
+        print("### %s  (seconds: median of the runs, * = single run; RMS = |true - T(Y)|_F / sqrt(n); "
+              "ratio = library s / ours s)" % case)
+        print(table(["n", "library", "seconds", "runs", "iters", "stop", "RMS error", "lib/ours"], body,
+                    align=[">", "<", ">", ">", ">", "<", ">", ">"]))
+        for note in dict.fromkeys(notes):
+            print("  note: " + note)
+        print()
+
+    print(_load_line())
+    if args.json:
+        out = {
+            "machine": info,
+            "args": {k: v for k, v in vars(args).items()},
+            "data": [{"case": p.case, "n": p.n, "shape": p.shape, "extent": p.extent,
+                      "noise_sigma": p.noise_sigma, "initial_rms": p.initial_rms} for p in problems],
+            "rows": [{
+                "case": r.case, "n": r.n, "library": r.library, "status": r.status,
+                "median_s": r.median if r.status == "ok" else None, "times_s": r.times,
+                "n_iter": r.n_iter, "stop": r.stop, "rms_error": r.error, "ratio_to_ours": r.ratio,
+                "params": r.params, "note": r.note, "warnings": r.warnings,
+            } for r in rows],
+        }
+        Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.json).write_text(json.dumps(out, indent=2, default=str))
+        print("results written to %s" % args.json)
+    return 0
+
+
+if __name__ == "__main__":
+    try:
+        sys.exit(main(parse_args()))
+    except KeyboardInterrupt:
+        sys.exit(130)
+    except Exception:  # noqa: BLE001
+        traceback.print_exc()
+        sys.exit(1)
