@@ -38,6 +38,19 @@ _SKIP = np.exp(-50.0)
 _FLOOR = -700.0
 
 
+@njit(nogil=True, cache=True, inline="always")
+def _advance(cur, lo_c, hi_c, last):
+    """Step the cell odometer ``cur`` over dimensions ``0..last`` (``last`` fastest); False when done."""
+    d = last
+    while d >= 0:
+        cur[d] += 1
+        if cur[d] <= hi_c[d]:
+            return True
+        cur[d] = lo_c[d]
+        d -= 1
+    return False
+
+
 @njit(nogil=True, cache=True)
 def dense_scores(x, yt, lo, hi, inv2s2, log_c, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, out, ref, best):
     """Fill ``out[i, m] = s_(m, lo+i) - ref[i]`` for rows ``lo <= n < hi``; ``best`` = argmax_m."""
@@ -192,15 +205,7 @@ def truncated_scores(
                         if s > smax:
                             smax = s
                             arg = j
-                # next cell box (odometer over all but the last dimension)
-                d = n_dims - 2
-                while d >= 0:
-                    cur[d] += 1
-                    if cur[d] <= hi_c[d]:
-                        break
-                    cur[d] = lo_c[d]
-                    d -= 1
-                if d < 0:
+                if not _advance(cur, lo_c, hi_c, n_dims - 2):
                     break
         r = max(smax, log_c)
         if r == -np.inf:
@@ -272,14 +277,7 @@ def count_candidates(x, rows, keys_sorted, origin, cell, dims, d2_min, extra, y_
                 key_lo = key_lo * dims[d] + (cur[d] if d < n_dims - 1 else lo_c[d])
                 key_hi = key_hi * dims[d] + (cur[d] if d < n_dims - 1 else hi_c[d])
             total += np.searchsorted(keys_sorted, key_hi, side="right") - np.searchsorted(keys_sorted, key_lo, side="left")
-            d = n_dims - 2
-            while d >= 0:
-                cur[d] += 1
-                if cur[d] <= hi_c[d]:
-                    break
-                cur[d] = lo_c[d]
-                d -= 1
-            if d < 0:
+            if not _advance(cur, lo_c, hi_c, n_dims - 2):
                 break
         out[i] = total
     return out
@@ -384,14 +382,7 @@ def fgt_evaluate(targets, lo, hi, box_keys, box_coords, centers, coeffs, origin,
                         for k in range(n_terms):
                             total += cbr[k] * prod[k]
                         acc[r] += total
-                d = n_dims - 1
-                while d >= 0:
-                    cur[d] += 1
-                    if cur[d] <= hi_c[d]:
-                        break
-                    cur[d] = lo_c[d]
-                    d -= 1
-                if d < 0:
+                if not _advance(cur, lo_c, hi_c, n_dims - 1):
                     break
         for r in range(n_rhs):
             out[t, r] = acc[r]
@@ -480,14 +471,7 @@ def fgt_translate_evaluate(
                             buf_a[k] = buf_b[k]
                     for k in range(n_terms):
                         local[r, k] += buf_a[k]
-            d = n_dims - 1
-            while d >= 0:
-                cur[d] += 1
-                if cur[d] <= hi_c[d]:
-                    break
-                cur[d] = lo_c[d]
-                d -= 1
-            if d < 0:
+            if not _advance(cur, lo_c, hi_c, n_dims - 1):
                 break
         for j in range(t_start[c], t_start[c + 1]):
             t = t_order[j]
