@@ -165,6 +165,9 @@ def parse_args(argv=None):
                    help="also run ours alone, rigid, on N points")
     p.add_argument("--with-large", action="store_true",
                    help="same as --large %d" % DEFAULT_LARGE)
+    p.add_argument("--large-shape", default="outline:dog1",
+                   help="data of the large case: a --shape value, or 'outline:NAME' for points along "
+                        "the outline of a Kimia-99 silhouette (default: %(default)s)")
     p.add_argument("--threads", type=int, default=_cores(),
                    help="threads for ours (default: all cores, %(default)s); numpy/BLAS stay at their defaults")
     p.add_argument("--blas-threads", type=int, default=None,
@@ -303,7 +306,14 @@ def base_shape(n, seed, shape, extent):
     rng = np.random.default_rng([seed, n])
     pts = None
     desc = None
-    if shape != "gmm":
+    if shape.startswith("outline:"):
+        from centrality_vision.datasets import contour_points, load_kimia99
+
+        name = shape.split(":", 1)[1]
+        pts = contour_points(load_kimia99().image(name), n)[:, ::-1] * [1.0, -1.0]
+        pts = pts + rng.uniform(-0.25, 0.25, (n, 2))
+        desc = "Kimia-99 '%s' outline, points equally spaced by arc length" % name
+    elif shape != "gmm":
         try:
             pix = _kimia_pixels(shape)
             pts = pix[rng.integers(0, len(pix), n)] + rng.uniform(-0.5, 0.5, (n, 2))
@@ -327,8 +337,8 @@ def base_shape(n, seed, shape, extent):
     return pts, desc
 
 
-def make_problem(case, n, args):
-    y, desc = base_shape(n, args.seed, args.shape, args.extent)
+def make_problem(case, n, args, shape=None):
+    y, desc = base_shape(n, args.seed, args.shape if shape is None else shape, args.extent)
     rng = np.random.default_rng([args.seed, n, 1 + CASES.index(case)])
     sigma = NOISE * args.extent
     if case == "rigid":
@@ -701,7 +711,7 @@ def main(args):
             problems.append(make_problem(case, n, args))
     if (args.large is not None and args.large not in args.sizes and "rigid" in args.cases
             and "ours" in libs):
-        problems.append(make_problem("rigid", args.large, args))
+        problems.append(make_problem("rigid", args.large, args, shape=args.large_shape))
     for pr in problems:
         what = ("s=%g, %g deg, t=%s" % (SCALE, ANGLE_DEG, SHIFT) if pr.case == "rigid"
                 else "%g*extent*(sin y2, sin y1)" % DEFORM)
