@@ -18,51 +18,30 @@ from pathlib import Path
 
 import numpy as np
 
+from ._compare import METHODS, compare_methods, faster_than_cpd, format_comparison, plot_comparison
+
 __all__ = ["METHODS", "run", "format_table", "plot", "main"]
 
-METHODS = ("betweenness", "closeness", "degree", "eigenvector", "CPD")
 ANGLE_DEG, SCALE, SHIFT = 50.0, 1.5, (0.5, -0.3)
 SNAPSHOTS = (3, 6, 9)
-LEVELS = (0.1, 0.01, 0.001)
 # Thesis 5.4.1: every centrality decays faster than CPD, closeness and eigenvector fastest.
 THESIS = "all four GPD variants faster than CPD; closeness and eigenvector fastest"
-
-
-def _first_below(errors: np.ndarray, level: float):
-    hit = np.flatnonzero(errors <= level * errors[0])
-    return int(hit[0]) if hit.size else None
 
 
 def run(*, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int = 150) -> dict:
     """Error curves, snapshots and iteration counts (``quick``: 40 iterations at most)."""
     from ..datasets import load_fish
-    from ..registration import GPD, RigidCPD, Snapshots
+    from ..registration import RigidCPD
 
     started = time.perf_counter()
     moving = load_fish().moving
     a = np.radians(ANGLE_DEG)
     rotation = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
     fixed = SCALE * moving @ rotation.T + np.asarray(SHIFT)
-    methods = {}
-    for name in METHODS:
-        snaps = Snapshots(SNAPSHOTS)
-        base = RigidCPD(scale=True, tol=tol, max_iter=40 if quick else max_iter, callback=snaps)
-        est = base if name == "CPD" else GPD(base, centrality=name, graph="delaunay")
-        est.fit(moving, fixed, true_moving=fixed)
-        errors = np.asarray(est.history_["error"])
-        methods[name] = {
-            "errors": errors.tolist(),
-            "n_iter": int(est.n_iter_),
-            "converged": bool(est.converged_),
-            "final_error": float(errors[-1]),
-            "below": {str(level): _first_below(errors, level) for level in LEVELS},
-            "snapshots": {str(k): v.tolist() for k, v in snaps.frames.items()},
-        }
-    cpd = methods["CPD"]["below"][str(LEVELS[1])]
-    gpd_faster = {
-        name: (methods[name]["below"][str(LEVELS[1])] is not None and cpd is not None and methods[name]["below"][str(LEVELS[1])] < cpd)
-        for name in METHODS[:-1]
-    }
+    cap = 40 if quick else max_iter
+    methods = compare_methods(
+        moving, fixed, fixed, lambda cb: RigidCPD(scale=True, tol=tol, max_iter=cap, callback=cb), snapshots=SNAPSHOTS
+    )
     return {
         "transform": {"rotation_deg": ANGLE_DEG, "scale": SCALE, "translation": list(SHIFT)},
         "n_points": int(moving.shape[0]),
@@ -74,7 +53,7 @@ def run(*, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int 
         "thesis": THESIS,
         "claims": {
             f"GPD ({name}) reaches 1% of the initial error in fewer iterations than CPD": holds
-            for name, holds in gpd_faster.items()
+            for name, holds in faster_than_cpd(methods).items()
         },
     }
 
@@ -84,15 +63,9 @@ def format_table(result: dict) -> str:
     lines = [
         f"Fish ({result['n_points']} points) under a similarity transform: rotation {t['rotation_deg']} deg, "
         f"scale {t['scale']}, translation {tuple(t['translation'])}; Delaunay graphs; tol={result['tol']}",
-        "Iterations until |X - T(Y)| falls below a share of its initial value, and to convergence:",
-        f"{'method':>12}" + "".join(f"{f'<= {100 * lv:g}%':>10}" for lv in LEVELS) + f"{'converged':>11}{'final error':>13}",
+        *format_comparison(result["methods"]),
+        f"Thesis (fig. 5.3): {result['thesis']}.",
     ]
-    for name, m in result["methods"].items():
-        cells = "".join(f"{'-' if m['below'][str(lv)] is None else m['below'][str(lv)]:>10}" for lv in LEVELS)
-        done = f"{m['n_iter']}" + ("" if m["converged"] else "*")
-        lines.append(f"{name:>12}{cells}{done:>11}{m['final_error']:>13.2e}")
-    lines.append("(* stopped at max_iter without converging)")
-    lines.append(f"Thesis (fig. 5.3): {result['thesis']}.")
     for claim, holds in result["claims"].items():
         lines.append(f"[{'holds' if holds else 'does not hold'}] {claim}")
     return "\n".join(lines)
@@ -100,22 +73,11 @@ def format_table(result: dict) -> str:
 
 def plot(result: dict, folder) -> list[Path]:
     """fig-5.3.png (error curves) and fig-5.4.png (snapshots at iterations 3, 6, 9)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from ..plotting import plot_alignment_errors, plot_registration_snapshots, save_figure
-
-    folder = Path(folder)
-    labels = {name: (name if name == "CPD" else name.capitalize()) for name in result["methods"]}
-    errors = {labels[name]: m["errors"][:25] for name, m in result["methods"].items()}
-    ax = plot_alignment_errors(errors, title="Similarity (fish): alignment error per iteration (thesis fig. 5.3)")
-    first = save_figure(ax.figure, folder / "fig-5.3.png")
-    snaps = {labels[name]: {int(k): np.asarray(v) for k, v in m["snapshots"].items()} for name, m in result["methods"].items()}
-    fig = plot_registration_snapshots(
-        np.asarray(result["fixed"]), snaps, iterations=SNAPSHOTS, title="Fish under similarity: iterations 3, 6, 9 (thesis fig. 5.4)"
+    return plot_comparison(
+        result["methods"], result["fixed"], folder, curve_name="fig-5.3.png", snap_name="fig-5.4.png", snapshots=SNAPSHOTS,
+        curve_title="Similarity (fish): alignment error per iteration (thesis fig. 5.3)",
+        snap_title="Fish under similarity: iterations 3, 6, 9 (thesis fig. 5.4)", max_iter_shown=25,
     )
-    second = save_figure(fig, folder / "fig-5.4.png")
-    return [first, second]
 
 
 def main(argv=None) -> int:

@@ -1,0 +1,100 @@
+"""CPD against GPD with each of the thesis' four centralities, on one registration problem.
+
+Shared by the experiments of thesis 5.4.1-5.4.3 (figs. 5.3-5.8): every method records the
+alignment error |X - T(Y)| per iteration and the moving set at chosen iterations.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["METHODS", "LEVELS", "compare_methods", "faster_than_cpd", "error_at", "format_comparison", "plot_comparison"]
+
+METHODS = ("betweenness", "closeness", "degree", "eigenvector", "CPD")
+LEVELS = (0.1, 0.01, 0.001)
+
+
+def _first_below(errors: np.ndarray, level: float):
+    hit = np.flatnonzero(errors <= level * errors[0])
+    return int(hit[0]) if hit.size else None
+
+
+def compare_methods(moving, fixed, true_moving, make_base, *, snapshots, graph="delaunay") -> dict:
+    """Fit CPD (``make_base(callback)``) and GPD over it for each centrality; per-method records."""
+    from ..exceptions import ConvergenceWarning
+    from ..registration import GPD, Snapshots
+
+    methods = {}
+    for name in METHODS:
+        snaps = Snapshots(snapshots)
+        base = make_base(snaps)
+        est = base if name == "CPD" else GPD(base, centrality=name, graph=graph)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ConvergenceWarning)
+            est.fit(moving, fixed, true_moving=true_moving)
+        errors = np.asarray(est.history_["error"])
+        methods[name] = {
+            "errors": errors.tolist(),
+            "n_iter": int(est.n_iter_),
+            "converged": bool(est.converged_),
+            "final_error": float(errors[-1]),
+            "below": {str(level): _first_below(errors, level) for level in LEVELS},
+            "snapshots": {str(k): v.tolist() for k, v in snaps.frames.items()},
+        }
+    return methods
+
+
+def faster_than_cpd(methods: dict, level: float = 0.01) -> dict:
+    """For each centrality: does GPD reach ``level`` x the initial error in fewer iterations than CPD?"""
+    cpd = methods["CPD"]["below"][str(level)]
+    out = {}
+    for name in METHODS[:-1]:
+        mine = methods[name]["below"][str(level)]
+        out[name] = mine is not None and (cpd is None or mine < cpd)
+    return out
+
+
+def error_at(methods: dict, iteration: int) -> dict:
+    """Each method's alignment error after ``iteration`` iterations (its last one if it stopped earlier)."""
+    return {name: m["errors"][min(iteration, len(m["errors"]) - 1)] for name, m in methods.items()}
+
+
+def format_comparison(methods: dict, *, at=()) -> list[str]:
+    if at:
+        lines = ["Alignment error |X - T(Y)| after a number of iterations:",
+                 f"{'method':>12}" + "".join(f"{f'it. {k}':>10}" for k in at) + f"{'final':>10}"]
+        for name, m in methods.items():
+            lines.append(f"{name:>12}" + "".join(f"{error_at(methods, k)[name]:>10.3f}" for k in at) + f"{m['final_error']:>10.3f}")
+    else:
+        lines = []
+    lines += [
+        "Iterations until |X - T(Y)| falls below a share of its initial value, and to convergence:",
+        f"{'method':>12}" + "".join(f"{f'<= {100 * lv:g}%':>10}" for lv in LEVELS) + f"{'stopped at':>12}{'final error':>13}",
+    ]
+    for name, m in methods.items():
+        cells = "".join(f"{'-' if m['below'][str(lv)] is None else m['below'][str(lv)]:>10}" for lv in LEVELS)
+        done = f"{m['n_iter']}" + ("" if m["converged"] else "*")
+        lines.append(f"{name:>12}{cells}{done:>12}{m['final_error']:>13.3e}")
+    lines.append("(* stopped at max_iter without meeting the tolerance)")
+    return lines
+
+
+def plot_comparison(methods: dict, fixed, folder, *, curve_name, snap_name, snapshots, curve_title, snap_title, max_iter_shown=None):
+    """Error curves (``curve_name``) and snapshots (``snap_name``) as PNG files in ``folder``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from ..plotting import plot_alignment_errors, plot_registration_snapshots, save_figure
+
+    folder = Path(folder)
+    labels = {name: (name if name == "CPD" else name.capitalize()) for name in methods}
+    cut = slice(None) if max_iter_shown is None else slice(0, max_iter_shown + 1)
+    errors = {labels[name]: m["errors"][cut] for name, m in methods.items()}
+    ax = plot_alignment_errors(errors, title=curve_title)
+    first = save_figure(ax.figure, folder / curve_name)
+    snaps = {labels[name]: {int(k): np.asarray(v) for k, v in m["snapshots"].items()} for name, m in methods.items()}
+    fig = plot_registration_snapshots(np.asarray(fixed), snaps, iterations=snapshots, title=snap_title)
+    return [first, save_figure(fig, folder / snap_name)]
