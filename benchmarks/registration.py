@@ -55,7 +55,7 @@ be CPD's negative log-likelihood (c = 0 for w = 0).
   Q^T W)`` (the penalty with the new W). Its ``low_rank=False`` path is not usable in 0.28:
   it raises AttributeError (``A_times``) and never updates its error, so it would always
   run ``max_iterations``. We therefore use the low-rank path with ``num_eig`` = K =
-  ``--cycpd-num-eig`` (default: the rank ours uses above 1,500 points,
+  ``--cycpd-num-eig`` (default: the rank ours uses above 500 points,
   ``max(50, ceil(sqrt(n)))``); cycpd computes it with a full ``numpy.linalg.eigh`` of G.
 
 With w = 0 and the same tol, ours (relative) stops much earlier than cycpd (absolute) when
@@ -63,7 +63,7 @@ With w = 0 and the same tol, ours (relative) stops much earlier than cycpd (abso
 report iterations and the final error next to the seconds, not seconds alone.
 ``--ours-tol`` sets ours' tolerance on its own (e.g. to match an absolute tolerance).
 
-Ours' NonRigidCPD (``low_rank="auto"``) is exact up to 1,500 moving points and keeps
+Ours' NonRigidCPD (``low_rank="auto"``) is exact up to 500 moving points and keeps
 ``max(50, ceil(sqrt(M)))`` eigenpairs of G above (``--low-rank`` overrides); pycpd is
 always exact (an M x M solve per iteration).
 
@@ -118,7 +118,7 @@ SCALE = 1.2
 SHIFT = (0.3, -0.2)
 NOISE = 0.005  # noise standard deviation, times the extent
 DEFORM = 0.05  # non-rigid displacement amplitude, times the extent
-OURS_EXACT_MAX = 1500  # NonRigidCPD(low_rank="auto") is exact up to this many moving points
+OURS_EXACT_MAX = 500  # NonRigidCPD(low_rank="auto") is exact up to this many moving points
 
 
 def _cores():

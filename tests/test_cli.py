@@ -1,7 +1,9 @@
 import json
 
 import numpy as np
+import pytest
 
+from centrality_vision import __version__
 from centrality_vision.cli import main
 
 
@@ -28,9 +30,339 @@ def test_no_command_prints_help(capsys):
 
 
 def test_reproduce_rejects_unknown_experiment(capsys):
-    import pytest
-
     with pytest.raises(SystemExit) as info:
         main(["reproduce", "table-9.9"])
     assert info.value.code == 2
     assert "invalid choice" in capsys.readouterr().err
+
+
+# --------------------------------------------------------------------------------------
+# capability subcommands: graph, centrality, register, match, classify
+# --------------------------------------------------------------------------------------
+
+def _points(n=12, seed=0):
+    return np.random.default_rng(seed).random((n, 2))
+
+
+def _png(path, pixels):
+    from skimage.io import imsave
+
+    imsave(path, np.asarray(pixels, dtype=np.uint8), check_contrast=False)
+    return path
+
+
+def _one_line_error(capsys, *, only=False):
+    """The error line on stderr: the last line, the only one saying "error:" (the only line at all if ``only``)."""
+    err = capsys.readouterr().err
+    lines = err.strip().splitlines()
+    assert "Traceback" not in err and lines and "error:" in lines[-1], err
+    assert sum("error:" in line for line in lines) == 1, err
+    if only:
+        assert len(lines) == 1, err
+    return lines[-1]
+
+
+def _rotation(angle):
+    return np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+
+
+@pytest.mark.parametrize("out", ["g.json", "g.npz", "g.csv"])
+def test_graph_delaunay_has_3n_3_h_edges(tmp_path, out):
+    from scipy.spatial import ConvexHull
+
+    points = _points()
+    np.savetxt(tmp_path / "p.txt", points)
+    assert main(["graph", str(tmp_path / "p.txt"), "--kind", "delaunay", "--out", str(tmp_path / out)]) == 0
+    n, h = len(points), len(ConvexHull(points).vertices)
+    if out.endswith(".json"):
+        record = json.loads((tmp_path / out).read_text())
+        edges = np.array(record["edges"])
+        assert record["n_edges"] == 3 * n - 3 - h
+        assert record["parameters"]["kind"] == "delaunay" and record["parameters"]["version"] == __version__
+        i, j, length = edges[:, 0].astype(int), edges[:, 1].astype(int), edges[:, 2]
+    elif out.endswith(".npz"):
+        with np.load(tmp_path / out, allow_pickle=False) as saved:
+            i, j = saved["edges"].T
+            length = saved["lengths"]
+            assert json.loads(str(saved["parameters"]))["kind"] == "delaunay"
+    else:
+        table = np.loadtxt(tmp_path / out, delimiter=",", skiprows=2)
+        i, j, length = table[:, 0].astype(int), table[:, 1].astype(int), table[:, 2]
+    assert len(i) == 3 * n - 3 - h and np.all(i < j)
+    assert np.allclose(length, np.linalg.norm(points[i] - points[j], axis=1))
+
+
+@pytest.mark.parametrize(
+    ("kind", "extra", "n_edges"),
+    [("emst", [], 11), ("complete", [], 66), ("mstme", ["--lam", "1.5"], 11), ("mwme", [], None), ("knn", ["--k", "3"], None)],
+)
+def test_graph_kinds_and_plot(tmp_path, kind, extra, n_edges):
+    np.save(tmp_path / "p.npy", _points())
+    argv = ["graph", str(tmp_path / "p.npy"), "--kind", kind, *extra, "--out", str(tmp_path / "g.json"), "--plot", str(tmp_path / "g.png")]
+    assert main(argv) == 0
+    record = json.loads((tmp_path / "g.json").read_text())
+    assert (tmp_path / "g.png").stat().st_size > 0
+    if n_edges is not None:
+        assert record["n_edges"] == n_edges
+    if kind == "mwme":  # n - 1 distinct degrees
+        assert len(set(record["degrees"])) == 11
+    if kind == "knn":
+        assert record["parameters"]["k"] == 3 and record["n_edges"] >= 12 * 3 // 2
+    if kind == "mstme":
+        assert record["parameters"]["lam"] == 1.5 and record["entropy"] > 0
+
+
+def test_centrality_of_points_matches_the_graph(tmp_path):
+    from centrality_vision.centrality import closeness
+    from centrality_vision.graphs import delaunay_graph
+
+    points = _points()
+    np.savetxt(tmp_path / "p.csv", points, delimiter=",", header="x,y", comments="")
+    out = tmp_path / "c.csv"
+    assert main(["centrality", str(tmp_path / "p.csv"), "--measure", "all", "--out", str(out), "--plot", str(tmp_path / "c.png")]) == 0
+    lines = out.read_text().splitlines()
+    parameters = json.loads(lines[0].removeprefix("# parameters: "))
+    assert parameters["measure"] == "all" and parameters["graph"] == "delaunay" and parameters["seed"] is None
+    header = lines[1].split(",")
+    assert header == ["node", "x", "y", "degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity"]
+    table = np.loadtxt(out, delimiter=",", skiprows=2)
+    graph = delaunay_graph(points)
+    assert np.array_equal(table[:, 0], np.arange(12)) and np.allclose(table[:, 1:3], points)
+    assert np.array_equal(table[:, 3], (graph > 0).sum(axis=1))
+    assert np.allclose(table[:, 5], closeness(graph))
+    assert (tmp_path / "c.png").stat().st_size > 0
+
+    assert main(["centrality", str(tmp_path / "p.csv"), "--measure", "closeness", "--weights", "--out", str(tmp_path / "w.npy")]) == 0
+    side = json.loads((tmp_path / "w.parameters.json").read_text())
+    assert side["columns"] == ["node", "x", "y", "closeness"] and side["parameters"]["weights"] is True
+    assert np.allclose(np.load(tmp_path / "w.npy")[:, 3], closeness(graph, weights=True))
+
+
+def test_centrality_of_an_image_gives_pixel_coordinates(tmp_path, capsys):
+    pixels = np.full((7, 8), 255)  # a dark 3 x 3 square on white, Kimia style
+    pixels[2:5, 3:6] = 0
+    _png(tmp_path / "square.png", pixels)
+    out = tmp_path / "c.json"
+    assert main(["centrality", str(tmp_path / "square.png"), "--measure", "degree", "--out", str(out), "--plot", str(tmp_path / "c.png")]) == 0
+    record = json.loads(out.read_text())
+    assert record["input_kind"] == "image" and record["image_shape"] == [7, 8] and record["n_nodes"] == 9
+    rows, cols = np.array(record["coordinates"]["row"]), np.array(record["coordinates"]["col"])
+    degree = np.zeros((7, 8))
+    degree[rows, cols] = record["centrality"]["degree"]
+    assert degree[2:5, 3:6].tolist() == [[3, 5, 3], [5, 8, 5], [3, 5, 3]]
+    assert "9 foreground pixels" in capsys.readouterr().err
+    assert (tmp_path / "c.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("out", ["r.json", "r.npz"])
+def test_register_recovers_a_known_similarity(tmp_path, out):
+    from centrality_vision.datasets import load_fish
+
+    moving = load_fish().fixed
+    rotation, translation, scale = _rotation(0.4), np.array([0.5, -0.2]), 1.3
+    fixed = scale * moving @ rotation.T + translation
+    np.savetxt(tmp_path / "moving.txt", moving)
+    np.save(tmp_path / "fixed.npy", fixed)
+    np.save(tmp_path / "true.npy", fixed)
+    argv = ["register", str(tmp_path / "moving.txt"), str(tmp_path / "fixed.npy"), "--method", "cpd", "--transform", "similarity",
+            "--tol", "1e-10", "--max-iter", "500", "--true-moving", str(tmp_path / "true.npy"),
+            "--out", str(tmp_path / out), "--plot", str(tmp_path / "r.png")]
+    assert main(argv) == 0
+    if out.endswith(".json"):
+        record = json.loads((tmp_path / out).read_text())
+        transform, parameters = record["transform"], record["parameters"]
+        history_error = record["history"]["error"]
+        assert record["correspondence"] == list(range(91))
+    else:
+        with np.load(tmp_path / out, allow_pickle=False) as saved:
+            record = {key: saved[key] for key in saved.files}
+        transform = {key.removeprefix("transform_"): record[key] for key in record if key.startswith("transform_")}
+        parameters = json.loads(str(record["parameters"]))
+        history_error = record["history_error"]
+    assert str(transform["type"]) == "similarity"
+    assert abs(float(transform["scale"]) - scale) < 1e-6
+    assert np.allclose(transform["rotation"], rotation, atol=1e-6) and np.allclose(transform["translation"], translation, atol=1e-6)
+    assert np.allclose(record["moving_transformed"], fixed, atol=1e-6)
+    assert bool(record["converged"]) and int(record["n_iter"]) >= 1 and float(record["final_error"]) < 1e-6
+    assert len(history_error) == int(record["n_iter"]) + 1
+    assert parameters["tol"] == 1e-10 and parameters["max_iter"] == 500 and parameters["method"] == "cpd"
+    assert (tmp_path / "r.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize(
+    ("method", "transform", "kind"),
+    [("icp", "rigid", "rigid"), ("gpd", "rigid", "rigid"), ("gpd", "nonrigid", "nonrigid"), ("cpd", "affine", "affine")],
+)
+def test_register_methods_and_transforms(tmp_path, method, transform, kind):
+    moving = _points(30, seed=1)
+    fixed = moving @ _rotation(0.05).T + 0.01
+    np.save(tmp_path / "m.npy", moving)
+    np.save(tmp_path / "f.npy", fixed)
+    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--method", method, "--transform", transform,
+            "--tol", "1e-8", "--out", str(tmp_path / "r.json"), "--plot", str(tmp_path / "r.png")]
+    assert main(argv) == 0
+    record = json.loads((tmp_path / "r.json").read_text())
+    assert record["transform"]["type"] == kind
+    assert np.allclose(record["moving_transformed"], fixed, atol=1e-3)
+    assert (record["sigma2"] is None) == (method == "icp")
+    assert ("fixed_centrality" in record) == (method == "gpd")
+    assert (tmp_path / "r.png").stat().st_size > 0
+
+
+def test_register_icp_refuses_affine(tmp_path, capsys):
+    np.save(tmp_path / "m.npy", _points())
+    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "m.npy"), "--method", "icp", "--transform", "affine", "--out", str(tmp_path / "r.json")]
+    assert main(argv) == 2
+    assert "ICP fits rigid or similarity transforms only" in _one_line_error(capsys, only=True)
+
+
+def test_register_reports_non_convergence_as_a_one_line_warning(tmp_path, capsys):
+    np.save(tmp_path / "m.npy", _points(20))
+    np.save(tmp_path / "f.npy", _points(20, seed=3))
+    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--max-iter", "1", "--tol", "1e-12", "--out", str(tmp_path / "r.json")]
+    assert main(argv) == 0
+    record = json.loads((tmp_path / "r.json").read_text())
+    assert record["converged"] is False and record["n_iter"] == 1
+    assert record["warnings"] and record["warnings"][0].startswith("ConvergenceWarning")
+    warnings_on_stderr = [line for line in capsys.readouterr().err.splitlines() if "warning:" in line]
+    assert len(warnings_on_stderr) == 1
+
+
+def test_match_recovers_a_permutation(tmp_path):
+    fixed = _points(12, seed=4)
+    perm = np.random.default_rng(5).permutation(12)
+    moving = 0.5 * fixed[perm] @ _rotation(1.0).T + 3.0
+    np.savetxt(tmp_path / "m.txt", moving)
+    np.savetxt(tmp_path / "f.txt", fixed)
+    argv = ["match", str(tmp_path / "m.txt"), str(tmp_path / "f.txt"), "--method", "greedy", "--out", str(tmp_path / "m.json"), "--plot", str(tmp_path / "m.png")]
+    assert main(argv) == 0
+    record = json.loads((tmp_path / "m.json").read_text())
+    assert record["correspondence"] == perm.tolist()
+    assert abs(record["transform"]["scale"] - 2.0) < 1e-9 and record["rms_residual"] < 1e-9
+    assert record["parameters"]["method"] == "greedy" and (tmp_path / "m.png").stat().st_size > 0
+
+
+def _shapes_folder(folder, *, extra=()):
+    """Kimia-style files: dark silhouettes on white, label = name without digits."""
+    folder.mkdir()
+    yy, xx = np.mgrid[:24, :24]
+    for k, radius in enumerate((6, 8, 10), start=1):
+        disk = (yy - 12) ** 2 + (xx - 12) ** 2 <= radius**2
+        _png(folder / f"disk{k}.png", np.where(disk, 0, 255))
+        bar = np.zeros((24, 24), bool)
+        bar[12 - k : 12 + k, 2:22] = True
+        _png(folder / f"bar{k}.png", np.where(bar, 0, 255))
+    for name in extra:
+        _png(folder / name, np.where((yy - 12) ** 2 + (xx - 12) ** 2 <= 25, 0, 255))
+    return folder
+
+
+def test_classify_cross_validates_with_fewer_folds_when_classes_are_small(tmp_path, capsys):
+    folder = _shapes_folder(tmp_path / "shapes")
+    out = tmp_path / "c.json"
+    assert main(["classify", str(folder), "--centrality", "degree", "--bins", "8", "--seed", "3", "--out", str(out)]) == 0
+    record = json.loads(out.read_text())
+    assert record["classes"] == ["bar", "disk"] and record["class_counts"] == [3, 3]
+    assert record["cross_validation"]["n_splits"] == 3 and "using 3 folds" in record["cross_validation"]["note"]
+    assert len(record["fold_accuracy"]) == 3 and record["accuracy"] == pytest.approx(np.mean(record["fold_accuracy"]))
+    images = record["images"]
+    assert sorted(image["file"] for image in images) == sorted(p.name for p in folder.iterdir())
+    assert all(image["label"] == image["file"].removesuffix(".png").rstrip("0123456789") for image in images)
+    assert record["accuracy"] == pytest.approx(np.mean([image["label"] == image["predicted"] for image in images]))
+    assert np.sum(record["confusion"]) == 6
+    assert record["parameters"]["seed"] == 3 and record["parameters"]["histogram"]["bins"] == 8
+    captured = capsys.readouterr()
+    assert "using 3 folds" in captured.err and "warning:" not in captured.err and captured.out.startswith("accuracy")
+
+
+def test_classify_needs_two_images_per_class(tmp_path, capsys):
+    folder = _shapes_folder(tmp_path / "shapes", extra=["star1.png"])
+    assert main(["classify", str(folder), "--out", str(tmp_path / "c.json")]) == 2
+    assert "'star'" in _one_line_error(capsys)
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (None, "no such file"),
+        ("0 0 0 0\n1 1 1 1\n2 0 1 1\n", "columns"),
+        ("0 0\nnan 1\n1 1\n", "NaN"),
+        ("0 0\n1 1 1\n", "line 2"),
+        ("", "no points"),
+    ],
+)
+@pytest.mark.parametrize("command", ["graph", "centrality", "register", "match"])
+def test_bad_point_files_are_one_line_errors(tmp_path, capsys, command, content, message):
+    path = tmp_path / "bad.txt"
+    if content is not None:
+        path.write_text(content)
+    good = tmp_path / "good.txt"
+    np.savetxt(good, _points())
+    argv = {
+        "graph": ["graph", str(path), "--out", str(tmp_path / "g.json")],
+        "centrality": ["centrality", str(path), "--out", str(tmp_path / "c.json")],
+        "register": ["register", str(good), str(path), "--out", str(tmp_path / "r.json")],
+        "match": ["match", str(path), str(good), "--out", str(tmp_path / "m.json")],
+    }[command]
+    assert main(argv) == 2
+    line = _one_line_error(capsys, only=True)
+    assert str(path) in line and message in line
+    assert not list(tmp_path.glob("[gcrm].json"))
+
+
+@pytest.mark.parametrize(("content", "message"), [(b"GIF89a not a png", "not a readable image"), (b"", "empty"), (None, "no such file")])
+def test_bad_images_are_one_line_errors(tmp_path, capsys, content, message):
+    path = tmp_path / "bad.png"
+    if content is not None:
+        path.write_bytes(content)
+    assert main(["centrality", str(path), "--out", str(tmp_path / "c.json")]) == 2
+    line = _one_line_error(capsys, only=True)
+    assert str(path) in line and message in line
+
+
+def test_other_input_errors_are_one_line(tmp_path, capsys):
+    np.savetxt(tmp_path / "p.txt", _points(5))
+    np.savetxt(tmp_path / "q.txt", _points(6))
+    assert main(["graph", str(tmp_path / "p.txt"), "--kind", "knn", "--k", "5", "--out", str(tmp_path / "g.json")]) == 2
+    assert "--k must be smaller" in _one_line_error(capsys)
+    assert main(["match", str(tmp_path / "p.txt"), str(tmp_path / "q.txt"), "--out", str(tmp_path / "m.json")]) == 2
+    assert "same size" in _one_line_error(capsys)
+    assert main(["classify", str(tmp_path / "nowhere"), "--out", str(tmp_path / "c.json")]) == 2
+    assert "no such folder" in _one_line_error(capsys)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["graph", "p.txt", "--out", "g.json", "--colour", "red"],
+        ["graph", "p.txt", "--kind", "voronoi", "--out", "g.json"],
+        ["graph", "p.txt", "--out", "g.xlsx"],
+        ["centrality", "p.txt"],
+        ["register", "m.txt", "f.txt", "--tol", "-1", "--out", "r.json"],
+        ["classify", "shapes", "--folds", "1", "--out", "c.json"],
+    ],
+)
+def test_usage_errors_are_one_line_with_status_2(capsys, argv):
+    with pytest.raises(SystemExit) as info:
+        main(argv)
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and f"centrality-vision {argv[0]}: error:" in err and "--help" in err
+
+
+@pytest.mark.parametrize("command", ["graph", "centrality", "register", "match", "classify"])
+def test_each_subcommand_has_help_with_an_example(capsys, command):
+    with pytest.raises(SystemExit) as info:
+        main([command, "--help"])
+    assert info.value.code == 0
+    text = capsys.readouterr().out
+    assert f"centrality-vision {command}" in text and "example:" in text and "--out" in text
+
+
+def test_choice_lists_match_the_library():
+    from centrality_vision import cli
+    from centrality_vision.centrality import CENTRALITIES
+    from centrality_vision.registration import GRAPHS
+
+    assert cli.CENTRALITY_NAMES == tuple(CENTRALITIES)
+    assert set(cli.GPD_GRAPHS) == set(GRAPHS) - {"edgeless"}

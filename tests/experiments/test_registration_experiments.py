@@ -64,3 +64,25 @@ def test_table_5_1_quick(tmp_path, capsys):
     assert "Table 5.3" in text and "| 100" in text  # ours | thesis side by side
     lines = (tmp_path / "table-5.1-quick.jsonl").read_text().splitlines()
     assert len(lines) == 20  # one line per unit, kept for a resumed run
+
+
+def test_table_2_1_and_fig_7_1_reproduce_the_thesis(tmp_path):
+    from centrality_vision.experiments import fig_7_1, table_2_1
+
+    assert all(table_2_1.run()["claims"].values())
+    assert table_2_1.main(["--out", str(tmp_path / "t")]) == 0
+    result = fig_7_1.run()
+    assert all(result["claims"].values())
+    assert result["ours"]["exhaustive"]["degrees"] == [3, 2, 1, 1, 1]
+    assert fig_7_1.main(["--out", str(tmp_path / "f")]) == 0
+    assert (tmp_path / "f" / "fig-7.1.png").stat().st_size > 5_000
+
+
+def test_report_gathers_tables_and_figures(tmp_path):
+    from centrality_vision.experiments.report import run_all
+
+    path = run_all(tmp_path, quick=True, only=["table-2.1", "fig-7.1"])
+    text = path.read_text()
+    assert "## table-2.1" in text and "## fig-7.1" in text
+    assert "0.83 | 0.83" in text  # closeness of node b, ours | thesis
+    assert "![fig-7.1](fig-7.1/fig-7.1.png)" in text

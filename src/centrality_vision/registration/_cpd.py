@@ -399,7 +399,7 @@ class NonRigidCPD(_CPD):
     low_rank : int, 'auto' or None, default='auto'
         Number of eigenpairs of ``G`` kept (the CPD paper's fast variant, O(M K^2) per
         iteration instead of an O(M^3) solve). None solves exactly; 'auto' is exact up to
-        1,500 moving points and ``ceil(sqrt(M))`` eigenpairs (at least 50) above.
+        500 moving points and keeps ``ceil(sqrt(M))`` eigenpairs (at least 50) above.
 
     Examples
     --------
@@ -430,7 +430,10 @@ class NonRigidCPD(_CPD):
         if self.low_rank is None:
             return None
         if self.low_rank == "auto":
-            return None if n_moving <= 1500 else max(50, math.ceil(math.sqrt(n_moving)))
+            if n_moving <= 500:
+                return None
+            rank = max(50, math.ceil(math.sqrt(n_moving)))
+            return None if rank >= n_moving - 1 else rank
         if self.low_rank >= n_moving - 1:
             return None  # ARPACK needs k < n; a full-rank "approximation" is the exact kernel
         return int(self.low_rank)

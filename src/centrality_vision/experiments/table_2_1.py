@@ -1,0 +1,103 @@
+"""Thesis Table 2.1: degree, closeness, betweenness and eigenvector centrality of a 6-node graph.
+
+The graph is the one SPEC section 2 identifies as the only one with the printed degrees
+that reproduces every value: edges a-b, b-c, b-d, b-e, c-d, c-f, d-e, e-f. We print our
+values beside the thesis' (to two decimals) and draw the graph coloured by each centrality.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+__all__ = ["NODES", "EDGES", "THESIS", "graph", "run", "format_table", "plot", "main"]
+
+NODES = "abcdef"
+EDGES = ("ab", "bc", "bd", "be", "cd", "cf", "de", "ef")
+THESIS = {
+    "degree": (1, 4, 3, 3, 3, 2),
+    "closeness": (0.50, 0.83, 0.71, 0.71, 0.71, 0.56),
+    "betweenness": (0.00, 4.33, 1.50, 0.33, 1.50, 0.33),
+    "eigenvector": (0.34, 1.00, 0.85, 0.91, 0.85, 0.57),
+}
+# a drawing of the graph (positions only matter for the figure)
+POSITIONS = np.array([[0.0, 1.0], [1.0, 1.0], [2.0, 2.0], [2.0, 1.0], [2.0, 0.0], [3.0, 1.0]])
+
+
+def graph():
+    """The Table 2.1 graph as a symmetric CSR adjacency (unit edge lengths)."""
+    from scipy import sparse
+
+    rows = [NODES.index(e[0]) for e in EDGES]
+    cols = [NODES.index(e[1]) for e in EDGES]
+    upper = sparse.coo_array((np.ones(len(EDGES)), (rows, cols)), shape=(6, 6))
+    return sparse.csr_array(upper + upper.T)
+
+
+def run(*, quick: bool = False, seed: int = 0) -> dict:
+    from ..centrality import compute
+
+    g = graph()
+    ours = {name: compute(g, name).tolist() for name in THESIS}
+    match = {name: bool(np.array_equal(np.round(ours[name], 2), np.asarray(THESIS[name], dtype=float))) for name in THESIS}
+    return {
+        "nodes": list(NODES),
+        "edges": list(EDGES),
+        "ours": ours,
+        "thesis": {k: list(v) for k, v in THESIS.items()},
+        "seed": seed,
+        "claims": {f"{name} equals Table 2.1 to two decimals": ok for name, ok in match.items()},
+    }
+
+
+def format_table(result: dict) -> str:
+    lines = ["Table 2.1 (each cell: ours | thesis)", f"{'node':>12}" + "".join(f"{n:>14}" for n in result["nodes"])]
+    for name, values in result["ours"].items():
+        lines.append(f"{name:>12}" + "".join(f"{f'{v:.2f} | {t:.2f}':>14}" for v, t in zip(values, result["thesis"][name])))
+    for claim, holds in result["claims"].items():
+        lines.append(f"[{'holds' if holds else 'does not hold'}] {claim}")
+    return "\n".join(lines)
+
+
+def plot(result: dict, path) -> Path:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..plotting import plot_graph, save_figure
+
+    fig, axes = plt.subplots(1, 4, figsize=(14, 3.2))
+    g = graph()
+    for ax, (name, values) in zip(axes, result["ours"].items()):
+        plot_graph(POSITIONS, g, np.asarray(values), ax=ax, title=name)
+        for i, label in enumerate(result["nodes"]):
+            ax.annotate(label, POSITIONS[i], xytext=(4, 4), textcoords="offset points")
+    fig.suptitle("Thesis Table 2.1: the four centralities of the 6-node graph")
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m centrality_vision.experiments.table_2_1", description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="the same (the experiment is instant)")
+    parser.add_argument("--seed", type=int, default=0, help="recorded; nothing is random")
+    parser.add_argument("--out", default="results/table-2.1")
+    args = parser.parse_args(argv)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    result = run(quick=args.quick, seed=args.seed)
+    text = format_table(result)
+    print(text)
+    (out / "table-2.1.txt").write_text(text + "\n")
+    (out / "table-2.1.json").write_text(json.dumps(result, indent=1) + "\n")
+    plot(result, out / "table-2.1.png")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
