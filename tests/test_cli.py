@@ -366,3 +366,21 @@ def test_choice_lists_match_the_library():
 
     assert cli.CENTRALITY_NAMES == tuple(CENTRALITIES)
     assert set(cli.GPD_GRAPHS) == set(GRAPHS) - {"edgeless"}
+
+
+def test_reproduce_runs_an_experiment_and_resumes_with_a_scheduler(tmp_path, capsys):
+    assert main(["reproduce", "table-2.1", "--out", str(tmp_path)]) == 0
+    assert "0.83 | 0.83" in capsys.readouterr().out
+    assert (tmp_path / "table-2.1" / "table-2.1.json").is_file()
+    args = ["reproduce", "fig-6.4", "--quick", "--out", str(tmp_path), "--scheduler", "serial"]
+    assert main(args) == 0
+    lines = (tmp_path / "fig-6.4" / "fig-6.4-quick.jsonl").read_text().splitlines()
+    assert len(lines) == 9  # one unit per image, every 11th of the 99
+    assert main(args) == 0  # a re-run finds every unit done and recomputes nothing
+    assert (tmp_path / "fig-6.4" / "fig-6.4-quick.jsonl").read_text().splitlines() == lines
+
+
+def test_reproduce_scheduler_only_where_it_applies(tmp_path, capsys):
+    assert main(["reproduce", "table-2.1", "--out", str(tmp_path), "--scheduler", "serial"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "--scheduler" in err and len(err.splitlines()) == 1

@@ -103,10 +103,14 @@ def _reproduce(args: argparse.Namespace) -> int:
     if args.quick:
         argv.append("--quick")
     if args.scheduler is not None:
-        if args.experiment != "table-5.1":
+        from .experiments.report import RUNNER_EXPERIMENTS
+
+        if args.experiment not in RUNNER_EXPERIMENTS:
             from .exceptions import InputError
 
-            raise InputError(f"`--scheduler` applies to table-5.1 (and all); got it for {args.experiment}.")
+            raise InputError(
+                f"`--scheduler` applies to {', '.join(RUNNER_EXPERIMENTS)} (and all); got it for {args.experiment}."
+            )
         argv += ["--scheduler", args.scheduler]
     return module.main(argv)
 
@@ -869,7 +873,7 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument(
         "--scheduler",
         default=None,
-        help="where the units of table-5.1 run: serial, processes (default), dask (a local cluster started "
+        help="where the units of table-5.1, fig-6.4 and fig-7.4 run: serial, processes (default), dask (a local cluster started "
         "for the run) or tcp://host:port (a running Dask scheduler); finished units are kept and skipped on a re-run",
     )
     reproduce.set_defaults(run=_reproduce, _parser=reproduce)

@@ -30,33 +30,50 @@ def _random_similarity(points, rng):
     return rng.uniform(0.5, 2.0) * points @ rot.T + rng.uniform(-100, 100, size=2)
 
 
-def run(*, quick: bool = False, seed: int = 0, method: str = "local", progress: bool = True) -> dict:
-    """Matching accuracy per image and noise level; ``quick`` uses every 11th image."""
+def match_image(index: int, seed: int, method: str, noise) -> list:
+    """One runner unit: matching accuracy of image ``index`` at each noise level."""
     from scipy.spatial.distance import pdist
 
     from ..datasets import contour_points, load_kimia99
     from ..matching import mwme_match
 
+    fixed = contour_points(load_kimia99().images[index], N_POINTS)
+    eps = float(pdist(fixed).min())
+    accuracy = []
+    for col, sigma in enumerate(noise):
+        rng = np.random.default_rng([seed, index, col])
+        perm = rng.permutation(N_POINTS)
+        moved = _random_similarity(fixed[perm], rng)
+        moved = moved + rng.normal(0.0, sigma * eps, size=moved.shape) if sigma else moved
+        correspondence, _ = mwme_match(moved, fixed, method=method)
+        accuracy.append(float(np.mean(correspondence == perm)))
+    return accuracy
+
+
+def run(
+    *, quick: bool = False, seed: int = 0, method: str = "local", progress: bool = True, out=None,
+    scheduler: str = "processes", workers=None,
+) -> dict:
+    """Matching accuracy per image and noise level; ``quick`` uses every 11th image.
+
+    Each image is a unit of the shared runner, kept in ``out/fig-6.4[-quick].jsonl`` (a
+    temporary file when ``out`` is None).
+    """
+    import tempfile
+
+    from ..datasets import load_kimia99
+    from ._runner import Unit, run_units
+
     data = load_kimia99()
-    index = range(0, len(data), 11) if quick else range(len(data))
+    index = list(range(0, len(data), 11)) if quick else list(range(len(data)))
     noise = NOISE[:3] if quick else NOISE
     started = time.perf_counter()
-    accuracy = np.zeros((len(index), len(noise)))
-    items = list(enumerate(index))
-    if progress:
-        from tqdm.auto import tqdm
-
-        items = tqdm(items, desc="mwme matching", unit="image", leave=False)
-    for row, i in items:
-        fixed = contour_points(data.images[i], N_POINTS)
-        eps = float(pdist(fixed).min())
-        for col, sigma in enumerate(noise):
-            rng = np.random.default_rng([seed, i, col])
-            perm = rng.permutation(N_POINTS)
-            moved = _random_similarity(fixed[perm], rng)
-            moved = moved + rng.normal(0.0, sigma * eps, size=moved.shape) if sigma else moved
-            correspondence, _ = mwme_match(moved, fixed, method=method)
-            accuracy[row, col] = float(np.mean(correspondence == perm))
+    units = [Unit(f"{i:02d}", match_image, {"index": i, "seed": seed, "method": method, "noise": list(noise)}) for i in index]
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = Path(out) if out is not None else Path(scratch)
+        path = folder / ("fig-6.4-quick.jsonl" if quick else "fig-6.4.jsonl")
+        done = run_units(units, path, scheduler=scheduler, workers=workers, progress=progress, desc="mwme matching")
+    accuracy = np.array([done[f"{i:02d}"] for i in index])
     return {
         "names": [str(data.names[i]) for i in index],
         "noise": list(noise),
@@ -123,10 +140,12 @@ def main(argv=None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--method", choices=("local", "greedy"), default="local")
     parser.add_argument("--out", default="results/fig-6.4")
+    parser.add_argument("--scheduler", default="processes", help="serial, processes (default), dask, or tcp://host:port")
+    parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    result = run(quick=args.quick, seed=args.seed, method=args.method)
+    result = run(quick=args.quick, seed=args.seed, method=args.method, out=out, scheduler=args.scheduler, workers=args.workers)
     text = format_table(result)
     print(text)
     (out / "fig-6.4.txt").write_text(text + "\n")

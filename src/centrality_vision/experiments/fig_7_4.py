@@ -69,43 +69,56 @@ def stable_share(points, build, radius, n_copies, rng) -> float:
     return len(kept) / len(reference)
 
 
-def run(*, quick: bool = False, seed: int = 0, n_batches: int | None = None, n_copies: int = 30, progress: bool = True) -> dict:
+def stability_batch(name: str, d: int, level: int, batch: int, seed: int, n_copies: int) -> dict:
+    """One runner unit: the stable share of every graph for batch ``batch`` of ``level``."""
+    from scipy.spatial.distance import pdist
+
+    points = load_points(name)
+    eps = float(pdist(points).min())
+    builders = _builders()
+    out = {}
+    for g in GRAPHS:
+        rng = np.random.default_rng([seed, d, level, batch])  # same sets for every graph
+        out[g] = stable_share(points, builders[g], level * eps, n_copies, rng)
+    return out
+
+
+def run(
+    *, quick: bool = False, seed: int = 0, n_batches: int | None = None, n_copies: int = 30, progress: bool = True,
+    out=None, scheduler: str = "processes", workers=None,
+) -> dict:
     """Stable shares per dataset, graph, noise level and batch.
 
     Returns a dict with ``shares[dataset][graph]`` of shape (n_levels, n_batches), the
     levels, eps per dataset, and the parameters. Batch ``b`` of level ``r`` of dataset
     ``d`` uses ``default_rng([seed, d, r, b])`` for all graphs, so every graph sees the
-    same perturbed sets.
+    same perturbed sets. Each batch is a unit of the shared runner, kept in
+    ``out/fig-7.4[-quick].jsonl`` (a temporary file when ``out`` is None).
     """
+    import tempfile
+
     from scipy.spatial.distance import pdist
+
+    from ._runner import Unit, run_units
 
     levels = (1, 5, 10) if quick else tuple(range(1, 11))
     n_batches = n_batches or (3 if quick else 10)
     n_copies = 10 if quick else n_copies
-    builders = _builders()
     started = time.perf_counter()
     result = {"levels": list(levels), "n_batches": n_batches, "n_copies": n_copies, "seed": seed, "eps": {}, "shares": {}}
-    jobs = [(d, name) for d, name in enumerate(DATASETS)]
-    bar = None
-    if progress:
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=len(jobs) * len(levels) * n_batches, desc="stability", unit="batch", leave=False)
-    for d, name in jobs:
-        points = load_points(name)
-        eps = float(pdist(points).min())
-        result["eps"][name] = eps
-        shares = {g: np.zeros((len(levels), n_batches)) for g in GRAPHS}
-        for i, level in enumerate(levels):
-            for b in range(n_batches):
-                for g in GRAPHS:
-                    rng = np.random.default_rng([seed, d, level, b])  # same sets for every graph
-                    shares[g][i, b] = stable_share(points, builders[g], level * eps, n_copies, rng)
-                if bar is not None:
-                    bar.update()
-        result["shares"][name] = {g: v.tolist() for g, v in shares.items()}
-    if bar is not None:
-        bar.close()
+    units = [
+        Unit(f"{name}/{level}/{b}", stability_batch, {"name": name, "d": d, "level": level, "batch": b, "seed": seed, "n_copies": n_copies})
+        for d, name in enumerate(DATASETS) for level in levels for b in range(n_batches)
+    ]
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = Path(out) if out is not None else Path(scratch)
+        path = folder / ("fig-7.4-quick.jsonl" if quick else "fig-7.4.jsonl")
+        done = run_units(units, path, scheduler=scheduler, workers=workers, progress=progress, desc="stability")
+    for name in DATASETS:
+        result["eps"][name] = float(pdist(load_points(name)).min())
+        result["shares"][name] = {
+            g: [[done[f"{name}/{level}/{b}"][g] for b in range(n_batches)] for level in levels] for g in GRAPHS
+        }
     result["seconds"] = time.perf_counter() - started
     result["parameters"] = {
         "mstme": "lam=0.5, normalize=True (weights / mean MST edge length), greedy Algorithm 7.1",
@@ -207,10 +220,12 @@ def main(argv=None) -> int:
     parser.add_argument("--quick", action="store_true", help="3 levels, 3 batches of 10 copies")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", default="results/fig-7.4")
+    parser.add_argument("--scheduler", default="processes", help="serial, processes (default), dask, or tcp://host:port")
+    parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    result = run(quick=args.quick, seed=args.seed)
+    result = run(quick=args.quick, seed=args.seed, out=out, scheduler=args.scheduler, workers=args.workers)
     text = format_table(result)
     print(text)
     (out / "fig-7.4.txt").write_text(text + "\n")

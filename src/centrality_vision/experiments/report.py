@@ -18,8 +18,44 @@ from . import EXPERIMENTS
 
 __all__ = ["run_all", "write_report", "RUNNER_EXPERIMENTS"]
 
+# Where and why our numbers differ from the thesis' (measured on the full runs of 2026-11-21).
+DEVIATIONS = {
+    "table-2.1": "None: every value equals the thesis' to two decimals.",
+    "table-4.1": (
+        "Our accuracies are held-out (5-fold) and, at high salt noise, above the thesis': the "
+        "thesis does not state its split, and its histogram scaling and noise model are "
+        "reconstructed (SPEC section 6). Closeness is the most robust centrality, as in the thesis."
+    ),
+    "fig-5.3": (
+        "The thesis does not give its similarity transform; ours is a 50 degree rotation, scale "
+        "1.5. As in the thesis, all four GPD variants reach the alignment faster than CPD."
+    ),
+    "fig-5.5": (
+        "On our face data (8% of the points missing on opposite sides, a seeded affine map) CPD and "
+        "the four GPD variants need about the same number of iterations: the thesis' twofold "
+        "speed-up is not reproduced. The thesis' face pair and missing points are not published."
+    ),
+    "fig-5.7": (
+        "Our deformation, missing part and outliers are our own. The error cannot reach zero "
+        "(ten moving points have no partner). Closeness is ahead of CPD early on, as in the thesis, "
+        "but CPD ends lower; the thesis saw closeness ahead again after iteration 50."
+    ),
+    "table-5.1": (
+        "Our iteration counts are lower than the thesis' in most cells: noise-free copies let "
+        "sigma2 fall to the floor of coinciding sets quickly, and our sets have 100 points. "
+        "Closeness-GPD beats CPD on every class, as in the thesis, and is the fastest method on "
+        "cluster, normal and contour sets, as in the thesis; on random and grid sets the thesis "
+        "found eigenvector fastest, we find closeness (eigenvector close behind on grids). Convergence shares "
+        "differ: rotations up to 60 degrees defeat CPD and GPD alike on some random and Gaussian "
+        "sets, while on our grid sets every method converges almost always."
+    ),
+    "fig-6.4": "The thesis reports the matching visually; we measure it on all 99 outlines.",
+    "fig-7.1": "None: the MST, the MSTME and the exhaustive optimum equal the thesis' values.",
+    "fig-7.4": "As in the thesis, the MSTME keeps more of its edges than Delaunay under small perturbations.",
+}
+
 # the experiments whose units go through the shared runner (and accept --scheduler)
-RUNNER_EXPERIMENTS = ("table-5.1",)
+RUNNER_EXPERIMENTS = ("table-5.1", "fig-6.4", "fig-7.4")
 
 
 def run_all(out, *, quick: bool = False, seed: int = 0, only=None, scheduler: str | None = None) -> Path:
@@ -63,6 +99,8 @@ def write_report(out, names, *, quick: bool, seed: int, timings=None) -> Path:
         if timings and name in timings:
             lines.append(f"_{timings[name]:.1f} s_")
         lines.append("")
+        if name in DEVIATIONS and not quick:
+            lines += [f"**Against the thesis.** {DEVIATIONS[name]}", ""]
         for table in sorted(folder.glob("*.txt")):
             lines += ["```text", table.read_text().rstrip(), "```", ""]
         for figure in sorted(folder.glob("*.png")):
