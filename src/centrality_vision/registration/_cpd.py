@@ -303,9 +303,12 @@ class RigidCPD(_CPD):
         Tolerance on the relative change of the objective.
     sigma2 : float, optional
         Initial variance; by default ``sum |x_n - y_m|^2 / (D M N)``.
-    method : {'auto', 'dense', 'truncated'}, default='auto'
-        E-step path: every pair, or for each fixed point only the moving points whose
-        term is above 1e-16 of the largest (a cell grid); 'auto' picks per iteration.
+    method : {'auto', 'dense', 'truncated', 'fgt'}, default='auto'
+        E-step path: every pair ('dense'); for each fixed point only the moving points whose
+        term is above exp(-36.8)/M of its largest ('truncated', a cell grid: equal to dense to
+        rounding); a fast Gauss transform ('fgt', about 1e-8 of the total weight; CPD only,
+        not GPD). 'auto' takes the cheapest by a cost model at each iteration (always dense
+        below 4 million pairs).
     callback : callable, optional
         Called with an :class:`IterationInfo` after each E-step; return ``True`` to stop.
     progress : bool, default=False
