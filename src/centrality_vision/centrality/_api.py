@@ -15,7 +15,6 @@ Conventions shared by every function here:
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 from scipy import sparse

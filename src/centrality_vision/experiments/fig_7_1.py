@@ -31,28 +31,31 @@ def _entropy(degrees) -> float:
     return float(-(p * np.log2(p)).sum())
 
 
+def _is_tree(n: int, edges) -> bool:
+    """n - 1 edges form a spanning tree iff they close no cycle (union-find)."""
+    parent = list(range(n))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in edges:
+        ra, rb = find(a), find(b)
+        if ra == rb:
+            return False
+        parent[ra] = rb
+    return True
+
+
 def exhaustive(points: np.ndarray, lam: float) -> dict:
     """The best spanning tree by brute force over all edge subsets of size n - 1 (tiny n only)."""
     n = len(points)
     pairs = list(itertools.combinations(range(n), 2))
     best = None
     for edges in itertools.combinations(pairs, n - 1):
-        parent = list(range(n))
-
-        def find(i):
-            while parent[i] != i:
-                parent[i] = parent[parent[i]]
-                i = parent[i]
-            return i
-
-        tree = True
-        for a, b in edges:
-            ra, rb = find(a), find(b)
-            if ra == rb:
-                tree = False
-                break
-            parent[ra] = rb
-        if not tree:
+        if not _is_tree(n, edges):
             continue
         degrees = np.bincount(np.asarray(edges).ravel(), minlength=n)
         weight = float(sum(np.linalg.norm(points[a] - points[b]) for a, b in edges))

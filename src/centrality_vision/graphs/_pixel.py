@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import sparse
 
-from .._validation import as_binary_image, check_float, check_int
+from .._validation import as_binary_image, check_float
 from .._seeding import as_generator
 
 __all__ = ["pixel_graph", "pixel_coordinates", "salt_noise"]

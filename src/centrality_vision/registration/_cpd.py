@@ -11,7 +11,7 @@ import numpy as np
 from .._validation import ANY_DIMS, as_points, check_choice, check_float, check_int
 from ..exceptions import ConvergenceWarning, InputError
 from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, SimilarityTransform
-from ._estep import E_STEP_METHODS, CentralityPrior, Posteriors, _e_step, dense_posterior
+from ._estep import E_STEP_METHODS, CentralityPrior, _e_step, dense_posterior
 from ._mstep import LowRankKernel, affine_m_step, gaussian_kernel, nonrigid_m_step, rigid_m_step
 
 __all__ = ["RigidCPD", "AffineCPD", "NonRigidCPD", "IterationInfo", "Snapshots", "initial_sigma2", "alignment_error"]

@@ -285,7 +285,6 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
 def _fgt(moving_t, fixed, sigma2, w, log_c, eps):
     """E-step by two fast Gauss transforms (no prior); rows it cannot resolve go dense."""
     n_moving, n_dims = moving_t.shape
-    n_fixed = fixed.shape[0]
     h = math.sqrt(2.0 * sigma2)
     from scipy.spatial import cKDTree
 

@@ -150,7 +150,6 @@ def truncated_scores(
     n_dims = x.shape[1]
     capacity = index.shape[0]
     has_prior = log_weight.shape[0] > 0
-    coords = np.empty(n_dims, dtype=np.int64)
     lo_c = np.empty(n_dims, dtype=np.int64)
     hi_c = np.empty(n_dims, dtype=np.int64)
     cur = np.empty(n_dims, dtype=np.int64)
