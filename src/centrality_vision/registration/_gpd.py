@@ -194,7 +194,14 @@ class GPD:
                 raise InputError(f"`{name}_centrality` must have shape ({points.shape[0]},); got {values.shape}.")
             return normalize_centrality(values, name=f"{name}_centrality"), None
         if graph is None:
-            graph = _build_graph(points, self.graph, self.k)
+            try:
+                graph = _build_graph(points, self.graph, self.k)
+            except InputError as exc:
+                kind = getattr(self.graph, "__name__", self.graph)
+                raise InputError(
+                    f"GPD could not build the {kind!r} graph of `{name}`: {exc} Pass another `graph` "
+                    f"(e.g. 'knn' or 'emst') or `{name}_graph=`."
+                ) from None
         else:
             graph = as_graph(graph, name=f"{name}_graph")
             if graph.shape[0] != points.shape[0]:
