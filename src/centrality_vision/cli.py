@@ -898,7 +898,7 @@ def _parser() -> argparse.ArgumentParser:
     reproduce.add_argument(
         "--scheduler",
         default=None,
-        help="where the units of table-5.1, fig-6.4 and fig-7.4 run: serial, processes (default), dask (a local cluster started "
+        help="where the units of table-4.1, table-5.1, fig-6.4 and fig-7.4 run: serial, processes (default), dask (a local cluster started "
         "for the run) or tcp://host:port (a running Dask scheduler); finished units are kept and skipped on a re-run",
     )
     reproduce.set_defaults(run=_reproduce, _parser=reproduce)

@@ -58,3 +58,21 @@ def test_main_writes_files(tmp_path, capsys):
     assert table_4_1.main(["--quick", "--no-forest", "--out", str(tmp_path)]) == 0
     assert {p.name for p in tmp_path.iterdir()} == {"table-4.1.txt", "table-4.1.json", "fig-4.8.png", "cache"}
     assert "NB closeness" in capsys.readouterr().out
+
+
+def test_runner_unit_caches_exactly_the_centralities_of_the_noisy_copy(tmp_path):
+    """A unit (image 5 at 5% noise, 3rd in the list) caches what the main process looks up."""
+    from centrality_vision.datasets import load_kimia99
+    from centrality_vision.shapes import SHAPE_CENTRALITIES, CentralityCache, shape_centralities
+
+    record = table_4_1.centralities_unit(image_index=5, position=2, level_index=2, level=0.05, seed=7, cache_dir=str(tmp_path))
+    images = [load_kimia99().images[i] for i in (0, 1, 5)]
+    noisy = table_4_1.noisy_copies(images, table_4_1.NOISE_LEVELS, seed=7)[0.05][2]
+    cache = CentralityCache(directory=tmp_path)
+    before = {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()}
+    values = shape_centralities([noisy], SHAPE_CENTRALITIES, cache=cache)[0]
+    assert {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()} == before  # read from disk, nothing (re)written
+    assert record["n_nodes"] == values["nodes"].size == int(noisy.sum())
+    fresh = shape_centralities([noisy], SHAPE_CENTRALITIES, cache=CentralityCache())[0]
+    for name in SHAPE_CENTRALITIES:
+        np.testing.assert_array_equal(values[name], fresh[name])

@@ -55,7 +55,7 @@ DEVIATIONS = {
 }
 
 # the experiments whose units go through the shared runner (and accept --scheduler)
-RUNNER_EXPERIMENTS = ("table-5.1", "fig-6.4", "fig-7.4")
+RUNNER_EXPERIMENTS = ("table-4.1", "table-5.1", "fig-6.4", "fig-7.4")
 
 
 def run_all(out, *, quick: bool = False, seed: int = 0, only=None, scheduler: str | None = None) -> Path:

@@ -78,6 +78,28 @@ FOREST_PARAMETERS = {"n_estimators": 300, "n_comparisons": 2000, "extent": 2.0, 
 QUICK_FOREST_PARAMETERS = {"n_estimators": 60, "n_comparisons": 400, "extent": 2.0, "reference": "centroid"}
 
 
+def centralities_unit(image_index: int, position: int, level_index: int, level: float, seed: int, cache_dir: str) -> dict:
+    """One runner unit: the centralities of one (noisy) image, written to the on-disk cache.
+
+    The noise uses the seed of :func:`noisy_copies` (``position`` is the image's place in
+    the experiment's list), so the main process finds exactly these values in the cache.
+    """
+    from ..datasets import load_kimia99
+    from ..graphs import salt_noise
+    from ..shapes import SHAPE_CENTRALITIES, default_cache, shape_centralities
+
+    image = load_kimia99().images[image_index]
+    if level != 0:
+        image = salt_noise(image, level, seed=np.random.default_rng([seed, level_index, position]))
+    previous = default_cache.directory
+    default_cache.directory = Path(cache_dir)
+    try:
+        values = shape_centralities([image], SHAPE_CENTRALITIES)[0]
+    finally:
+        default_cache.directory = previous
+    return {"n_nodes": int(values["nodes"].size)}
+
+
 def _forest(centrality, seed, parameters):
     from ..shapes import CentralityComparisonForest
 
@@ -102,6 +124,8 @@ def run(
     forest: bool = True,
     scaling: str = "max",
     cache_dir=None,
+    scheduler: str | None = None,
+    workers: int | None = None,
 ) -> Table41:
     """Run the experiment and return its results.
 
@@ -122,6 +146,13 @@ def run(
     cache_dir : path, optional
         Keep the centralities on disk there: a second run, or a run started again after
         it was stopped, reads them instead of recomputing.
+    scheduler : str, optional
+        With ``cache_dir``: compute the centralities as units of the shared runner
+        (``"serial"``, ``"processes"``, ``"dask"`` or ``"tcp://host:port"``; see
+        :func:`centrality_vision.experiments._runner.run_units`), one unit per image and
+        noise level, recorded in ``cache_dir/table-4.1-units.jsonl``.
+    workers : int, optional
+        Processes or Dask workers for ``scheduler``.
     """
     from ..shapes import default_cache
 
@@ -129,12 +160,15 @@ def run(
     if cache_dir is not None:
         default_cache.directory = Path(cache_dir)
     try:
-        return _run(quick=quick, seed=seed, n_folds=n_folds, progress=progress, forest=forest, scaling=scaling)
+        return _run(
+            quick=quick, seed=seed, n_folds=n_folds, progress=progress, forest=forest, scaling=scaling,
+            cache_dir=cache_dir if scheduler is not None else None, scheduler=scheduler, workers=workers,
+        )
     finally:
         default_cache.directory = previous
 
 
-def _run(*, quick, seed, n_folds, progress, forest, scaling) -> Table41:
+def _run(*, quick, seed, n_folds, progress, forest, scaling, cache_dir=None, scheduler=None, workers=None) -> Table41:
     from sklearn.base import clone
     from sklearn.metrics import confusion_matrix
     from sklearn.model_selection import StratifiedKFold
@@ -152,6 +186,18 @@ def _run(*, quick, seed, n_folds, progress, forest, scaling) -> Table41:
     sets = noisy_copies(images, NOISE_LEVELS, seed)
 
     t0 = time.perf_counter()
+    if cache_dir is not None:
+        from ._runner import Unit, run_units
+
+        units = [
+            Unit(
+                f"{seed}/{level}/{int(index[i])}",
+                centralities_unit,
+                {"image_index": int(index[i]), "position": i, "level_index": j, "level": level, "seed": seed, "cache_dir": str(cache_dir)},
+            )
+            for j, level in enumerate(NOISE_LEVELS) for i in range(len(images))
+        ]
+        run_units(units, Path(cache_dir) / "table-4.1-units.jsonl", scheduler=scheduler, workers=workers, progress=progress, desc="centralities")
     everything = [image for level in NOISE_LEVELS for image in sets[level]]
     shape_centralities(everything, SHAPE_CENTRALITIES, progress=progress)
     seconds = {"centralities": time.perf_counter() - t0}
@@ -277,6 +323,8 @@ def main(argv=None) -> int:
     parser.add_argument("--no-forest", action="store_true", help="only the naive Bayes rows")
     parser.add_argument("--scaling", choices=("max", "minmax"), default="max", help="histogram scaling (default: %(default)s)")
     parser.add_argument("--cache", default=None, help="folder for computed centralities (default: OUT/cache)")
+    parser.add_argument("--scheduler", default="processes", help="where the centralities are computed: serial, processes (default), dask, or tcp://host:port")
+    parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
     out = Path(args.out)
     print(f"Table 4.1: seed={args.seed}, quick={args.quick}", file=sys.stderr)
@@ -286,6 +334,8 @@ def main(argv=None) -> int:
         forest=not args.no_forest,
         scaling=args.scaling,
         cache_dir=args.cache or out / "cache",
+        scheduler=args.scheduler,
+        workers=args.workers,
     )
     out.mkdir(parents=True, exist_ok=True)
     text = format_table(result)
