@@ -456,8 +456,10 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
                 ax.set_zticks([])
             heading = f"{label}: {shown}" if shown != iteration else label
             ax.set_title(heading if r == 0 or shown != iteration else "", fontsize=9)
-            if c == 0:
-                ax.text2D(-0.1, 0.5, f"{iteration}", transform=ax.transAxes, rotation=90, va="center") if dim == 3 else ax.set_ylabel(f"iteration {iteration}")
+            if c == 0 and dim == 3:
+                ax.text2D(-0.1, 0.5, f"iteration {iteration}", transform=ax.transAxes, rotation=90, va="center")
+            elif c == 0:
+                ax.set_ylabel(f"iteration {iteration}")
     if title:
         fig.suptitle(title)
     fig.tight_layout()
