@@ -64,7 +64,7 @@ def normalize_centrality(values, *, name: str = "values") -> np.ndarray:
     return (v - lo) / (hi - lo)
 
 
-def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=0.5) -> CentralityPrior:
+def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> CentralityPrior:
     """GPD's prior from normalised centralities of the moving and fixed sets (SPEC section 3).
 
     ``h(m)`` is the share of moving points whose centrality falls in the histogram bin of
@@ -75,7 +75,7 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=0.5) -> Cent
     centralities; when that is 0 the Gaussian term carries no information and is dropped.
     ``kappa`` weighs geometry against topology as ``kappa A + (1 - kappa) B``, with the
     overall factor absorbed in sigma2 (which CPD re-estimates): the prior is multiplied by
-    ``(1 - kappa) / kappa``, so 0.5 is the thesis' equal weighting and 1 is plain CPD.
+    ``(1 - kappa) / kappa``, so 0.5 (or None) is the thesis' equal weighting and 1 is plain CPD.
 
     Examples
     --------
@@ -104,7 +104,7 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=0.5) -> Cent
     else:
         phi2 = check_float(phi, name="phi", low=0.0, low_open=True) ** 2
     inv2phi2 = 0.0 if phi2 <= 0 else 1.0 / (2.0 * phi2)
-    kappa = check_float(kappa, name="kappa", low=0.0, high=1.0, low_open=True)
+    kappa = 0.5 if kappa is None else check_float(kappa, name="kappa", low=0.0, high=1.0, low_open=True)
     return CentralityPrior(log_weight, vy.copy(), vx.copy(), inv2phi2, (1.0 - kappa) / kappa)
 
 
@@ -132,8 +132,9 @@ class GPD:
     phi : float, optional
         Width of the Gaussian on centrality differences; default: the standard deviation of
         the fixed set's centralities.
-    kappa : float in (0, 1], default=0.5
-        Geometry-vs-topology balance; 0.5 is the thesis, 1 is plain CPD.
+    kappa : float in (0, 1], optional
+        Geometry-vs-topology balance ``kappa A + (1 - kappa) B`` (thesis 5.4.5); None or 0.5
+        is the thesis' equal weighting, 1 is plain CPD.
     weights : bool, default=False
         Use edge lengths in the centrality (shortest paths by length) instead of hop counts.
     k : int, default=6
@@ -160,7 +161,7 @@ class GPD:
 
     _FITTED = ("transform_", "moving_transformed_", "sigma2_", "n_iter_", "converged_", "history_", "correspondence_", "posteriors_")
 
-    def __init__(self, base_cpd=None, *, centrality="closeness", graph="delaunay", bins=10, phi=None, kappa=0.5, weights=False, k=6):
+    def __init__(self, base_cpd=None, *, centrality="closeness", graph="delaunay", bins=10, phi=None, kappa=None, weights=False, k=6):
         self.base_cpd = base_cpd
         self.centrality = centrality
         self.graph = graph
