@@ -250,6 +250,12 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
     dims = np.floor(extent / side).astype(np.int64) + 1
     keys = K.grid_keys(sources, origin, side, dims)
     box_keys, box_of = np.unique(keys, return_inverse=True)
+    size = box_keys.size * weights.shape[1] * p**n_dims * 8
+    if size > _FGT_MAX_BYTES:
+        raise MemoryError(
+            f"The fast Gauss transform would need {size / 2**30:.1f} GiB of expansion coefficients "
+            f"({box_keys.size} boxes x {p}^{n_dims} terms); use method='truncated' or 'dense'."
+        )
     coords = np.stack(np.unravel_index(box_keys, tuple(dims)), axis=1).astype(np.int64)
     centers = origin + (coords + 0.5) * side
     coeffs = np.zeros((box_keys.size, weights.shape[1], p**n_dims))
@@ -315,6 +321,9 @@ def _fgt(moving_t, fixed, sigma2, w, log_c, eps):
     return p1, px, pt1, log_den, best
 
 
+# The FGT's expansion coefficients may not take more memory than this.
+_FGT_MAX_BYTES = 2**32
+
 # Measured costs on 2 cores (nanoseconds): a dense pair, a pair the truncated path visits,
 # one FGT term for one right-hand side. They only rank the paths; any is correct.
 _COST_DENSE, _COST_TRUNCATED, _COST_FGT = 2.0, 5.0, 0.4
@@ -337,6 +346,8 @@ def _fgt_cost(moving_t, fixed, sigma2, eps):
 
     def transform_cost(src, tgt, n_rhs):
         n_src_boxes, bbox = boxes(src)
+        if n_src_boxes * n_rhs * p**n_dims * 8 > _FGT_MAX_BYTES / 4:
+            return math.inf  # the coefficients alone would take too much memory
         n_tgt_boxes, _ = boxes(tgt)
         in_reach = min(n_src_boxes, (2 * reach + 1) ** n_dims * n_src_boxes / bbox)
         direct = tgt.shape[0] * in_reach * p**n_dims * n_rhs
