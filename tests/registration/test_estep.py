@@ -151,3 +151,11 @@ def test_fgt_refuses_a_prior():
     rng = np.random.default_rng(7)
     with pytest.raises(ValueError, match="fgt"):
         _e_step(rng.random((5, 2)), rng.random((5, 2)), 1.0, 0.0, _prior(rng, 5, 5), method="fgt")
+
+
+def test_fgt_refuses_an_expansion_that_does_not_fit_in_memory():
+    rng = np.random.default_rng(8)
+    points = rng.random((60_000, 3))
+    # one box per point, 24^3 terms each: about 6.6 GiB of coefficients, refused before allocating
+    with pytest.raises(MemoryError, match="GiB"):
+        gauss_transform(points, np.ones(60_000), points, 1e-4, eps=1e-14)
