@@ -330,7 +330,7 @@ _FGT_MAX_BYTES = 2**32
 
 # Measured costs on 2 cores (nanoseconds): a dense pair, a pair the truncated path visits,
 # one FGT term for one right-hand side. They only rank the paths; any is correct.
-_COST_DENSE, _COST_TRUNCATED, _COST_FGT = 2.0, 5.0, 0.4
+_COST_DENSE, _COST_TRUNCATED, _COST_FGT = 2.0, 4.5, 1.0
 
 
 def _fgt_cost(moving_t, fixed, sigma2, eps):
