@@ -293,7 +293,8 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
 
 
 def _fgt(moving_t, fixed, sigma2, w, log_c, eps):
-    """E-step by two fast Gauss transforms (no prior); rows it cannot resolve go dense."""
+    """E-step by two fast Gauss transforms (no prior); rows whose sum is too small for the
+    transform's error bound are computed exactly (dense or truncated)."""
     n_moving, n_dims = moving_t.shape
     h = math.sqrt(2.0 * sigma2)
     from scipy.spatial import cKDTree
@@ -316,7 +317,12 @@ def _fgt(moving_t, fixed, sigma2, w, log_c, eps):
     rows = np.flatnonzero(exact)
     if rows.size:
         sub = np.ascontiguousarray(fixed[rows])
-        d_p1, d_px, d_pt1, d_log_den, d_best = _dense(moving_t, sub, 1.0 / (2.0 * sigma2), log_c, None)
+        inv2s2 = 1.0 / (2.0 * sigma2)
+        if rows.size * n_moving <= _DENSE_PAIRS:
+            d_p1, d_px, d_pt1, d_log_den, d_best = _dense(moving_t, sub, inv2s2, log_c, None)
+        else:  # many rows: visit only their neighbourhoods (exact to rounding as well)
+            tau = 36.8 + math.log(n_moving)
+            d_p1, d_px, d_pt1, d_log_den, d_best = _truncated(moving_t, sub, sigma2, inv2s2, log_c, None, tau)
         p1 += d_p1
         px += d_px
         pt1[rows] = d_pt1
