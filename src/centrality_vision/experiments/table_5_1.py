@@ -193,7 +193,6 @@ def _claims(summary: dict) -> dict:
 
 def format_table(result: dict) -> str:
     s = result["summary"]
-    head = "".join(f"{m[:1].upper() if m != 'CPD' else 'CPD':>8}" for m in METHODS)
     lines = [
         f"{result['n_sets']} sets per class, {result['n_points']} points, rotation uniform in +-{result['rotation_deg']} deg, "
         f"translation {result['translation']}; converged = own stopping test (tol {result['tol']}) within "
@@ -214,7 +213,6 @@ def format_table(result: dict) -> str:
                 cells.append(f"{ours + ' | ' + fmt.format(THESIS[key][kind][j]):>15}")
             lines.append(f"{kind:>8}" + "".join(cells))
     lines.append("")
-    del head
     for claim, holds in result["claims"].items():
         lines.append(f"[{'holds' if holds else 'does not hold'}] {claim} (thesis)")
     return "\n".join(lines)
