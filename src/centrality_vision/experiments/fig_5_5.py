@@ -10,13 +10,13 @@ measured on the moving set's points against their true positions A y + t.
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
 
 from ._compare import METHODS, compare_methods, faster_than_cpd, format_comparison, plot_comparison
 
@@ -79,8 +79,7 @@ def format_table(result: dict) -> str:
         *format_comparison(result["methods"]),
         f"Thesis (fig. 5.6): {result['thesis']}.",
     ]
-    for claim, holds in result["claims"].items():
-        lines.append(f"[{'holds' if holds else 'does not hold'}] {claim}")
+    lines += claim_lines(result["claims"])
     return "\n".join(lines)
 
 
@@ -94,18 +93,10 @@ def plot(result: dict, folder) -> list[Path]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m centrality_vision.experiments.fig_5_5", description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", default="results/fig-5.5")
-    args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args = experiment_parser("fig_5_5", __doc__, "fig-5.5").parse_args(argv)
+    out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
-    text = format_table(result)
-    print(text)
-    (out / "fig-5.5.txt").write_text(text + "\n")
-    (out / "fig-5.5.json").write_text(json.dumps(result, indent=1) + "\n")
+    save_outputs(out, "fig-5.5", format_table(result), result)
     plot(result, out)
     return 0
 

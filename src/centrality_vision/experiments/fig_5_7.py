@@ -11,13 +11,13 @@ the alignment error is measured over all moving points against their deformed po
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
 
 from ._compare import METHODS, compare_methods, error_at, format_comparison, plot_comparison
 
@@ -83,8 +83,7 @@ def format_table(result: dict) -> str:
         *format_comparison(result["methods"], at=SNAPSHOTS),
         f"Thesis (fig. 5.8): {result['thesis']}.",
     ]
-    for claim, holds in result["claims"].items():
-        lines.append(f"[{'holds' if holds else 'does not hold'}] {claim}")
+    lines += claim_lines(result["claims"])
     return "\n".join(lines)
 
 
@@ -98,18 +97,10 @@ def plot(result: dict, folder) -> list[Path]:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m centrality_vision.experiments.fig_5_7", description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", default="results/fig-5.7")
-    args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args = experiment_parser("fig_5_7", __doc__, "fig-5.7").parse_args(argv)
+    out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
-    text = format_table(result)
-    print(text)
-    (out / "fig-5.7.txt").write_text(text + "\n")
-    (out / "fig-5.7.json").write_text(json.dumps(result, indent=1) + "\n")
+    save_outputs(out, "fig-5.7", format_table(result), result)
     plot(result, out)
     return 0
 

@@ -10,13 +10,13 @@ added to the moved points, to show how the matching degrades.
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
 
 __all__ = ["NOISE", "run", "format_table", "plot", "main"]
 
@@ -96,8 +96,7 @@ def format_table(result: dict) -> str:
     for j, sigma in enumerate(result["noise"]):
         col = acc[:, j]
         lines.append(f"{sigma:>18.2f}{col.mean():>8.3f}{np.median(col):>8.3f}{col.min():>8.3f}{np.mean(col == 1.0):>13.2f}")
-    for claim, holds in result["claims"].items():
-        lines.append(f"[{'holds' if holds else 'does not hold'}] {claim}")
+    lines += claim_lines(result["claims"])
     return "\n".join(lines)
 
 
@@ -135,21 +134,12 @@ def plot(result: dict, path, *, example: str = "cow1", seed: int = 0) -> Path:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m centrality_vision.experiments.fig_6_4", description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--seed", type=int, default=0)
+    parser = experiment_parser("fig_6_4", __doc__, "fig-6.4", runner=True)
     parser.add_argument("--method", choices=("local", "greedy"), default="local")
-    parser.add_argument("--out", default="results/fig-6.4")
-    parser.add_argument("--scheduler", default="processes", help="serial, processes (default), dask, or tcp://host:port")
-    parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed, method=args.method, out=out, scheduler=args.scheduler, workers=args.workers)
-    text = format_table(result)
-    print(text)
-    (out / "fig-6.4.txt").write_text(text + "\n")
-    (out / "fig-6.4.json").write_text(json.dumps(result, indent=1) + "\n")
+    save_outputs(out, "fig-6.4", format_table(result), result)
     plot(result, out / "fig-6.4.png", seed=args.seed)
     return 0
 

@@ -10,13 +10,13 @@ spanning trees (Cayley), print both beside the thesis and draw the three graphs 
 
 from __future__ import annotations
 
-import argparse
 import itertools
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
+
+from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
 
 __all__ = ["POINTS", "run", "format_table", "plot", "main"]
 
@@ -103,8 +103,7 @@ def format_table(result: dict) -> str:
         f"{'exhaustive':>12}{o['exhaustive']['weight']:>16.2f}{o['exhaustive']['entropy']:>16.2f}{o['exhaustive']['cost']:>16.2f}  "
         f"{o['exhaustive']['degrees']}",
     ]
-    for claim, holds in result["claims"].items():
-        lines.append(f"[{'holds' if holds else 'does not hold'}] {claim}")
+    lines += claim_lines(result["claims"])
     return "\n".join(lines)
 
 
@@ -132,18 +131,10 @@ def plot(result: dict, path) -> Path:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m centrality_vision.experiments.fig_7_1", description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="the same (the experiment is instant)")
-    parser.add_argument("--seed", type=int, default=0, help="recorded; nothing is random")
-    parser.add_argument("--out", default="results/fig-7.1")
-    args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args = experiment_parser("fig_7_1", __doc__, "fig-7.1", quick_help="the same (the experiment is instant)", seed_help="recorded; nothing is random").parse_args(argv)
+    out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
-    text = format_table(result)
-    print(text)
-    (out / "fig-7.1.txt").write_text(text + "\n")
-    (out / "fig-7.1.json").write_text(json.dumps(result, indent=1) + "\n")
+    save_outputs(out, "fig-7.1", format_table(result), result)
     plot(result, out / "fig-7.1.png")
     return 0
 

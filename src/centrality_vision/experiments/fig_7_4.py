@@ -11,13 +11,13 @@ weights divided by the mean MST edge), Delaunay, Gabriel and the Euclidean MST.
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
 
 __all__ = ["GRAPHS", "DATASETS", "perturb", "stable_share", "run", "format_table", "plot_boxplots", "plot_perturbed", "main"]
 
@@ -143,8 +143,7 @@ def format_table(result: dict) -> str:
             med = np.median(np.asarray(values), axis=1)
             lines.append(f"{name:<6}{g:<10}" + "".join(f"{m:>8.2f}" for m in med))
     lines.append("thesis (fig. 7.4): MSTME more stable than Delaunay on fish and cow1.")
-    for claim, holds in result["claims"].items():
-        lines.append(f"[{'holds' if holds else 'does not hold'}] {claim}")
+    lines += claim_lines(result["claims"])
     return "\n".join(lines)
 
 
@@ -216,20 +215,10 @@ def plot_perturbed(name: str, level: int, path, *, seed: int = 0, n_copies: int 
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m centrality_vision.experiments.fig_7_4", description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="3 levels, 3 batches of 10 copies")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", default="results/fig-7.4")
-    parser.add_argument("--scheduler", default="processes", help="serial, processes (default), dask, or tcp://host:port")
-    parser.add_argument("--workers", type=int, default=None)
-    args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args = experiment_parser("fig_7_4", __doc__, "fig-7.4", quick_help="3 levels, 3 batches of 10 copies", runner=True).parse_args(argv)
+    out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed, out=out, scheduler=args.scheduler, workers=args.workers)
-    text = format_table(result)
-    print(text)
-    (out / "fig-7.4.txt").write_text(text + "\n")
-    (out / "fig-7.4.json").write_text(json.dumps(result, indent=1) + "\n")
+    save_outputs(out, "fig-7.4", format_table(result), result)
     plot_boxplots(result, out / "fig-7.4.png")
     plot_perturbed("fish", 3, out / "fig-7.3-fish.png", seed=args.seed, n_copies=result["n_copies"])
     plot_perturbed("cow1", 3, out / "fig-7.5-cow1.png", seed=args.seed, n_copies=result["n_copies"])

@@ -7,12 +7,12 @@ values beside the thesis' (to two decimals) and draw the graph coloured by each 
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 from pathlib import Path
 
 import numpy as np
+
+from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
 
 __all__ = ["NODES", "EDGES", "THESIS", "graph", "run", "format_table", "plot", "main"]
 
@@ -58,8 +58,7 @@ def format_table(result: dict) -> str:
     lines = ["Table 2.1 (each cell: ours | thesis)", f"{'node':>12}" + "".join(f"{n:>14}" for n in result["nodes"])]
     for name, values in result["ours"].items():
         lines.append(f"{name:>12}" + "".join(f"{f'{v:.2f} | {t:.2f}':>14}" for v, t in zip(values, result["thesis"][name])))
-    for claim, holds in result["claims"].items():
-        lines.append(f"[{'holds' if holds else 'does not hold'}] {claim}")
+    lines += claim_lines(result["claims"])
     return "\n".join(lines)
 
 
@@ -83,18 +82,10 @@ def plot(result: dict, path) -> Path:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m centrality_vision.experiments.table_2_1", description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="the same (the experiment is instant)")
-    parser.add_argument("--seed", type=int, default=0, help="recorded; nothing is random")
-    parser.add_argument("--out", default="results/table-2.1")
-    args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args = experiment_parser("table_2_1", __doc__, "table-2.1", quick_help="the same (the experiment is instant)", seed_help="recorded; nothing is random").parse_args(argv)
+    out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
-    text = format_table(result)
-    print(text)
-    (out / "table-2.1.txt").write_text(text + "\n")
-    (out / "table-2.1.json").write_text(json.dumps(result, indent=1) + "\n")
+    save_outputs(out, "table-2.1", format_table(result), result)
     plot(result, out / "table-2.1.png")
     return 0
 

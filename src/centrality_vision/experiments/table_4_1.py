@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ._common import SCHEDULER_HELP, claim_lines
+
 __all__ = ["THESIS_TABLE_4_1", "NOISE_LEVELS", "HISTOGRAM_FEATURES", "Table41", "run", "format_table", "plot_confusion", "main"]
 
 NOISE_LEVELS = (0.0, 0.01, 0.05, 0.10)
@@ -283,8 +285,7 @@ def format_table(result: Table41) -> str:
                  "the 0% column is training accuracy, as in the thesis.")
     if flagged:
         lines.append("* differs from the thesis by more than 0.1: " + "; ".join(f"{r} at {l}: {v:.2f} vs {t:.2f}" for r, l, v, t in flagged))
-    for claim, holds in result.claims.items():
-        lines.append(f"[{'holds' if holds else 'does not hold'}] {claim}")
+    lines += claim_lines(result.claims)
     return "\n".join(lines)
 
 
@@ -323,7 +324,7 @@ def main(argv=None) -> int:
     parser.add_argument("--no-forest", action="store_true", help="only the naive Bayes rows")
     parser.add_argument("--scaling", choices=("max", "minmax"), default="max", help="histogram scaling (default: %(default)s)")
     parser.add_argument("--cache", default=None, help="folder for computed centralities (default: OUT/cache)")
-    parser.add_argument("--scheduler", default="processes", help="where the centralities are computed: serial, processes (default), dask, or tcp://host:port")
+    parser.add_argument("--scheduler", default="processes", help=f"where the centralities are computed: {SCHEDULER_HELP}")
     parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
     out = Path(args.out)

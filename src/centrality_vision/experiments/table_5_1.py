@@ -18,13 +18,13 @@ centralities. The thesis leaves three choices open; ours, fixed and written into
 
 from __future__ import annotations
 
-import argparse
-import json
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
+
+from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
 
 __all__ = ["CLASSES", "METHODS", "make_set", "register_set", "run", "format_table", "plot", "main"]
 
@@ -213,8 +213,7 @@ def format_table(result: dict) -> str:
                 cells.append(f"{ours + ' | ' + fmt.format(THESIS[key][kind][j]):>15}")
             lines.append(f"{kind:>8}" + "".join(cells))
     lines.append("")
-    for claim, holds in result["claims"].items():
-        lines.append(f"[{'holds' if holds else 'does not hold'}] {claim} (thesis)")
+    lines += claim_lines(result["claims"], " (thesis)")
     return "\n".join(lines)
 
 
@@ -245,21 +244,11 @@ def plot(result: dict, path) -> Path:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m centrality_vision.experiments.table_5_1", description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true")
-    parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", default="results/table-5.1")
-    parser.add_argument("--scheduler", default="processes", help="serial, processes (default), dask, or tcp://host:port")
-    parser.add_argument("--workers", type=int, default=None)
-    args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args = experiment_parser("table_5_1", __doc__, "table-5.1", runner=True).parse_args(argv)
+    out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed, out=out, scheduler=args.scheduler, workers=args.workers)
-    text = format_table(result)
-    print(text)
     name = "table-5.1-quick" if args.quick else "table-5.1"
-    (out / f"{name}.txt").write_text(text + "\n")
-    (out / f"{name}.json").write_text(json.dumps(result, indent=1) + "\n")
+    save_outputs(out, name, format_table(result), result)
     plot(result, out / f"{name}.png")
     return 0
 
