@@ -125,6 +125,7 @@ if _ARGS is not None:
     os.environ["NUMBA_NUM_THREADS"] = str(_ARGS.threads)
 
 import numpy as np  # noqa: E402
+from _common import fmt_s, load_line, table  # noqa: E402
 import scipy  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
 
@@ -498,26 +499,6 @@ def compare(cells, ref_lib):
 # --------------------------------------------------------------------------- output
 
 
-def fmt_s(c):
-    if c is None:
-        return "-"
-    if c.status == "ok":
-        s = c.median
-        txt = "%.4f" % s if s < 10 else "%.2f" % s
-        return txt + ("*" if len(c.times) == 1 else "")
-    return c.status
-
-
-def table(headers, rows, align=None):
-    cols = list(zip(*([headers] + rows))) if rows else [[h] for h in headers]
-    widths = [max(len(str(x)) for x in col) for col in cols]
-    align = align or ["<"] + [">"] * (len(headers) - 1)
-    line = lambda r: "  ".join(("{:%s%d}" % (a, w)).format(str(x)) for x, w, a in zip(r, widths, align))
-    out = [line(headers), "  ".join("-" * w for w in widths)]
-    out += [line(r) for r in rows]
-    return "\n".join(out)
-
-
 def machine_info(threads):
     def ver(mod):
         return getattr(mod, "__version__", "?") if mod is not None else "not installed"
@@ -580,7 +561,7 @@ def main(args):
             print("%s: not available (%s)" % (lib, err))
     print("repeat: %d (median; a single run, marked *, when the first run takes > %g s)"
           % (args.repeat, SINGLE_RUN_S))
-    print(_load_line())
+    print(load_line("multi-threaded timings (networkit, rustworkx, ours) suffer most"))
     print("=" * 78)
 
     # graphs
@@ -707,7 +688,7 @@ def main(args):
             print("  note: " + note)
         print()
 
-    print(_load_line())
+    print(load_line("multi-threaded timings (networkit, rustworkx, ours) suffer most"))
     if args.json:
         out = {
             "machine": info,
@@ -739,17 +720,6 @@ def main(args):
         Path(args.json).write_text(json.dumps(out, indent=2))
         print("results written to %s" % args.json)
     return 0
-
-
-def _load_line():
-    try:
-        load = os.getloadavg()
-    except OSError:
-        return "load average: unknown"
-    line = "load average (1, 5, 15 min): %.2f %.2f %.2f" % load
-    if load[0] > 0.5 * (os.cpu_count() or 1):
-        line += "  ! the machine is busy: multi-threaded timings (networkit, rustworkx, ours) suffer most"
-    return line
 
 
 def _our_threads():

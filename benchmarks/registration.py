@@ -104,6 +104,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+from _common import fmt_s, load_line, table
 
 LIBRARIES = ("ours", "pycpd", "cycpd")
 CASES = ("rigid", "nonrigid")
@@ -561,24 +562,6 @@ def warm_up(libs, cases, args):
 # --------------------------------------------------------------------------- output
 
 
-def table(headers, rows, align=None):
-    cols = list(zip(*([headers] + rows))) if rows else [[h] for h in headers]
-    widths = [max(len(str(x)) for x in col) for col in cols]
-    align = align or ["<"] + [">"] * (len(headers) - 1)
-    line = lambda r: "  ".join(("{:%s%d}" % (a, w)).format(str(x)) for x, w, a in zip(r, widths, align))
-    out = [line(headers), "  ".join("-" * w for w in widths)]
-    out += [line(r) for r in rows]
-    return "\n".join(out)
-
-
-def fmt_s(row):
-    if row.status != "ok":
-        return row.status
-    s = row.median
-    txt = "%.4f" % s if s < 10 else "%.2f" % s
-    return txt + ("*" if len(row.times) == 1 else "")
-
-
 def _blas_info():
     try:
         from threadpoolctl import threadpool_info
@@ -603,17 +586,6 @@ def _mem_total():
     except OSError:
         pass
     return "?"
-
-
-def _load_line():
-    try:
-        load = os.getloadavg()
-    except OSError:
-        return "load average: unknown"
-    line = "load average (1, 5, 15 min): %.2f %.2f %.2f" % load
-    if load[0] > 0.5 * (os.cpu_count() or 1):
-        line += "  ! the machine is busy: timings are unreliable"
-    return line
 
 
 def machine_info(args):
@@ -700,7 +672,7 @@ def main(args):
                                          args.cycpd_num_eig or "max(50, ceil(sqrt(n)))"))
     print("repeat: %s (median; a single run, marked *, when the first run takes > %g s)"
           % (args.repeat if args.repeat is not None else "3 for n < %d, 1 above" % SLOW_N, SINGLE_RUN_S))
-    print(_load_line())
+    print(load_line())
     print("=" * 78)
 
     # data
@@ -773,7 +745,7 @@ def main(args):
             print("  note: " + note)
         print()
 
-    print(_load_line())
+    print(load_line())
     if args.json:
         out = {
             "machine": info,

@@ -1,0 +1,41 @@
+"""Output helpers shared by the benchmark scripts (imported as ``_common`` from this folder)."""
+
+from __future__ import annotations
+
+import os
+
+__all__ = ["table", "fmt_s", "load_line"]
+
+
+def table(headers, rows, align=None):
+    """A plain-text table: left-aligned first column, right-aligned others unless ``align`` says."""
+    cols = list(zip(*([headers] + rows))) if rows else [[h] for h in headers]
+    widths = [max(len(str(x)) for x in col) for col in cols]
+    align = align or ["<"] + [">"] * (len(headers) - 1)
+    line = lambda r: "  ".join(("{:%s%d}" % (a, w)).format(str(x)) for x, w, a in zip(r, widths, align))
+    out = [line(headers), "  ".join("-" * w for w in widths)]
+    out += [line(r) for r in rows]
+    return "\n".join(out)
+
+
+def fmt_s(result):
+    """Median seconds of a measurement (``*`` after a single run), its status if it failed, ``-`` if absent."""
+    if result is None:
+        return "-"
+    if result.status != "ok":
+        return result.status
+    s = result.median
+    txt = "%.4f" % s if s < 10 else "%.2f" % s
+    return txt + ("*" if len(result.times) == 1 else "")
+
+
+def load_line(busy_note="timings are unreliable"):
+    """The load average, with ``busy_note`` when more than half the cores are taken."""
+    try:
+        load = os.getloadavg()
+    except OSError:
+        return "load average: unknown"
+    line = "load average (1, 5, 15 min): %.2f %.2f %.2f" % load
+    if load[0] > 0.5 * (os.cpu_count() or 1):
+        line += "  ! the machine is busy: " + busy_note
+    return line
