@@ -20,6 +20,8 @@ __all__ = [
     "AffineTransform",
     "NonRigidTransform",
     "fit_similarity",
+    "least_squares_similarity",
+    "proper_rotation",
     "random_rotation",
 ]
 
@@ -280,12 +282,35 @@ def fit_similarity(source, target, *, scale: bool = True) -> SimilarityTransform
     target = as_points(target, name="target", n_dims=(source.shape[1],), min_points=2)
     if source.shape != target.shape:
         raise InputError(f"`source` and `target` must have the same shape; got {source.shape} and {target.shape}.")
+    rotation, translation, s = least_squares_similarity(source, target, scale=scale)
+    return SimilarityTransform(rotation, translation, s)
+
+
+def proper_rotation(cross: np.ndarray) -> tuple[np.ndarray, float]:
+    """The proper rotation R maximising ``tr(cross^T R)``, and that maximum.
+
+    SVD ``cross = U S V^T``; the sign of the last singular vector is flipped when
+    ``det(U V^T) < 0`` (Umeyama's correction), so det R = +1 even for reflected data.
+
+    Examples
+    --------
+    >>> r, trace = proper_rotation(np.diag([2.0, 1.0]))
+    >>> r, trace
+    (array([[1., 0.],
+           [0., 1.]]), 3.0)
+    """
+    u, sv, vt = np.linalg.svd(cross)
+    c = np.ones(cross.shape[0])
+    c[-1] = 1.0 if np.linalg.det(u @ vt) >= 0 else -1.0
+    return (u * c) @ vt, float(np.sum(sv * c))
+
+
+def least_squares_similarity(source: np.ndarray, target: np.ndarray, *, scale: bool) -> tuple[np.ndarray, np.ndarray, float]:
+    """``(rotation, translation, s)`` minimising ``sum |s R x_i + t - y_i|^2`` for paired rows
+    (``s = 1`` without ``scale``, or when the sets are degenerate); no input checks."""
     mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
     xs, xt = source - mu_s, target - mu_t
-    u, sv, vt = np.linalg.svd(xt.T @ xs)
-    d = np.ones(source.shape[1])
-    d[-1] = np.sign(np.linalg.det(u @ vt)) or 1.0
-    rotation = (u * d) @ vt
-    var = np.sum(xs**2)
-    s = float(np.sum(sv * d) / var) if scale and var > 0 else 1.0
-    return SimilarityTransform(rotation, mu_t - s * rotation @ mu_s, s if s > 0 else 1.0)
+    rotation, trace = proper_rotation(xt.T @ xs)
+    var = float(np.sum(xs * xs))
+    s = trace / var if scale and var > 0 and trace > 0 else 1.0
+    return rotation, mu_t - s * rotation @ mu_s, s

@@ -10,7 +10,7 @@ from scipy.spatial import cKDTree
 from .._parallel import get_num_threads
 from .._validation import ANY_DIMS, as_points, check_float, check_int
 from ..exceptions import ConvergenceWarning, InputError
-from ..transforms import RigidTransform, SimilarityTransform
+from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity
 from ._cpd import IterationInfo
 
 __all__ = ["ICP"]
@@ -18,15 +18,7 @@ __all__ = ["ICP"]
 
 def _fit(source, target, scale: bool):
     """Least-squares rigid/similarity transform taking ``source`` rows onto ``target`` rows."""
-    mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
-    xs, xt = source - mu_s, target - mu_t
-    u, sv, vt = np.linalg.svd(xt.T @ xs)
-    c = np.ones(source.shape[1])
-    c[-1] = 1.0 if np.linalg.det(u @ vt) >= 0 else -1.0
-    rotation = (u * c) @ vt
-    var = float(np.sum(xs * xs))
-    s = float(np.sum(sv * c)) / var if scale and var > 0 and np.sum(sv * c) > 0 else 1.0
-    translation = mu_t - s * rotation @ mu_s
+    rotation, translation, s = least_squares_similarity(source, target, scale=scale)
     return SimilarityTransform(rotation, translation, s) if scale else RigidTransform(rotation, translation)
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import linalg
 
-from ..transforms import AffineTransform, RigidTransform, SimilarityTransform
+from ..transforms import AffineTransform, RigidTransform, SimilarityTransform, proper_rotation
 from ._estep import Posteriors
 
 __all__ = ["rigid_m_step", "affine_m_step", "nonrigid_m_step", "gaussian_kernel", "LowRankKernel"]
@@ -40,11 +40,7 @@ def rigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, sca
     """
     n_p, mu_x, mu_y, a, _, y_hat, x_px = _moments(post, moving, fixed)
     n_dims = moving.shape[1]
-    u, sv, vt = np.linalg.svd(a)
-    c = np.ones(n_dims)
-    c[-1] = 1.0 if np.linalg.det(u @ vt) >= 0 else -1.0
-    rotation = (u * c) @ vt
-    tr_ar = float(np.sum(sv * c))
+    rotation, tr_ar = proper_rotation(a)
     y_py = float(post.p1 @ np.einsum("ij,ij->i", y_hat, y_hat))
     s = tr_ar / y_py if scale and y_py > 0 and tr_ar > 0 else 1.0
     sigma2 = (x_px - 2 * s * tr_ar + s * s * y_py) / (n_p * n_dims)
