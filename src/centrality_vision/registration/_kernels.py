@@ -310,6 +310,16 @@ def _tensor(per_dim, prod):
         size *= p
 
 
+@njit(nogil=True, cache=True, inline="always")
+def _box_at(box_keys, cur, dims):
+    """Index in the sorted ``box_keys`` of the box at cell ``cur``, or -1 if that box is empty."""
+    key = 0
+    for d in range(cur.shape[0]):
+        key = key * dims[d] + cur[d]
+    b = np.searchsorted(box_keys, key)
+    return b if b < box_keys.shape[0] and box_keys[b] == key else -1
+
+
 _FAST = {"reassoc", "contract"}  # reassociated dot products vectorise; no other IEEE liberty
 
 
@@ -361,11 +371,8 @@ def fgt_evaluate(targets, lo, hi, box_keys, box_coords, centers, coeffs, origin,
             for d in range(n_dims):
                 cur[d] = lo_c[d]
             while True:
-                key = 0
-                for d in range(n_dims):
-                    key = key * dims[d] + cur[d]
-                b = np.searchsorted(box_keys, key)
-                if b < box_keys.shape[0] and box_keys[b] == key:
+                b = _box_at(box_keys, cur, dims)
+                if b >= 0:
                     for d in range(n_dims):
                         v = (targets[t, d] - centers[b, d]) * inv_h
                         g = np.exp(-v * v)
@@ -453,11 +460,8 @@ def fgt_translate_evaluate(
             hi_c[d] = min(t_coords[c, d] + reach, dims[d] - 1)
             cur[d] = lo_c[d]
         while True:
-            key = 0
-            for d in range(n_dims):
-                key = key * dims[d] + cur[d]
-            b = np.searchsorted(s_box_keys, key)
-            if b < s_box_keys.shape[0] and s_box_keys[b] == key:
+            b = _box_at(s_box_keys, cur, dims)
+            if b >= 0:
                 for r in range(n_rhs):
                     src = coeffs[b, r]
                     for k in range(n_terms):
