@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["METHODS", "LEVELS", "compare_methods", "faster_than_cpd", "error_at", "format_comparison", "plot_comparison"]
+__all__ = ["METHODS", "LEVELS", "compare_methods", "faster_than_cpd", "error_at", "format_comparison", "comparison_text", "plot_comparison"]
 
 METHODS = ("betweenness", "closeness", "degree", "eigenvector", "CPD")
 LEVELS = (0.1, 0.01, 0.001)
@@ -48,13 +48,22 @@ def compare_methods(moving, fixed, true_moving, make_base, *, snapshots, graph="
 
 
 def faster_than_cpd(methods: dict, level: float = 0.01) -> dict:
-    """For each centrality: does GPD reach ``level`` x the initial error in fewer iterations than CPD?"""
+    """The claims "GPD (centrality) reaches ``level`` x the initial error in fewer iterations than CPD"."""
     cpd = methods["CPD"]["below"][str(level)]
     out = {}
     for name in METHODS[:-1]:
         mine = methods[name]["below"][str(level)]
-        out[name] = mine is not None and (cpd is None or mine < cpd)
+        claim = f"GPD ({name}) reaches {100 * level:g}% of the initial error in fewer iterations than CPD"
+        out[claim] = mine is not None and (cpd is None or mine < cpd)
     return out
+
+
+def comparison_text(header: str, result: dict, figure: str, *, at=()) -> str:
+    """The printed table of a comparison experiment: header, iteration counts, the thesis, the claims."""
+    from ._common import claim_lines
+
+    lines = [header, *format_comparison(result["methods"], at=at), f"Thesis ({figure}): {result['thesis']}."]
+    return "\n".join(lines + claim_lines(result["claims"]))
 
 
 def error_at(methods: dict, iteration: int) -> dict:

@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
+from ._common import experiment_parser, prepare_out, save_outputs
 
-from ._compare import METHODS, compare_methods, faster_than_cpd, format_comparison, plot_comparison
+from ._compare import METHODS, compare_methods, faster_than_cpd, comparison_text, plot_comparison
 
 __all__ = ["METHODS", "run", "format_table", "plot", "main"]
 
@@ -51,23 +51,17 @@ def run(*, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int 
         "methods": methods,
         "seconds": time.perf_counter() - started,
         "thesis": THESIS,
-        "claims": {
-            f"GPD ({name}) reaches 1% of the initial error in fewer iterations than CPD": holds
-            for name, holds in faster_than_cpd(methods).items()
-        },
+        "claims": faster_than_cpd(methods),
     }
 
 
 def format_table(result: dict) -> str:
     t = result["transform"]
-    lines = [
+    header = (
         f"Fish ({result['n_points']} points) under a similarity transform: rotation {t['rotation_deg']} deg, "
-        f"scale {t['scale']}, translation {tuple(t['translation'])}; Delaunay graphs; tol={result['tol']}",
-        *format_comparison(result["methods"]),
-        f"Thesis (fig. 5.3): {result['thesis']}.",
-    ]
-    lines += claim_lines(result["claims"])
-    return "\n".join(lines)
+        f"scale {t['scale']}, translation {tuple(t['translation'])}; Delaunay graphs; tol={result['tol']}"
+    )
+    return comparison_text(header, result, "fig. 5.3")
 
 
 def plot(result: dict, folder) -> list[Path]:

@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
+from ._common import experiment_parser, prepare_out, save_outputs
 
-from ._compare import METHODS, compare_methods, error_at, format_comparison, plot_comparison
+from ._compare import METHODS, compare_methods, error_at, comparison_text, plot_comparison
 
 __all__ = ["METHODS", "run", "format_table", "plot", "main"]
 
@@ -76,15 +76,12 @@ def run(*, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int 
 
 
 def format_table(result: dict) -> str:
-    lines = [
+    header = (
         f"Fish under a non-rigid deformation: {result['n_moving']} moving points, {result['n_fixed']} fixed "
         f"({result['missing']} missing, {result['outliers']} outliers); non-rigid CPD beta={result['beta']}, "
-        f"lambda={result['lam']}, w={result['w']}; Delaunay graphs",
-        *format_comparison(result["methods"], at=SNAPSHOTS),
-        f"Thesis (fig. 5.8): {result['thesis']}.",
-    ]
-    lines += claim_lines(result["claims"])
-    return "\n".join(lines)
+        f"lambda={result['lam']}, w={result['w']}; Delaunay graphs"
+    )
+    return comparison_text(header, result, "fig. 5.8", at=SNAPSHOTS)
 
 
 def plot(result: dict, folder) -> list[Path]:
