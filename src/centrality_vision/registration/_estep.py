@@ -157,12 +157,18 @@ class _Grid:
         self.points = np.ascontiguousarray(points[self.order])
 
 
-def _nearest_d2(moving_t, fixed):
+def _nearest(moving_t, fixed):
+    """Squared distance from each fixed point to its nearest moving point, and that point."""
     from scipy.spatial import cKDTree
 
-    dist, _ = cKDTree(moving_t).query(fixed, k=1, workers=get_num_threads())
-    # slack so that rounding (the tree's sqrt vs our squared sum) never drops the nearest point
-    return dist * dist * (1.0 + 1e-9) + 1e-300
+    dist, index = cKDTree(moving_t).query(fixed, k=1, workers=get_num_threads())
+    return dist * dist, index
+
+
+def _reach_d2(d2_nearest):
+    """Squared nearest distances with slack, so that rounding (the tree's sqrt against our
+    squared sum) never drops the nearest point from the truncated search."""
+    return d2_nearest * (1.0 + 1e-9) + 1e-300
 
 
 def _truncation_extra(sigma2, tau, prior):
@@ -170,11 +176,10 @@ def _truncation_extra(sigma2, tau, prior):
     return 2.0 * sigma2 * (tau + (high - low))
 
 
-def _truncated(moving_t, fixed, sigma2, inv2s2, log_c, prior, tau, grid=None, d2_min=None):
+def _truncated(moving_t, fixed, sigma2, inv2s2, log_c, prior, tau, grid=None, nearest=None):
     n_moving, n_dims = moving_t.shape
     n_fixed = fixed.shape[0]
-    if d2_min is None:
-        d2_min = _nearest_d2(moving_t, fixed)
+    d2_min = _reach_d2((nearest if nearest is not None else _nearest(moving_t, fixed))[0])
     extra = _truncation_extra(sigma2, tau, prior)
     if grid is None:
         grid = _Grid(moving_t, math.sqrt(extra) / _CELLS_PER_REACH)
@@ -292,14 +297,12 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
     return out
 
 
-def _fgt(moving_t, fixed, sigma2, w, log_c, eps):
+def _fgt(moving_t, fixed, sigma2, w, log_c, eps, nearest=None):
     """E-step by two fast Gauss transforms (no prior); rows whose sum is too small for the
     transform's error bound are computed exactly (dense or truncated)."""
     n_moving, n_dims = moving_t.shape
     h = math.sqrt(2.0 * sigma2)
-    from scipy.spatial import cKDTree
-
-    dist, nearest = cKDTree(moving_t).query(fixed, k=1, workers=get_num_threads())
+    d2_nearest, index = nearest if nearest is not None else _nearest(moving_t, fixed)
     raw = gauss_transform(moving_t, np.ones((n_moving, 1)), fixed, h, eps=eps)[:, 0]
     c = math.exp(log_c) if log_c > -math.inf else 0.0
     # the transform's absolute error is ~eps * M: rows whose sum is not far above it are redone exactly
@@ -313,7 +316,7 @@ def _fgt(moving_t, fixed, sigma2, w, log_c, eps):
     p1, px = out[:, 0].copy(), out[:, 1:].copy()
     pt1 = raw * inv
     log_den = np.log(np.where(exact, 1.0, den))
-    best = np.where(-dist * dist / (2 * sigma2) >= log_c, nearest, -1)
+    best = np.where(-d2_nearest / (2 * sigma2) >= log_c, index, -1)
     rows = np.flatnonzero(exact)
     if rows.size:
         sub = np.ascontiguousarray(fixed[rows])
@@ -322,7 +325,8 @@ def _fgt(moving_t, fixed, sigma2, w, log_c, eps):
             d_p1, d_px, d_pt1, d_log_den, d_best = _dense(moving_t, sub, inv2s2, log_c, None)
         else:  # many rows: visit only their neighbourhoods (exact to rounding as well)
             tau = 36.8 + math.log(n_moving)
-            d_p1, d_px, d_pt1, d_log_den, d_best = _truncated(moving_t, sub, sigma2, inv2s2, log_c, None, tau)
+            sub_nearest = (d2_nearest[rows], index[rows])
+            d_p1, d_px, d_pt1, d_log_den, d_best = _truncated(moving_t, sub, sigma2, inv2s2, log_c, None, tau, nearest=sub_nearest)
         p1 += d_p1
         px += d_px
         pt1[rows] = d_pt1
@@ -368,12 +372,14 @@ def _fgt_cost(moving_t, fixed, sigma2, eps):
 
 
 def _choose(moving_t, fixed, sigma2, prior, tau, eps):
-    """The cheapest path by a cost model; the truncated cost from 256 sampled rows."""
+    """The cheapest path by a cost model (the truncated cost from 256 sampled rows), and what
+    the chosen path can reuse: the nearest moving points and, for the truncated path, the grid."""
     n_moving, n_fixed = moving_t.shape[0], fixed.shape[0]
     if n_moving * n_fixed <= _DENSE_PAIRS:
-        return "dense", None
+        return "dense", {}
     costs = {"dense": _COST_DENSE * n_moving * n_fixed}
-    d2_min = _nearest_d2(moving_t, fixed)
+    nearest = _nearest(moving_t, fixed)
+    d2_min = _reach_d2(nearest[0])
     extra = _truncation_extra(sigma2, tau, prior)
     grid = _Grid(moving_t, math.sqrt(extra) / _CELLS_PER_REACH)
     rows = np.linspace(0, n_fixed - 1, min(256, n_fixed)).astype(np.int64)
@@ -382,7 +388,7 @@ def _choose(moving_t, fixed, sigma2, prior, tau, eps):
     if prior is None or prior.scale == 0:
         costs["fgt"] = _fgt_cost(moving_t, fixed, sigma2, eps)
     method = min(costs, key=costs.get)
-    return method, ((grid, d2_min) if method == "truncated" else None)
+    return method, {"nearest": nearest, "grid": grid if method == "truncated" else None}
 
 
 def _e_step(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None, *, method="auto", tau=None, eps=1e-8):
@@ -400,7 +406,7 @@ def _e_step(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None
     if tau is None:
         # keep every term above 1e-16 of its row's largest, summed over all M of them
         tau = 36.8 + math.log(n_moving)
-    cached = None
+    cached = {}
     if method == "auto":
         method, cached = _choose(moving_t, fixed, sigma2, log_prior, tau, eps)
     if method == "fgt" and log_prior is not None and log_prior.scale != 0:
@@ -408,10 +414,11 @@ def _e_step(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None
     if method == "dense":
         p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, log_prior)
     elif method == "fgt":
-        p1, px, pt1, log_den, best = _fgt(moving_t, fixed, sigma2, w, log_c, eps)
+        p1, px, pt1, log_den, best = _fgt(moving_t, fixed, sigma2, w, log_c, eps, cached.get("nearest"))
     else:
-        grid, d2_min = cached if cached is not None else (None, None)
-        p1, px, pt1, log_den, best = _truncated(moving_t, fixed, sigma2, inv2s2, log_c, log_prior, tau, grid, d2_min)
+        p1, px, pt1, log_den, best = _truncated(
+            moving_t, fixed, sigma2, inv2s2, log_c, log_prior, tau, cached.get("grid"), cached.get("nearest")
+        )
     nll = float(-np.sum(log_den) + 0.5 * n_fixed * n_dims * math.log(sigma2))
     return Posteriors(p1=p1, pt1=pt1, px=px, n_p=float(np.sum(pt1)), neg_log_likelihood=nll, best=best, method=method)
 
