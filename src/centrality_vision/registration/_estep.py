@@ -278,7 +278,7 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
     if not translate:
 
         def task(lo, hi):
-            K.fgt_evaluate(targets, lo, hi, box_keys, coords, centers, coeffs, origin, side, dims, 1.0 / h, p, reach, out)
+            K.fgt_evaluate(targets, lo, hi, box_keys, centers, coeffs, origin, side, dims, 1.0 / h, p, reach, out)
 
         run_chunks(task, targets.shape[0])
         return out
@@ -289,7 +289,7 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
 
     def task_boxes(lo, hi):
         K.fgt_translate_evaluate(
-            targets, t_start, t_order, t_box_keys, t_coords, box_keys, coords, coeffs, origin, side, dims,
+            targets, t_start, t_order, t_coords, box_keys, coords, coeffs, origin, side, dims,
             1.0 / h, p, reach, trans, lo, hi, out,
         )
 
@@ -297,7 +297,7 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
     return out
 
 
-def _fgt(moving_t, fixed, sigma2, w, log_c, eps, nearest=None):
+def _fgt(moving_t, fixed, sigma2, log_c, eps, nearest=None):
     """E-step by two fast Gauss transforms (no prior); rows whose sum is too small for the
     transform's error bound are computed exactly (dense or truncated)."""
     n_moving, n_dims = moving_t.shape
@@ -383,7 +383,7 @@ def _choose(moving_t, fixed, sigma2, prior, tau, eps):
     extra = _truncation_extra(sigma2, tau, prior)
     grid = _Grid(moving_t, math.sqrt(extra) / _CELLS_PER_REACH)
     rows = np.linspace(0, n_fixed - 1, min(256, n_fixed)).astype(np.int64)
-    visited = K.count_candidates(fixed, rows, grid.keys, grid.origin, grid.cell, grid.dims, d2_min, extra, grid.points)
+    visited = K.count_candidates(fixed, rows, grid.keys, grid.origin, grid.cell, grid.dims, d2_min, extra)
     costs["truncated"] = _COST_TRUNCATED * visited.mean() * n_fixed
     if prior is None or prior.scale == 0:
         costs["fgt"] = _fgt_cost(moving_t, fixed, sigma2, eps)
@@ -414,7 +414,7 @@ def _e_step(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None
     if method == "dense":
         p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, log_prior)
     elif method == "fgt":
-        p1, px, pt1, log_den, best = _fgt(moving_t, fixed, sigma2, w, log_c, eps, cached.get("nearest"))
+        p1, px, pt1, log_den, best = _fgt(moving_t, fixed, sigma2, log_c, eps, cached.get("nearest"))
     else:
         p1, px, pt1, log_den, best = _truncated(
             moving_t, fixed, sigma2, inv2s2, log_c, log_prior, tau, cached.get("grid"), cached.get("nearest")

@@ -51,6 +51,32 @@ def _advance(cur, lo_c, hi_c, last):
     return False
 
 
+@njit(nogil=True, cache=True, inline="always")
+def _reach_box(point, reach, origin, cell, dims, lo_c, hi_c, cur):
+    """Cells overlapping the box of half-side ``reach`` about ``point`` into ``lo_c``..``hi_c``
+    (clipped to the grid), ``cur`` set to the first; returns the number of cells (0: none)."""
+    span = 1
+    for d in range(point.shape[0]):
+        lo_c[d] = max(int(np.floor((point[d] - reach - origin[d]) / cell)), 0)
+        hi_c[d] = min(int(np.floor((point[d] + reach - origin[d]) / cell)), dims[d] - 1)
+        span *= max(hi_c[d] - lo_c[d] + 1, 0)
+        cur[d] = lo_c[d]
+    return span
+
+
+@njit(nogil=True, cache=True, inline="always")
+def _row_range(keys_sorted, cur, lo_c, hi_c, dims):
+    """Positions ``a:b`` in ``keys_sorted`` of the points in the cells at ``cur`` in every
+    dimension but the last, over its whole range (the last dimension is contiguous in key order)."""
+    n_dims = cur.shape[0]
+    key_lo = 0
+    key_hi = 0
+    for d in range(n_dims):
+        key_lo = key_lo * dims[d] + (cur[d] if d < n_dims - 1 else lo_c[d])
+        key_hi = key_hi * dims[d] + (cur[d] if d < n_dims - 1 else hi_c[d])
+    return np.searchsorted(keys_sorted, key_lo, side="left"), np.searchsorted(keys_sorted, key_hi, side="right")
+
+
 @njit(nogil=True, cache=True)
 def dense_scores(x, yt, lo, hi, inv2s2, log_c, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, out, ref, best):
     """Fill ``out[i, m] = s_(m, lo+i) - ref[i]`` for rows ``lo <= n < hi``; ``best`` = argmax_m."""
@@ -129,12 +155,6 @@ def grid_keys(points, origin, cell, dims):
     return keys
 
 
-@njit(nogil=True, cache=True)
-def _cell_of(point, origin, cell, dims, coords):
-    for d in range(point.shape[0]):
-        c = int(np.floor((point[d] - origin[d]) / cell))
-        coords[d] = c
-
 
 @njit(nogil=True, cache=True)
 def truncated_scores(
@@ -158,29 +178,14 @@ def truncated_scores(
     n = lo
     while n < hi:
         r2 = d2_min[n] + extra
-        reach = np.sqrt(r2)
-        span = 1
-        for d in range(n_dims):
-            a = int(np.floor((x[n, d] - reach - origin[d]) / cell))
-            b = int(np.floor((x[n, d] + reach - origin[d]) / cell))
-            lo_c[d] = max(a, 0)
-            hi_c[d] = min(b, dims[d] - 1)
-            span *= max(hi_c[d] - lo_c[d] + 1, 0)
+        span = _reach_box(x[n], np.sqrt(r2), origin, cell, dims, lo_c, hi_c, cur)
         start = used
         smax = -np.inf
         arg = -1
         if span > 0:
-            for d in range(n_dims):
-                cur[d] = lo_c[d]
             # iterate over the cells of the box, the last dimension innermost and contiguous
             while True:
-                key_lo = 0
-                key_hi = 0
-                for d in range(n_dims):
-                    key_lo = key_lo * dims[d] + (cur[d] if d < n_dims - 1 else lo_c[d])
-                    key_hi = key_hi * dims[d] + (cur[d] if d < n_dims - 1 else hi_c[d])
-                a = np.searchsorted(keys_sorted, key_lo, side="left")
-                b = np.searchsorted(keys_sorted, key_hi, side="right")
+                a, b = _row_range(keys_sorted, cur, lo_c, hi_c, dims)
                 if used + (b - a) > capacity:
                     if start == 0:
                         # a single row larger than the buffer cannot happen: capacity >= M
@@ -249,7 +254,7 @@ def sparse_accumulate(index, e, row_ptr, x, lo, hi, ref, log_c, p1, pxt, pt1, lo
 
 
 @njit(nogil=True, cache=True)
-def count_candidates(x, rows, keys_sorted, origin, cell, dims, d2_min, extra, y_sorted):
+def count_candidates(x, rows, keys_sorted, origin, cell, dims, d2_min, extra):
     """Number of moving points the truncated path would visit for each of ``rows``."""
     n_dims = x.shape[1]
     out = np.zeros(rows.shape[0], dtype=np.int64)
@@ -258,24 +263,12 @@ def count_candidates(x, rows, keys_sorted, origin, cell, dims, d2_min, extra, y_
     cur = np.empty(n_dims, dtype=np.int64)
     for i in range(rows.shape[0]):
         n = rows[i]
-        reach = np.sqrt(d2_min[n] + extra)
-        span = 1
-        for d in range(n_dims):
-            lo_c[d] = max(int(np.floor((x[n, d] - reach - origin[d]) / cell)), 0)
-            hi_c[d] = min(int(np.floor((x[n, d] + reach - origin[d]) / cell)), dims[d] - 1)
-            span *= max(hi_c[d] - lo_c[d] + 1, 0)
-        if span == 0:
+        if _reach_box(x[n], np.sqrt(d2_min[n] + extra), origin, cell, dims, lo_c, hi_c, cur) == 0:
             continue
-        for d in range(n_dims):
-            cur[d] = lo_c[d]
         total = 0
         while True:
-            key_lo = 0
-            key_hi = 0
-            for d in range(n_dims):
-                key_lo = key_lo * dims[d] + (cur[d] if d < n_dims - 1 else lo_c[d])
-                key_hi = key_hi * dims[d] + (cur[d] if d < n_dims - 1 else hi_c[d])
-            total += np.searchsorted(keys_sorted, key_hi, side="right") - np.searchsorted(keys_sorted, key_lo, side="left")
+            a, b = _row_range(keys_sorted, cur, lo_c, hi_c, dims)
+            total += b - a
             if not _advance(cur, lo_c, hi_c, n_dims - 2):
                 break
         out[i] = total
@@ -347,7 +340,7 @@ def fgt_coefficients(src, weights, box_of, centers, inv_h, p, coeffs):
 
 
 @njit(nogil=True, cache=True, fastmath=_FAST)
-def fgt_evaluate(targets, lo, hi, box_keys, box_coords, centers, coeffs, origin, side, dims, inv_h, p, reach, out):
+def fgt_evaluate(targets, lo, hi, box_keys, centers, coeffs, origin, side, dims, inv_h, p, reach, out):
     """``out[t, r] = sum_boxes sum_alpha coeffs[box, r, alpha] h_alpha((t - c_box) / h)`` for rows lo..hi."""
     n_dims = targets.shape[1]
     n_rhs = coeffs.shape[1]
@@ -437,7 +430,7 @@ def _mode_product(tensor, matrix, axis, n_dims, p, out):
 
 @njit(nogil=True, cache=True, fastmath=_FAST)
 def fgt_translate_evaluate(
-    targets, t_start, t_order, t_box_keys, t_coords, s_box_keys, s_coords, coeffs, origin, side, dims, inv_h, p,
+    targets, t_start, t_order, t_coords, s_box_keys, s_coords, coeffs, origin, side, dims, inv_h, p,
     reach, trans, lo, hi, out,
 ):
     """For target boxes lo..hi: sum the source boxes' Hermite series as one Taylor series about
