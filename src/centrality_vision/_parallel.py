@@ -16,7 +16,7 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 from ._validation import check_int
 
-__all__ = ["get_num_threads", "set_num_threads", "run_chunks"]
+__all__ = ["get_num_threads", "set_num_threads", "run_chunks", "available_cores"]
 
 _ENV = "CENTRALITY_VISION_NUM_THREADS"
 _lock = threading.Lock()
@@ -30,6 +30,11 @@ def _default_threads() -> int:
             return max(1, int(env))
         except ValueError:
             raise ValueError(f"The environment variable {_ENV} must be a positive int; got {env!r}.") from None
+    return available_cores()
+
+
+def available_cores() -> int:
+    """The cores this process may run on (its CPU affinity where the OS reports one)."""
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not Linux

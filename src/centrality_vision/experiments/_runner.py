@@ -119,10 +119,9 @@ def run_units(units, path, *, scheduler: str = "processes", workers: int | None 
     done = load_results(path)
     todo = [u for u in units if u.key not in done]
     if workers is None:
-        try:
-            workers = len(os.sched_getaffinity(0))
-        except AttributeError:  # pragma: no cover
-            workers = os.cpu_count() or 1
+        from .._parallel import available_cores
+
+        workers = available_cores()
     bar = None
     if progress and todo:
         from tqdm.auto import tqdm
