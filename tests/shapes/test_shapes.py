@@ -160,7 +160,7 @@ def test_forest_graph_centre_reference():
     [
         ([np.zeros((5, 5), bool)], ValueError, r"`X\[0\]` must have at least one foreground pixel"),
         ([np.ones((5, 5), bool)], ValueError, r"`X\[0\]` must have background pixels.*inverted"),
-        ([np.full((4, 4), 0.5)], ValueError, r"`X\[0\]` must be binary"),
+        ([np.full((4, 4), 0.5)], ValueError, r"`X\[0\]` is uniform"),
         ([np.ones((2, 2, 2))], ValueError, r"`X\[0\]` must be a 2D array"),
         (np.ones((5, 5)), ValueError, "single 2D array"),
         ([], ValueError, "at least one image"),
