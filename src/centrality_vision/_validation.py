@@ -214,6 +214,16 @@ def as_graph(graph, *, name: str = "graph") -> sparse.csr_array:
     return as_any_graph(graph, name=name).adjacency
 
 
+FOREGROUNDS = ("auto", "dark", "light")
+
+
+def _border(mask: np.ndarray) -> np.ndarray:
+    """The pixels on the outer frame of a 2D mask, each once."""
+    if mask.shape[0] <= 2 or mask.shape[1] <= 2:
+        return mask.ravel()
+    return np.concatenate([mask[0], mask[-1], mask[1:-1, 0], mask[1:-1, -1]])
+
+
 def as_binary_image(
     image, *, name: str = "image", foreground: str = "auto", threshold: float | None = None, check_inverted: bool = False
 ) -> np.ndarray:
