@@ -1,0 +1,202 @@
+"""Fuzzing the public API: every call either returns a finite answer or raises a named error.
+
+Each property draws inputs a user could pass (point sets at extreme scales and offsets, with
+duplicates, collinear rows, NaN and inf; random graphs, including disconnected and weighted
+ones; images with and without a shape) and checks the one contract of the library:
+
+- the call returns, with every float in the result finite, or
+- it raises :class:`~centrality_vision.exceptions.InputError` (a ValueError) or a TypeError whose
+  message names a parameter in backquotes, and nothing else (no IndexError, ZeroDivisionError,
+  LinAlgError, MemoryError, segfault or hang; hypothesis' deadline catches slow paths);
+- the inputs are left unchanged.
+"""
+
+from __future__ import annotations
+
+import re
+import warnings
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from scipy import sparse
+
+from centrality_vision import centrality as cen
+from centrality_vision import graphs
+from centrality_vision.exceptions import InputError
+from centrality_vision.registration import ICP, AffineCPD, NonRigidCPD, RigidCPD
+from centrality_vision.transforms import fit_similarity
+
+FUZZ = settings(
+    max_examples=25,
+    deadline=5000,
+    derandomize=True,  # the same examples on every run and every machine
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
+)
+
+SCALES = [1e-300, 1e-150, 1e-8, 1.0, 1e8, 1e150, 1e300]
+OFFSETS = [0.0, 1.0, 1e8, 1e15]
+_NAMED = re.compile(r"`[A-Za-z_][\w\[\]. ]*`")
+
+
+@st.composite
+def point_sets(draw, *, dims=(2, 3), min_points=1, max_points=24, allow_bad=True):
+    """Point sets as users have them: any scale and offset, repeated rows, lines, NaN."""
+    n_dims = draw(st.sampled_from(dims))
+    n_points = draw(st.integers(min_points, max_points))
+    kind = draw(st.sampled_from(["random", "grid", "line", "same"]))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    if kind == "random":
+        points = rng.random((n_points, n_dims))
+    elif kind == "grid":  # many ties and duplicates
+        points = rng.integers(0, 3, size=(n_points, n_dims)).astype(float)
+    elif kind == "line":
+        points = np.outer(rng.random(n_points), rng.random(n_dims))
+    else:
+        points = np.repeat(rng.random((1, n_dims)), n_points, axis=0)
+    points = points * draw(st.sampled_from(SCALES)) + draw(st.sampled_from(OFFSETS))
+    if allow_bad and draw(st.integers(0, 9)) == 0:
+        points[rng.integers(n_points), rng.integers(n_dims)] = draw(st.sampled_from([np.nan, np.inf, -np.inf]))
+    return points
+
+
+@st.composite
+def adjacency(draw, *, max_nodes=30):
+    """Random symmetric graphs: sparse or dense, weighted or not, connected or not."""
+    n = draw(st.integers(1, max_nodes))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    density = draw(st.sampled_from([0.0, 0.05, 0.2, 0.6, 1.0]))
+    upper = np.triu(rng.random((n, n)) < density, 1)
+    lengths = draw(st.sampled_from(["ones", "random", "tiny", "huge"]))
+    values = {"ones": np.ones((n, n)), "random": rng.random((n, n)) + 0.1}.get(lengths)
+    if values is None:
+        values = rng.random((n, n)) * (1e-200 if lengths == "tiny" else 1e200) + (1e-200 if lengths == "tiny" else 1.0)
+    dense = np.where(upper, values, 0.0)
+    dense = dense + dense.T
+    return sparse.csr_array(dense)
+
+
+@st.composite
+def images(draw):
+    """Binary and grey images, with and without a shape, touching the border or not."""
+    rows, cols = draw(st.integers(1, 24)), draw(st.integers(1, 24))
+    rng = np.random.default_rng(draw(st.integers(0, 2**32 - 1)))
+    kind = draw(st.sampled_from(["blob", "noise", "empty", "full", "grey"]))
+    image = np.zeros((rows, cols), dtype=bool)
+    if kind == "blob":
+        r, c = np.ogrid[:rows, :cols]
+        image = (r - rows / 2) ** 2 + (c - cols / 2) ** 2 <= (min(rows, cols) / 3) ** 2
+    elif kind == "noise":
+        image = rng.random((rows, cols)) < 0.5
+    elif kind == "full":
+        image = np.ones((rows, cols), dtype=bool)
+    elif kind == "grey":
+        return (rng.random((rows, cols)) * 255).astype(np.uint8)
+    return image
+
+
+def _finite(value, where="result"):
+    if isinstance(value, np.ndarray):
+        if np.issubdtype(value.dtype, np.floating):
+            assert np.all(np.isfinite(value)), f"non-finite values in {where}"
+    elif sparse.issparse(value):
+        _finite(value.data, where)
+    elif isinstance(value, float):
+        assert np.isfinite(value), f"non-finite {where}: {value}"
+    elif isinstance(value, (tuple, list)):
+        for i, item in enumerate(value):
+            _finite(item, f"{where}[{i}]")
+
+
+def honest(call, *args, **kwargs):
+    """Run ``call``: a finite result or a named InputError/TypeError; inputs unchanged."""
+    copies = [a.copy() if isinstance(a, np.ndarray) or sparse.issparse(a) else None for a in args]
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # warnings are allowed; silence is not checked here
+            result = call(*args, **kwargs)
+    except (InputError, TypeError) as exc:
+        assert _NAMED.search(str(exc)), f"{type(exc).__name__} names no parameter: {exc}"
+        result = None
+    for before, after in zip(copies, args):
+        if before is None:
+            continue
+        if sparse.issparse(before):
+            assert (before != after).nnz == 0, "an input graph was modified"
+        else:
+            np.testing.assert_array_equal(before, after, err_msg="an input array was modified")
+    if result is not None:
+        _finite(result)
+    return result
+
+
+# --------------------------------------------------------------------------- graphs
+@pytest.mark.parametrize(
+    "builder",
+    [graphs.delaunay_graph, graphs.gabriel_graph, graphs.emst_graph, graphs.complete_graph,
+     lambda points: graphs.knn_graph(points, k=3)],
+    ids=["delaunay", "gabriel", "emst", "complete", "knn"],
+)
+@FUZZ
+@given(points=point_sets())
+def test_point_graphs(builder, points):
+    graph = honest(builder, points)
+    if graph is not None:
+        assert graph.shape == (points.shape[0], points.shape[0])
+        assert (graph != graph.T).nnz == 0
+
+
+@FUZZ
+@given(points=point_sets(max_points=9))
+def test_entropy_graphs(points):
+    honest(lambda p: graphs.mwme_graph(p).graph, points)
+    honest(lambda p: graphs.mstme_graph(p).graph, points)
+
+
+@FUZZ
+@given(image=images(), connectivity=st.sampled_from([4, 8, 6]))
+def test_pixel_graph(image, connectivity):
+    honest(graphs.pixel_graph, image, connectivity=connectivity)
+
+
+# --------------------------------------------------------------------------- centralities
+@pytest.mark.parametrize("name", ["degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity"])
+@FUZZ
+@given(graph=adjacency(), weights=st.booleans())
+def test_centralities(name, graph, weights):
+    values = honest(cen.compute, graph, name, weights=weights)
+    if values is not None:
+        assert values.shape == (graph.shape[0],)
+
+
+@FUZZ
+@given(graph=adjacency())
+def test_degree_entropy(graph):
+    value = honest(cen.degree_entropy, graph)
+    if value is not None:
+        assert 0.0 <= value <= np.log2(max(graph.shape[0], 1)) + 1e-12
+
+
+# --------------------------------------------------------------------------- registration
+@pytest.mark.parametrize(
+    "make",
+    [lambda: RigidCPD(max_iter=20), lambda: RigidCPD(scale=True, max_iter=20), lambda: AffineCPD(max_iter=20),
+     lambda: NonRigidCPD(max_iter=10), lambda: ICP(max_iter=20)],
+    ids=["rigid", "similarity", "affine", "nonrigid", "icp"],
+)
+@FUZZ
+@given(moving=point_sets(max_points=15), data=st.data())
+def test_registration(make, moving, data):
+    fixed = data.draw(point_sets(dims=(moving.shape[1],), max_points=15))
+    estimator = honest(lambda m, f: make().fit(m, f), moving, fixed)
+    if estimator is not None:
+        _finite(estimator.moving_transformed_, "moving_transformed_")
+        assert estimator.moving_transformed_.shape == moving.shape
+
+
+@FUZZ
+@given(source=point_sets(max_points=12), data=st.data())
+def test_fit_similarity(source, data):
+    target = data.draw(point_sets(dims=(source.shape[1],), min_points=source.shape[0], max_points=source.shape[0]))
+    honest(lambda s, t: fit_similarity(s, t).matrix, source, target)
