@@ -1,0 +1,151 @@
+"""Binary shapes from image files (PNG, BMP, GIF, TIFF, JPEG, PGM/PPM, WebP)."""
+
+from __future__ import annotations
+
+import io
+import math
+from pathlib import Path
+
+import numpy as np
+
+from .._validation import _describe
+from ..exceptions import InputError
+from ._points import _existing_file, _first_line
+
+__all__ = ["IMAGE_SUFFIXES", "read_image", "read_shape"]
+
+#: Suffixes :func:`read_shape` reads (case-insensitive), all decoded by imageio.
+IMAGE_SUFFIXES = (".png", ".bmp", ".gif", ".tif", ".tiff", ".jpg", ".jpeg", ".pgm", ".ppm", ".pbm", ".pnm", ".webp")
+
+
+def read_image(path, /) -> np.ndarray:
+    """Read an image file as a 2D float64 grey image (colour averaged, alpha handled).
+
+    The pixels are decoded by :func:`imageio.v3.imread`, the first frame of an animated
+    GIF or a multi-page TIFF. Colour images become the mean of their red, green and blue
+    channels. An alpha channel is ignored unless the colour is the same everywhere and
+    only the alpha varies (a silhouette stored as transparency): then the alpha is the
+    image.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An image file; see :data:`IMAGE_SUFFIXES`.
+
+    Returns
+    -------
+    image : ndarray of shape (n_rows, n_cols), float64
+        Row 0 is the top of the picture.
+
+    Raises
+    ------
+    InputError
+        Missing file, a suffix that is not an image's, a file that does not decode, or
+        a decoded array that is not a 2D grey or colour image; the message starts with
+        the path.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, imageio.v3 as iio
+    >>> pixels = np.array([[0, 255], [255, 255]], dtype=np.uint8)
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     iio.imwrite(pathlib.Path(folder) / "a.bmp", pixels)
+    ...     read_image(pathlib.Path(folder) / "a.bmp").tolist()
+    [[0.0, 255.0], [255.0, 255.0]]
+    """
+    path = _existing_file(path)
+    if path.suffix.lower() not in IMAGE_SUFFIXES:
+        raise InputError(f"{path}: an image must be a {', '.join(IMAGE_SUFFIXES)} file; got suffix {path.suffix!r}.")
+    import imageio.v3 as iio
+
+    data = path.read_bytes()
+    if not data:
+        raise InputError(f"{path}: the file is empty.")
+    try:  # decode from memory: a decoder failing on a damaged file then leaves no file open
+        pixels = np.asarray(iio.imread(io.BytesIO(data), index=0, extension=path.suffix.lower()))
+    except Exception as exc:  # imageio and its plugins raise OSError, ValueError, SyntaxError, ...
+        kind = path.suffix.lower().lstrip(".").upper()
+        raise InputError(f"{path}: not a readable {kind} image ({type(exc).__name__}: {_first_line(exc)}).") from None
+    kind = path.suffix.lower().lstrip(".").upper()
+    if pixels.dtype == object or not (np.issubdtype(pixels.dtype, np.number) or pixels.dtype == bool):
+        raise InputError(f"{path}: not a readable {kind} image (pixel type {pixels.dtype}).")
+    if pixels.size == 0:
+        raise InputError(f"{path}: not a readable {kind} image (it decodes to no pixels, shape {pixels.shape}).")
+    if pixels.ndim == 3 and pixels.shape[2] in (2, 4):
+        colour, alpha = pixels[..., :-1], pixels[..., -1]
+        flat = colour.reshape(-1, colour.shape[2])
+        uniform_colour = bool(np.all(flat == flat[0])) if flat.size else True
+        pixels = alpha if uniform_colour and np.ptp(alpha) > 0 else colour
+    if pixels.ndim == 3 and pixels.shape[2] in (1, 3):
+        pixels = pixels.astype(np.float64).mean(axis=2)
+    if pixels.ndim != 2:
+        raise InputError(f"{path}: must be a 2D grey or colour image; got an array of shape {pixels.shape}.")
+    pixels = pixels.astype(np.float64)
+    if not np.all(np.isfinite(pixels)):
+        raise InputError(f"{path}: the image holds NaN or inf values.")
+    return pixels
+
+
+def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = None) -> np.ndarray:
+    """Read an image file as a 2D boolean shape mask (True on the shape).
+
+    The grey image from :func:`read_image` is split at ``threshold``, by default half its
+    range (``(min + max) / 2``). ``foreground`` says which side is the shape:
+    ``"dark"`` (below the threshold, e.g. black silhouettes on white as in Kimia-99),
+    ``"light"`` (above it), or ``"auto"``: the side that covers less of the image
+    border, so both dark-on-white and white-on-black files work.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        An image file (PNG, BMP, GIF, TIFF, JPEG, PGM/PPM, WebP).
+    foreground : {"auto", "dark", "light"}, default="auto"
+        Which side of the threshold is the shape.
+    threshold : float, optional
+        Grey level separating the two sides (pixels equal to it are dark); by default
+        half the image's range.
+
+    Returns
+    -------
+    mask : ndarray of bool, shape (n_rows, n_cols)
+
+    Raises
+    ------
+    InputError
+        Everything :func:`read_image` raises, a uniform image (no shape in it), a
+        threshold that leaves no shape, or a bad ``foreground``/``threshold``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib, imageio.v3 as iio
+    >>> pixels = np.full((4, 5), 255, dtype=np.uint8)
+    >>> pixels[1:3, 1:4] = 0  # a dark 2 x 3 rectangle on white
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     iio.imwrite(pathlib.Path(folder) / "shape.png", pixels)
+    ...     mask = read_shape(pathlib.Path(folder) / "shape.png")
+    >>> mask.astype(int)
+    array([[0, 0, 0, 0, 0],
+           [0, 1, 1, 1, 0],
+           [0, 1, 1, 1, 0],
+           [0, 0, 0, 0, 0]])
+    """
+    if foreground not in ("auto", "dark", "light"):
+        raise InputError(f"`foreground` must be 'auto', 'dark' or 'light'; got {foreground!r}.")
+    if threshold is not None and (
+        isinstance(threshold, bool) or not isinstance(threshold, (int, float, np.integer, np.floating))
+        or not math.isfinite(threshold)
+    ):
+        raise InputError(f"`threshold` must be a finite number or None; got {_describe(threshold)}.")
+    pixels = read_image(path)
+    path = Path(path)
+    low, high = float(pixels.min()), float(pixels.max())
+    if low == high:
+        raise InputError(f"{path}: the image is uniform (every pixel is {low:g}): there is no shape in it.")
+    light = pixels > ((low + high) / 2 if threshold is None else float(threshold))
+    if foreground == "auto":
+        border = np.concatenate([light[0], light[-1], light[1:-1, 0], light[1:-1, -1]])
+        foreground = "dark" if border.mean() > 0.5 else "light"
+    mask = ~light if foreground == "dark" else light
+    if not mask.any():
+        raise InputError(f"{path}: no {foreground} pixel at threshold {threshold!r}: there is no shape in the image.")
+    return mask

@@ -1,0 +1,627 @@
+"""Point sets in and out: delimited text, XYZ, NumPy, MATLAB, PLY, PCD and OBJ files.
+
+Every reader turns a file into a *table*: a float64 array with one row per point and,
+where the format names them, the names of its columns (a CSV header, the PLY vertex
+properties, the PCD fields). One rule then picks the coordinates from the table (see
+:func:`read_points`), so ``columns=`` works the same for every format.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .._validation import _describe
+from ..exceptions import InputError
+
+__all__ = ["POINT_SUFFIXES", "WRITE_SUFFIXES", "read_points", "write_points"]
+
+#: Suffixes :func:`read_points` reads (case-insensitive).
+POINT_SUFFIXES = (".txt", ".csv", ".tsv", ".xyz", ".npy", ".mat", ".ply", ".pcd", ".obj")
+#: Suffixes :func:`write_points` writes.
+WRITE_SUFFIXES = (".txt", ".csv", ".xyz", ".npy", ".mat", ".ply", ".pcd", ".obj")
+_TEXT_SUFFIXES = (".txt", ".csv", ".tsv", ".xyz")
+_THREE_D_ONLY = (".ply", ".pcd", ".obj")
+_INDEX_NAMES = ("", "index", "idx", "id", "i", "node", "unnamed: 0", "point", "point_id")
+
+
+@dataclass
+class _Table:
+    """What a reader found: values (n_rows, n_columns), column names or None, and where rows came from."""
+
+    values: np.ndarray
+    names: list[str] | None = None
+    lines: np.ndarray | None = None  # line number of each row in a text file
+
+    def where(self, row: int) -> str:
+        return f"line {int(self.lines[row])}" if self.lines is not None else f"row {row}"
+
+
+def _existing_file(path) -> Path:
+    if not isinstance(path, (str, Path)) and not hasattr(path, "__fspath__"):
+        raise TypeError(f"`path` must be a str or os.PathLike; got {_describe(path)}.")
+    path = Path(path)
+    if not path.exists():
+        raise InputError(f"{path}: no such file.")
+    if path.is_dir():
+        raise InputError(f"{path}: is a folder, not a file.")
+    return path
+
+
+def read_points(
+    path,
+    /,
+    *,
+    columns: Sequence[str | int] | str | None = None,
+    variable: str | None = None,
+    n_dims: Sequence[int] = (2, 3),
+    nan_rows: bool = False,
+) -> np.ndarray:
+    """Read a point set as a float64 array of shape (n_points, n_dims), one point per row.
+
+    The format follows the suffix (case-insensitive):
+
+    ``.csv``, ``.txt``, ``.tsv``, ``.xyz``
+        Delimited text. The delimiter is the first of semicolon, tab and comma found on
+        every line, else runs of spaces; a semicolon file may use decimal commas
+        (``0,5;1,5``).
+        Blank lines and lines starting with ``#`` are skipped, a UTF-8 byte-order mark is
+        ignored. The first line is a header when *none* of its cells is a number (e.g.
+        ``x,y,z,intensity`` or pandas' ``,x,y`` with an index column); a first line with
+        some numbers and some words is an error, never silently dropped.
+    ``.npy``
+        A 2D numeric array saved with :func:`numpy.save` (no pickles). The header's shape
+        is checked against the file size before anything is loaded.
+    ``.mat``
+        A MATLAB file (up to v7; v7.3 is HDF5 and refused) read by
+        :func:`scipy.io.loadmat`; ``variable`` names the array, needed only when the file
+        holds more than one 2D numeric array.
+    ``.ply``
+        The vertex element of an ASCII or binary PLY file (read by ``meshio``); its
+        properties (``x``, ``y``, ``z``, ``intensity``, ...) are the columns.
+    ``.pcd``
+        A Point Cloud Library file, ``DATA ascii`` or ``binary`` (``binary_compressed``
+        is refused); its ``FIELDS`` are the columns.
+    ``.obj``
+        The ``v`` (vertex) lines of a Wavefront OBJ file; faces, normals and texture
+        coordinates are ignored, and so are a vertex's optional weight or colour.
+
+    The coordinates are then picked from the file's columns: ``columns`` if given; else
+    the columns named ``x``, ``y`` (and ``z`` if present), whatever their case, when the
+    file names its columns; else every column, after dropping a leading index column
+    (named ``""``, ``index``, ``id``, ``node``, ``Unnamed: 0``, ...). Other columns, such
+    as an intensity, are ignored unless ``columns`` selects them.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    columns : sequence of str or int, or str, optional
+        The coordinate columns, by name (needs names in the file) or by 0-based index,
+        e.g. ``["x", "y", "z"]``, ``[1, 2]`` or the string ``"x,y,z"``.
+    variable : str, optional
+        ``.mat`` only: the name of the array to read.
+    n_dims : sequence of int, default=(2, 3)
+        Allowed numbers of coordinates.
+    nan_rows : bool, default=False
+        Allow rows that are entirely NaN (e.g. to mark outliers that have no true
+        position); a row with some but not all values NaN is still an error.
+
+    Returns
+    -------
+    points : ndarray of shape (n_points, n_dims), float64
+
+    Raises
+    ------
+    InputError
+        Missing file, unknown suffix, unparsable values, ragged rows, a wrong number of
+        columns, unknown ``columns``, NaN or inf values, or no points. The message is one
+        line starting with the file's path.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = pathlib.Path(folder) / "scan.csv"
+    ...     _ = path.write_text("x;y;intensity\\n0;0,5;7\\n1;1,5;9\\n")
+    ...     read_points(path).tolist()
+    [[0.0, 0.5], [1.0, 1.5]]
+    """
+    columns = _check_columns(columns)
+    if variable is not None and not isinstance(variable, str):
+        raise TypeError(f"`variable` must be a str or None; got {_describe(variable)}.")
+    path = _existing_file(path)
+    suffix = path.suffix.lower()
+    if suffix not in POINT_SUFFIXES:
+        raise InputError(f"{path}: a point set must be a {', '.join(POINT_SUFFIXES)} file; got suffix {path.suffix!r}.")
+    if variable is not None and suffix != ".mat":
+        raise InputError(f"{path}: `variable` applies to .mat files only; got a {suffix} file.")
+    reader = {".npy": _read_npy, ".mat": _read_mat, ".ply": _read_ply, ".pcd": _read_pcd, ".obj": _read_obj}
+    table = reader[suffix](path, variable) if suffix == ".mat" else reader.get(suffix, _read_text)(path)
+    if table.values.shape[0] == 0:
+        raise InputError(f"{path}: holds no points.")
+    picked = _pick_columns(path, table, columns, n_dims)
+    points = np.ascontiguousarray(table.values[:, picked], dtype=np.float64)
+    finite = np.isfinite(points)
+    bad = ~finite.all(axis=1)
+    if nan_rows:
+        bad &= ~np.isnan(points).all(axis=1)
+    if bad.any():
+        row = int(np.argmax(bad))
+        allowed = " (rows that are entirely NaN are allowed)" if nan_rows else ""
+        raise InputError(
+            f"{path}: {int(bad.sum())} point(s) with NaN or inf, the first at {table.where(row)}{allowed}."
+        )
+    return points
+
+
+def _check_columns(columns):
+    if columns is None:
+        return None
+    if isinstance(columns, str):
+        columns = [part.strip() for part in columns.split(",")]
+    try:
+        items = list(columns)
+    except TypeError:
+        raise TypeError(f"`columns` must be a sequence of names or indices, or None; got {_describe(columns)}.") from None
+    out = []
+    for item in items:
+        if isinstance(item, (int, np.integer)) and not isinstance(item, bool):
+            out.append(int(item))
+        elif isinstance(item, str) and item:
+            out.append(int(item) if re.fullmatch(r"\d+", item) else item)
+        else:
+            raise TypeError(f"`columns` must hold column names or 0-based indices; got {item!r} in {columns!r}.")
+    if not out:
+        raise InputError("`columns` must name at least one column; got none.")
+    if len(set(out)) != len(out):
+        raise InputError(f"`columns` must not repeat a column; got {columns!r}.")
+    return out
+
+
+def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
+    n_columns = table.values.shape[1]
+    names = table.names
+    shown = f" ({', '.join(repr(name) for name in names)})" if names else ""
+    if columns is not None:
+        picked = []
+        lower = [name.lower() for name in names] if names else None
+        for item in columns:
+            if isinstance(item, int):
+                if not 0 <= item < n_columns:
+                    raise InputError(f"{path}: `columns` index {item} is out of range; the file has {n_columns} columns{shown}.")
+                picked.append(item)
+            elif lower is None:
+                raise InputError(f"{path}: `columns` names {item!r} but the file names no columns; use 0-based indices.")
+            elif item.lower() not in lower:
+                raise InputError(f"{path}: `columns` names {item!r}, which is not a column of the file{shown}.")
+            else:
+                picked.append(lower.index(item.lower()))
+    else:
+        lower = [name.lower() for name in names] if names else []
+        if "x" in lower and "y" in lower:
+            picked = [lower.index(axis) for axis in ("x", "y", "z") if axis in lower]
+        else:
+            picked = list(range(n_columns))
+            if names and n_columns > 1 and lower[0] in _INDEX_NAMES:
+                picked = picked[1:]
+    wanted = " or ".join(str(d) for d in n_dims)
+    if len(picked) not in n_dims:
+        hint = "" if columns is not None else "; pick the coordinates with `columns` (--columns on the command line)"
+        raise InputError(f"{path}: points must have {wanted} coordinates; got {len(picked)} columns{shown}{hint}.")
+    return picked
+
+
+# ------------------------------------------------------------------------------- text
+
+
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*([eE][+-]?\d+)?|\.\d+([eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE)
+
+
+def _read_text(path: Path) -> _Table:
+    raw = path.read_bytes()
+    try:
+        text = raw.decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a text file of numbers (it is not UTF-8 text).") from None
+    if "\x00" in text:
+        raise InputError(f"{path}: not a text file of numbers (it holds NUL bytes).")
+    rows = [(number, line) for number, line in enumerate(text.splitlines(), start=1)
+            if line.strip() and not line.lstrip().startswith("#")]
+    if not rows:
+        raise InputError(f"{path}: holds no points.")
+    split, decimal_comma = _sniff([line for _, line in rows[:64]])
+    first_number, first = rows[0]
+    cells = split(first)
+    numeric = [_is_number(cell, decimal_comma) for cell in cells]
+    names = None
+    if not any(numeric):
+        names = [cell.strip().strip('"') for cell in cells]
+        rows = rows[1:]
+        if not rows:
+            raise InputError(f"{path}: holds no points (only the header line {first_number}).")
+    elif not all(numeric):
+        bad = cells[numeric.index(False)]
+        raise InputError(
+            f"{path}: line {first_number}, column {numeric.index(False) + 1}: {_clip(bad.strip())!r} is not a number "
+            "(a header line must name every column)."
+        )
+    width = len(names) if names is not None else len(cells)
+    values = np.empty((len(rows), width), dtype=np.float64)
+    for k, (number, line) in enumerate(rows):
+        cells = split(line)
+        if len(cells) != width:
+            before = "the header" if names is not None else "the rows before it"
+            raise InputError(f"{path}: line {number} has {len(cells)} values, {before} {width}.")
+        for j, cell in enumerate(cells):
+            try:
+                values[k, j] = _to_float(cell, decimal_comma)
+            except ValueError:
+                raise InputError(
+                    f"{path}: line {number}, column {j + 1}: {_clip(cell.strip())!r} is not a number."
+                ) from None
+    return _Table(values, names, np.array([number for number, _ in rows]))
+
+
+def _sniff(sample: list[str]):
+    """The cell splitter of a text file and whether it writes decimal commas.
+
+    The delimiter is the first of semicolon, tab and comma that occurs on every sampled
+    line, else runs of whitespace. (:class:`csv.Sniffer` was tried first: on a few short
+    lines, such as a header and a row with an empty cell, it picks a wrong delimiter.)
+    """
+    delimiter = next((d for d in (";", "\t", ",") if all(d in line for line in sample)), " ")
+    if delimiter == " ":
+        return (lambda line: line.split()), False
+    decimal_comma = delimiter == ";" and any("," in line for line in sample)
+
+    def split(line: str) -> list[str]:
+        return next(csv.reader([line], delimiter=delimiter, skipinitialspace=True))
+
+    return split, decimal_comma
+
+
+def _to_float(cell: str, decimal_comma: bool) -> float:
+    cell = cell.strip().strip('"')
+    if decimal_comma:
+        cell = cell.replace(",", ".")
+    if not _NUMBER.fullmatch(cell):
+        raise ValueError(cell)
+    return float(cell)
+
+
+def _is_number(cell: str, decimal_comma: bool) -> bool:
+    try:
+        _to_float(cell, decimal_comma)
+    except ValueError:
+        return False
+    return True
+
+
+# ------------------------------------------------------------------------------- .npy
+
+
+def _read_npy(path: Path) -> _Table:
+    """Check the header (dtype, shape against the file size) before loading anything."""
+    with path.open("rb") as handle:
+        try:
+            version = np.lib.format.read_magic(handle)
+            reader = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
+            if version not in reader:
+                raise ValueError(f"format version {version}")
+            shape, fortran_order, dtype = reader[version](handle, max_header_size=10_000)
+        except (ValueError, OSError, EOFError, SyntaxError) as exc:
+            raise InputError(f"{path}: not a readable .npy array ({_first_line(exc)}).") from None
+        offset = handle.tell()
+    if dtype.hasobject or not (np.issubdtype(dtype, np.number) or dtype == bool):
+        raise InputError(f"{path}: must hold a numeric array; got dtype {dtype}.")
+    if np.issubdtype(dtype, np.complexfloating):
+        raise InputError(f"{path}: must hold real numbers; got dtype {dtype}.")
+    if len(shape) != 2:
+        raise InputError(f"{path}: must hold a 2D array (one point per row); got shape {shape}.")
+    needed = math.prod(shape) * dtype.itemsize
+    available = path.stat().st_size - offset
+    if needed != available:
+        raise InputError(
+            f"{path}: the header announces shape {shape} of {dtype} ({needed} bytes) but the file holds {available} bytes of data."
+        )
+    array = np.load(path, allow_pickle=False, mmap_mode="r")
+    return _Table(np.array(array, dtype=np.float64))
+
+
+# ------------------------------------------------------------------------------- .mat
+
+
+def _read_mat(path: Path, variable: str | None) -> _Table:
+    from scipy.io import loadmat
+
+    try:
+        contents = loadmat(path)
+    except NotImplementedError:
+        raise InputError(f"{path}: MATLAB v7.3 (HDF5) files are not supported; save with -v7 (or read it with h5py).") from None
+    except Exception as exc:  # scipy raises ValueError, TypeError, MatReadError, ...
+        raise InputError(f"{path}: not a readable .mat file ({type(exc).__name__}: {_first_line(exc)}).") from None
+    arrays = {
+        key: value for key, value in contents.items()
+        if not key.startswith("__") and isinstance(value, np.ndarray) and value.ndim == 2
+        and (np.issubdtype(value.dtype, np.number) or value.dtype == bool) and not np.iscomplexobj(value)
+    }
+    if variable is not None:
+        if variable not in contents or variable.startswith("__"):
+            names = ", ".join(sorted(key for key in contents if not key.startswith("__"))) or "none"
+            raise InputError(f"{path}: no variable {variable!r} (variables: {names}).")
+        if variable not in arrays:
+            raise InputError(f"{path}: variable {variable!r} must be a 2D real numeric array; got {_describe(contents[variable])}.")
+        return _Table(arrays[variable].astype(np.float64))
+    if len(arrays) != 1:
+        names = ", ".join(sorted(arrays)) or "none"
+        raise InputError(
+            f"{path}: name the variable to read (`variable`, --variable on the command line); "
+            f"2D numeric arrays in the file: {names}."
+        )
+    return _Table(next(iter(arrays.values())).astype(np.float64))
+
+
+# ------------------------------------------------------------------------------- .ply
+
+
+_PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2, "int16": 2, "uint16": 2,
+              "int": 4, "uint": 4, "int32": 4, "uint32": 4, "float": 4, "float32": 4, "double": 8, "float64": 8}
+
+
+def _ply_vertex_count(path: Path, data: bytes) -> int:
+    """The vertex count a PLY header declares, checked against the bytes that follow it."""
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        raise InputError(f"{path}: not a PLY file (no 'ply' ... 'end_header' header).")
+    header = data[:end].decode("ascii", errors="replace").splitlines()
+    body = len(data) - (data.find(b"\n", end) + 1)
+    fmt, elements = "", []
+    for line in header:
+        words = line.split()
+        if words[:1] == ["format"] and len(words) > 1:
+            fmt = words[1]
+        elif words[:1] == ["element"] and len(words) == 3 and words[2].isdigit():
+            elements.append([words[1], int(words[2]), 0])
+        elif words[:1] == ["property"] and elements:
+            # a list property takes at least its count's bytes; a scalar its size
+            elements[-1][2] += _PLY_SIZES.get(words[2] if words[1] == "list" else words[1], 1)
+    vertex = [element for element in elements if element[0] == "vertex"]
+    if not vertex:
+        raise InputError(f"{path}: the PLY file has no vertex element.")
+    at_least = sum(count * size for _, count, size in elements) if fmt.startswith("binary") else vertex[0][1]
+    if at_least > body:
+        raise InputError(
+            f"{path}: the header declares {vertex[0][1]} vertices but the file holds only {body} bytes after it."
+        )
+    return vertex[0][1]
+
+
+def _read_ply(path: Path) -> _Table:
+    meshio = _meshio()
+    count = _ply_vertex_count(path, path.read_bytes())
+    try:
+        mesh = meshio.read(path, file_format="ply")
+    except Exception as exc:  # meshio raises ValueError, KeyError, ReadError, struct errors, ...
+        raise InputError(f"{path}: not a readable PLY file ({type(exc).__name__}: {_first_line(exc)}).") from None
+    points = np.asarray(mesh.points, dtype=np.float64)
+    if points.shape[0] != count:
+        raise InputError(f"{path}: the header declares {count} vertices but the file holds {points.shape[0]}.")
+    names = ["x", "y", "z"][: points.shape[1]]
+    extra = [(key, np.asarray(value)) for key, value in mesh.point_data.items()
+             if np.asarray(value).ndim == 1 and np.issubdtype(np.asarray(value).dtype, np.number)]
+    values = np.column_stack([points] + [value.astype(np.float64) for _, value in extra])
+    return _Table(values, names + [key for key, _ in extra])
+
+
+def _meshio():
+    try:
+        import meshio
+    except ImportError:  # pragma: no cover - meshio is a dependency
+        raise InputError("reading and writing PLY files needs the meshio package: pip install meshio") from None
+    return meshio
+
+
+# ------------------------------------------------------------------------------- .pcd
+
+
+_PCD_TYPES = {("F", 4): "f4", ("F", 8): "f8", ("I", 1): "i1", ("I", 2): "i2", ("I", 4): "i4", ("I", 8): "i8",
+              ("U", 1): "u1", ("U", 2): "u2", ("U", 4): "u4", ("U", 8): "u8"}
+
+
+def _read_pcd(path: Path) -> _Table:
+    """PCD v0.7 (and v0.6/v0.5 headers): ASCII or binary data; the header fields name the columns.
+
+    No maintained Python package reads PCD without pulling in a whole point-cloud
+    library (Open3D, python-pcl), and the format is a short text header followed by
+    rows or a packed array, so it is parsed here.
+    """
+    data = path.read_bytes()
+    header: dict[str, list[str]] = {}
+    offset = 0
+    while True:
+        end = data.find(b"\n", offset)
+        if end < 0:
+            raise InputError(f"{path}: not a PCD file (no DATA line in its header).")
+        line = data[offset:end].decode("ascii", errors="replace").strip()
+        offset = end + 1
+        if not line or line.startswith("#"):
+            continue
+        key, *words = line.split()
+        header[key.upper()] = words
+        if key.upper() == "DATA":
+            break
+    fields = header.get("FIELDS") or header.get("COLUMNS")
+    if not fields:
+        raise InputError(f"{path}: not a PCD file (no FIELDS line in its header).")
+    n = len(fields)
+    sizes = header.get("SIZE", ["4"] * n)
+    types = header.get("TYPE", ["F"] * n)
+    counts = header.get("COUNT", ["1"] * n)
+    try:
+        sizes, counts = [int(s) for s in sizes], [int(c) for c in counts]
+        n_points = int(header.get("POINTS", [header.get("WIDTH", ["0"])[0]])[0])
+    except ValueError:
+        raise InputError(f"{path}: the PCD header has a SIZE, COUNT or POINTS that is not an integer.") from None
+    if not (len(sizes) == len(types) == len(counts) == n) or min(counts) < 1:
+        raise InputError(f"{path}: the PCD header's FIELDS, SIZE, TYPE and COUNT lines do not match.")
+    names = []
+    for field, count in zip(fields, counts):
+        names += [field] if count == 1 else [f"{field}_{k}" for k in range(count)]
+    mode = header["DATA"][0].lower() if header["DATA"] else ""
+    if mode == "ascii":
+        text = data[offset:].decode("ascii", errors="replace")
+        lines = [line for line in text.splitlines() if line.strip()]
+        if len(lines) != n_points:
+            raise InputError(f"{path}: the header declares {n_points} points but the file holds {len(lines)} rows.")
+        try:
+            values = np.array([line.split() for line in lines], dtype=np.float64)
+        except ValueError:
+            raise InputError(f"{path}: the ASCII data are not rows of {len(names)} numbers.") from None
+        if values.ndim != 2 or values.shape[1] != len(names):
+            raise InputError(f"{path}: the ASCII data are not rows of {len(names)} numbers.")
+        return _Table(values, names)
+    if mode == "binary":
+        try:
+            dtype = np.dtype([(f"f{k}", "<" + _PCD_TYPES[(t.upper(), s)], (c,)) for k, (t, s, c) in enumerate(zip(types, sizes, counts))])
+        except KeyError:
+            raise InputError(f"{path}: unknown PCD TYPE/SIZE pair in {list(zip(types, sizes))}.") from None
+        if n_points * dtype.itemsize > len(data) - offset:
+            raise InputError(
+                f"{path}: the header declares {n_points} points ({n_points * dtype.itemsize} bytes) "
+                f"but the file holds {len(data) - offset} bytes of data."
+            )
+        records = np.frombuffer(data, dtype=dtype, count=n_points, offset=offset)
+        values = np.column_stack([records[f"f{k}"].astype(np.float64) for k in range(n)]) if n_points else np.empty((0, len(names)))
+        return _Table(values, names)
+    if mode == "binary_compressed":
+        raise InputError(f"{path}: compressed PCD data are not supported; save it as DATA ascii or binary.")
+    raise InputError(f"{path}: unknown PCD DATA kind {mode!r} (expected ascii or binary).")
+
+
+# ------------------------------------------------------------------------------- .obj
+
+
+def _read_obj(path: Path) -> _Table:
+    """The ``v x y z [w | r g b]`` lines; everything else (faces, normals, groups) is skipped."""
+    try:
+        text = path.read_bytes().decode("utf-8-sig")
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not an OBJ file (it is not UTF-8 text).") from None
+    rows, lines = [], []
+    for number, line in enumerate(text.splitlines(), start=1):
+        words = line.split()
+        if words[:1] != ["v"]:
+            continue
+        try:
+            rows.append([float(word) for word in words[1:4]])
+        except ValueError:
+            raise InputError(f"{path}: line {number} is not a vertex 'v x y z': {_clip(line.strip())!r}.") from None
+        if len(rows[-1]) != 3:
+            raise InputError(f"{path}: line {number} is not a vertex 'v x y z': {_clip(line.strip())!r}.")
+        lines.append(number)
+    values = np.array(rows, dtype=np.float64).reshape(-1, 3)
+    return _Table(values, ["x", "y", "z"], np.array(lines, dtype=np.int64))
+
+
+# ------------------------------------------------------------------------------- writing
+
+
+def write_points(path, points, /) -> Path:
+    """Write a point set in the format of ``path``'s suffix; :func:`read_points` reads it back.
+
+    ``.csv``: a header ``x,y[,z]`` and comma-separated rows (``pandas.read_csv`` reads it
+    with default arguments). ``.txt`` and ``.xyz``: space-separated rows, no header.
+    ``.npy``: :func:`numpy.save`. ``.mat``: the variable ``points``
+    (:func:`scipy.io.savemat`). ``.ply`` (binary, via meshio), ``.pcd`` (``DATA ascii``)
+    and ``.obj`` (``v`` lines) hold 3D points only. Numbers are written with 17
+    significant digits, so text formats round-trip float64 exactly; missing parent
+    folders are created.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        Output file.
+    points : array_like of shape (n_points, n_dims)
+        Finite coordinates, or rows that are entirely NaN (in the text, ``.npy`` and
+        ``.mat`` formats).
+
+    Returns
+    -------
+    path : pathlib.Path
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     path = write_points(pathlib.Path(folder) / "p.csv", [[0, 0.5], [1, 1.5]])
+    ...     print(path.read_text(), end="")
+    x,y
+    0.0,0.5
+    1.0,1.5
+    """
+    if not isinstance(path, (str, Path)) and not hasattr(path, "__fspath__"):
+        raise TypeError(f"`path` must be a str or os.PathLike; got {_describe(path)}.")
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in WRITE_SUFFIXES:
+        raise InputError(f"`path` must end in one of {', '.join(WRITE_SUFFIXES)}; got {str(path)!r}.")
+    arr = np.asarray(points)
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+        raise TypeError(f"`points` must be a real numeric array; got {_describe(arr)}.")
+    if arr.ndim != 2 or arr.shape[1] < 1:
+        raise InputError(f"`points` must have shape (n_points, n_dims); got shape {arr.shape}.")
+    arr = arr.astype(np.float64)
+    partial = ~np.isfinite(arr).all(axis=1) & ~np.isnan(arr).all(axis=1)
+    if partial.any():
+        raise InputError(f"`points` must be finite, or NaN in every coordinate of a row; row {int(np.argmax(partial))} is not.")
+    if suffix in _THREE_D_ONLY:
+        if arr.shape[1] != 3:
+            raise InputError(f"{path}: {suffix} files hold 3D points; got {arr.shape[1]}D points (write .csv, .txt, .npy or .mat).")
+        if np.isnan(arr).any():
+            raise InputError(f"{path}: {suffix} files cannot mark missing points with NaN rows; write .csv, .txt, .npy or .mat.")
+    if path.parent != Path("."):
+        path.parent.mkdir(parents=True, exist_ok=True)
+    names = ["x", "y", "z"][: arr.shape[1]] if arr.shape[1] <= 3 else [f"x{k}" for k in range(arr.shape[1])]
+    if suffix == ".npy":
+        np.save(path, arr)
+    elif suffix == ".mat":
+        from scipy.io import savemat
+
+        savemat(path, {"points": arr})
+    elif suffix == ".ply":
+        _meshio().write_points_cells(path, arr, [], file_format="ply", binary=True)
+    elif suffix == ".obj":
+        path.write_text("".join(f"v {_fmt(x)} {_fmt(y)} {_fmt(z)}\n" for x, y, z in arr), encoding="utf-8")
+    elif suffix == ".pcd":
+        header = (f"# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\n"
+                  f"COUNT 1 1 1\nWIDTH {arr.shape[0]}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {arr.shape[0]}\nDATA ascii\n")
+        path.write_text(header + _rows(arr, " "), encoding="ascii")
+    elif suffix == ".csv":
+        path.write_text(",".join(names) + "\n" + _rows(arr, ","), encoding="utf-8")
+    else:
+        path.write_text(_rows(arr, " "), encoding="utf-8")
+    return path
+
+
+def _fmt(value: float) -> str:
+    return repr(float(value)) if math.isfinite(value) else "nan"
+
+
+def _rows(arr: np.ndarray, delimiter: str) -> str:
+    return "".join(delimiter.join(_fmt(v) for v in row) + "\n" for row in arr)
+
+
+def _first_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return _clip(text[0]) if text else type(exc).__name__
+
+
+def _clip(text: str, limit: int = 60) -> str:
+    return text if len(text) <= limit else text[: limit - 3] + "..."

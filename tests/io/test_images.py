@@ -1,0 +1,81 @@
+"""read_shape / read_image on files written by imageio in every format it writes."""
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from centrality_vision.exceptions import InputError
+from centrality_vision.io import read_image, read_shape
+
+DARK_ON_WHITE = np.full((12, 14), 255, dtype=np.uint8)
+DARK_ON_WHITE[3:8, 4:11] = 10
+SHAPE = DARK_ON_WHITE < 128
+
+
+@pytest.mark.parametrize("suffix", [".png", ".bmp", ".gif", ".tif", ".tiff", ".jpg", ".pgm", ".webp"])
+def test_every_format_imageio_writes(tmp_path, suffix):
+    path = tmp_path / f"shape{suffix}"
+    iio.imwrite(path, DARK_ON_WHITE)
+    assert np.array_equal(read_shape(path), SHAPE)  # JPEG's ringing stays far from the mid-grey threshold
+
+
+def test_single_and_multi_frame_gif_and_colour(tmp_path):
+    frames = np.stack([DARK_ON_WHITE, 255 - DARK_ON_WHITE])
+    iio.imwrite(tmp_path / "two.gif", frames)
+    assert np.array_equal(read_shape(tmp_path / "two.gif"), SHAPE)  # the first frame
+    rgb = np.repeat(DARK_ON_WHITE[:, :, None], 3, axis=2)
+    iio.imwrite(tmp_path / "rgb.png", rgb)
+    assert np.array_equal(read_shape(tmp_path / "rgb.png"), SHAPE)
+
+
+def test_a_silhouette_stored_as_transparency(tmp_path):
+    rgba = np.zeros((12, 14, 4), dtype=np.uint8)  # black everywhere, opaque on the shape only
+    rgba[..., 3] = np.where(SHAPE, 255, 0)
+    iio.imwrite(tmp_path / "alpha.png", rgba)
+    assert np.array_equal(read_shape(tmp_path / "alpha.png"), SHAPE)
+
+
+def test_foreground_and_threshold(tmp_path):
+    iio.imwrite(tmp_path / "a.png", DARK_ON_WHITE)
+    iio.imwrite(tmp_path / "b.png", 255 - DARK_ON_WHITE)
+    assert np.array_equal(read_shape(tmp_path / "b.png"), SHAPE)  # white on black: auto finds it too
+    assert np.array_equal(read_shape(tmp_path / "a.png", foreground="light"), ~SHAPE)
+    grey = DARK_ON_WHITE.copy()
+    grey[0, 0] = 100
+    iio.imwrite(tmp_path / "c.png", grey)
+    assert read_shape(tmp_path / "c.png", threshold=50, foreground="dark").sum() == SHAPE.sum()
+    assert read_shape(tmp_path / "c.png", threshold=150, foreground="dark").sum() == SHAPE.sum() + 1
+    assert read_image(tmp_path / "c.png")[0, 0] == 100.0
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "match"),
+    [
+        ("bad.png", b"GIF89a not a png", "not a readable PNG image"),
+        ("bad.png", b"\x89PNG\r\n\x1a\n broken", "not a readable PNG image"),
+        ("bad.tif", b"II*\x00 broken", "not a readable TIF image"),
+        ("bad.png", b"", "empty"),
+        ("none.png", None, "no such file"),
+        ("p.txt", b"0 0\n", r"an image must be a \.png, \.bmp"),
+    ],
+)
+def test_bad_files_name_the_file(tmp_path, name, content, match):
+    path = tmp_path / name
+    if content is not None:
+        path.write_bytes(content)
+    with pytest.raises(InputError, match=match) as info:
+        read_shape(path)
+    assert str(info.value).startswith(str(path)) and "\n" not in str(info.value)
+
+
+def test_uniform_image_and_bad_options(tmp_path):
+    iio.imwrite(tmp_path / "u.png", np.full((4, 4), 7, dtype=np.uint8))
+    with pytest.raises(InputError, match="uniform"):
+        read_shape(tmp_path / "u.png")
+    iio.imwrite(tmp_path / "a.png", DARK_ON_WHITE)
+    with pytest.raises(InputError, match="no dark pixel at threshold 0"):
+        read_shape(tmp_path / "a.png", threshold=0, foreground="dark")
+    with pytest.raises(InputError, match="`foreground` must be"):
+        read_shape(tmp_path / "a.png", foreground="black")
+    with pytest.raises(InputError, match="`threshold` must be a finite number"):
+        read_shape(tmp_path / "a.png", threshold=float("nan"))

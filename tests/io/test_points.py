@@ -1,0 +1,286 @@
+"""read_points / write_points: files written by the formats' own libraries, and round trips."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+
+from centrality_vision.exceptions import InputError
+from centrality_vision.io import WRITE_SUFFIXES, read_points, write_points
+
+RNG = np.random.default_rng(0)
+CLOUD = RNG.random((7, 3)) * 10 - 5
+FLAT = RNG.random((6, 2))
+
+
+# ------------------------------------------------------------------ written by other tools
+
+
+def test_ply_written_by_plyfile_ascii_and_binary_with_an_intensity(tmp_path):
+    plyfile = pytest.importorskip("plyfile")
+    vertex = np.zeros(7, dtype=[("x", "f8"), ("y", "f8"), ("z", "f8"), ("intensity", "f4")])
+    vertex["x"], vertex["y"], vertex["z"] = CLOUD.T
+    vertex["intensity"] = np.arange(7)
+    for text in (True, False):
+        path = tmp_path / f"cloud_{text}.ply"
+        plyfile.PlyData([plyfile.PlyElement.describe(vertex, "vertex")], text=text).write(str(path))
+        assert np.allclose(read_points(path), CLOUD, rtol=0, atol=1e-12)
+        picked = read_points(path, columns=["z", "intensity"])
+        assert np.allclose(picked, np.column_stack([CLOUD[:, 2], np.arange(7)]))
+
+
+def test_pcd_written_by_open3d_ascii_and_binary(tmp_path):
+    o3d = pytest.importorskip("open3d")
+    cloud = o3d.geometry.PointCloud()
+    cloud.points = o3d.utility.Vector3dVector(CLOUD)
+    for ascii_ in (True, False):
+        path = tmp_path / f"cloud_{ascii_}.pcd"
+        assert o3d.io.write_point_cloud(str(path), cloud, write_ascii=ascii_)
+        # Open3D stores float32 (binary) or ten significant digits (ASCII)
+        assert np.allclose(read_points(path), CLOUD, rtol=1e-6, atol=1e-6)
+
+
+def test_pcd_binary_with_padding_and_an_rgb_field(tmp_path):
+    """A PCL-style binary file built byte by byte from the format description."""
+    records = np.zeros(3, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("rgb", "<u4"), ("_", "u1", (4,))])
+    records["x"], records["y"], records["z"] = [1, 2, 3], [4, 5, 6], [7, 8, 9]
+    header = ("VERSION .7\nFIELDS x y z rgb _\nSIZE 4 4 4 4 1\nTYPE F F F U U\nCOUNT 1 1 1 1 4\n"
+              "WIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA binary\n")
+    path = tmp_path / "pcl.pcd"
+    path.write_bytes(header.encode() + records.tobytes())
+    assert read_points(path).tolist() == [[1, 4, 7], [2, 5, 8], [3, 6, 9]]
+
+
+def test_obj_written_by_meshio_and_an_obj_with_faces_and_normals(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    meshio.write_points_cells(tmp_path / "cloud.obj", CLOUD, [])
+    assert np.array_equal(read_points(tmp_path / "cloud.obj"), CLOUD)
+    (tmp_path / "mesh.obj").write_text("# a triangle\nv 0 0 0 1.0\nv 1 0 0\nv 0 1 0 0.5 0.5 0.5\nvn 0 0 1\nf 1//1 2//1 3//1\n")
+    assert read_points(tmp_path / "mesh.obj").tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+
+
+def test_mat_written_by_scipy_with_a_named_variable(tmp_path):
+    from scipy.io import savemat
+
+    savemat(tmp_path / "one.mat", {"X": FLAT})
+    assert np.array_equal(read_points(tmp_path / "one.mat"), FLAT)
+    savemat(tmp_path / "two.mat", {"X": FLAT, "Y": CLOUD, "note": "fish"})
+    assert np.array_equal(read_points(tmp_path / "two.mat", variable="Y"), CLOUD)
+    with pytest.raises(InputError, match="name the variable .* X, Y"):
+        read_points(tmp_path / "two.mat")
+    with pytest.raises(InputError, match="no variable 'Z'"):
+        read_points(tmp_path / "two.mat", variable="Z")
+
+
+def test_xyz_and_txt_written_by_numpy(tmp_path):
+    np.savetxt(tmp_path / "cloud.xyz", CLOUD)
+    np.savetxt(tmp_path / "tabs.txt", FLAT, delimiter="\t", header="some comment")
+    assert np.array_equal(read_points(tmp_path / "cloud.xyz"), CLOUD)
+    assert np.array_equal(read_points(tmp_path / "tabs.txt"), FLAT)
+
+
+@pytest.mark.parametrize(
+    "options",
+    [{}, {"index": False}, {"sep": ";"}, {"sep": ";", "decimal": ","}, {"sep": "\t"}, {"sep": " ", "index": False}],
+)
+def test_csv_written_by_pandas(tmp_path, options):
+    pandas = pytest.importorskip("pandas")
+    frame = pandas.DataFrame({"x": CLOUD[:, 0], "y": CLOUD[:, 1], "z": CLOUD[:, 2], "intensity": np.arange(7)})
+    path = tmp_path / "cloud.csv"
+    frame.to_csv(path, **options)
+    assert np.array_equal(read_points(path), CLOUD)
+    assert np.array_equal(read_points(path, columns="x,intensity"), np.column_stack([CLOUD[:, 0], np.arange(7)]))
+
+
+def test_npy_written_by_numpy_in_fortran_order_and_int(tmp_path):
+    np.save(tmp_path / "f.npy", np.asfortranarray(CLOUD))
+    np.save(tmp_path / "i.npy", np.arange(12, dtype=np.int32).reshape(4, 3))
+    assert np.array_equal(read_points(tmp_path / "f.npy"), CLOUD)
+    assert read_points(tmp_path / "i.npy").dtype == np.float64
+
+
+# ------------------------------------------------------------------ text layouts and columns
+
+
+@pytest.mark.parametrize(
+    "text",
+    [
+        "0 0\n1 0.5\n2 1\n",
+        "0,0\n1,0.5\n2,1\n",
+        "x,y\n0,0\n1, 0.5\n2,1\n",
+        "# a comment\n\n0\t0\n1   0.5\n\n2 1\n",
+        "\ufeff0,0\n1,0.5\n2,1\n",  # a byte-order mark keeps the first row
+        "\ufeffX;Y\n0;0\n1;0,5\n2;1\n",
+        '"x","y"\n"0","0"\n"1","0.5"\n"2","1"\n',
+        ",x,y\n0,0,0\n1,1,0.5\n2,2,1\n",  # pandas' index column
+        "id x y\n7 0 0\n8 1 0.5\n9 2 1\n",
+    ],
+)
+def test_text_layouts(tmp_path, text):
+    path = tmp_path / "p.csv"
+    path.write_text(text, encoding="utf-8")
+    assert read_points(path).tolist() == [[0.0, 0.0], [1.0, 0.5], [2.0, 1.0]]
+
+
+def test_columns_by_index_and_case_insensitive_names(tmp_path):
+    path = tmp_path / "p.csv"
+    path.write_text("A,X,Y,Z\n1,2,3,4\n5,6,7,8\n")
+    assert read_points(path).tolist() == [[2, 3, 4], [6, 7, 8]]
+    assert read_points(path, columns=[0, 3]).tolist() == [[1, 4], [5, 8]]
+    assert read_points(path, columns=["a", "x"]).tolist() == [[1, 2], [5, 6]]
+    headerless = tmp_path / "q.txt"
+    headerless.write_text("1 2 3 4\n5 6 7 8\n")
+    with pytest.raises(InputError, match="got 4 columns; pick the coordinates with `columns`"):
+        read_points(headerless)
+    assert read_points(headerless, columns="1,2,3").tolist() == [[2, 3, 4], [6, 7, 8]]
+    with pytest.raises(InputError, match="names no columns"):
+        read_points(headerless, columns=["x", "y"])
+    with pytest.raises(InputError, match="index 4 is out of range"):
+        read_points(headerless, columns=[0, 4])
+    with pytest.raises(InputError, match="'w', which is not a column"):
+        read_points(path, columns=["x", "w"])
+    with pytest.raises(InputError, match="must not repeat"):
+        read_points(path, columns=[1, 1])
+
+
+def test_nan_rows_only_when_asked_and_only_whole_rows(tmp_path):
+    path = tmp_path / "p.txt"
+    path.write_text("0 0\nnan nan\n1 1\n")
+    with pytest.raises(InputError, match="first at line 2"):
+        read_points(path)
+    got = read_points(path, nan_rows=True)
+    assert np.isnan(got[1]).all() and got[[0, 2]].tolist() == [[0, 0], [1, 1]]
+    path.write_text("0 0\nnan 1\n1 1\n")
+    with pytest.raises(InputError, match="entirely NaN are allowed"):
+        read_points(path, nan_rows=True)
+
+
+# ------------------------------------------------------------------ bad files
+
+
+@pytest.mark.parametrize(
+    ("name", "content", "match"),
+    [
+        ("missing.txt", None, "no such file"),
+        ("p.dat", "0 0\n", "must be a .txt, .csv"),
+        ("p.txt", "", "holds no points"),
+        ("p.txt", "# only a comment\n", "holds no points"),
+        ("p.csv", "x,y\n", "only the header"),
+        ("p.txt", "0 0 0 0\n1 1 1 1\n", "2 or 3 coordinates; got 4"),
+        ("p.txt", "0\n1\n", "got 1"),
+        ("p.txt", "0 0\n1 1 1\n", "line 2 has 3 values"),
+        ("p.txt", "0 0\nnan 1\n3 3\n", "NaN or inf, the first at line 2"),
+        ("p.csv", "x,y\n0,0\n1,,1\n", "line 3 has 3 values, the header 2"),
+        ("p.csv", "0,0\n1,a\n", "line 2, column 2: 'a' is not a number"),
+        ("p.csv", "O.5,1\n0,0\n1,1\n", "line 1, column 1: 'O.5' is not a number"),  # a typo is not a header
+        ("p.csv", "x,y,z\n0,0\n", "line 2 has 2 values, the header 3"),
+        ("p.csv", "0x10,1\n2,3\n", "'0x10' is not a number"),
+        ("p.obj", "v 1 2\n", "line 1 is not a vertex"),
+        ("p.pcd", "FIELDS x y z\nPOINTS 2\nDATA ascii\n1 2 3\n", "declares 2 points but the file holds 1"),
+        ("p.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nPOINTS 1\nDATA binary_compressed\n", "compressed"),
+        ("p.ply", "not a ply\n", "not a PLY file"),
+        ("p.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n",
+         "declares 3 vertices"),
+        ("p.mat", "MATLAB nonsense", "not a readable .mat"),
+    ],
+)
+def test_bad_files_name_the_file_on_one_line(tmp_path, name, content, match):
+    path = tmp_path / name
+    if content is not None:
+        path.write_text(content)
+    with pytest.raises(InputError, match=match) as info:
+        read_points(path)
+    message = str(info.value)
+    assert message.startswith(str(path)) and "\n" not in message
+
+
+def test_npy_headers_are_checked_before_loading(tmp_path):
+    (tmp_path / "junk.npy").write_bytes(b"not numpy")
+    with pytest.raises(InputError, match="not a readable .npy"):
+        read_points(tmp_path / "junk.npy")
+    np.save(tmp_path / "flat.npy", np.arange(4.0))
+    with pytest.raises(InputError, match=r"2D array .* got shape \(4,\)"):
+        read_points(tmp_path / "flat.npy")
+    # a header claiming 10**12 rows over 48 bytes of data: refused, nothing allocated
+    data = (tmp_path / "huge.npy")
+    np.save(data, np.zeros((3, 2)))
+    raw = data.read_bytes().replace(b"(3, 2)", b"(1000000000000, 2)".ljust(6))
+    header_len = raw.index(b"\n") + 1
+    fixed = raw[:8] + (header_len - 10).to_bytes(2, "little") + raw[10:header_len]
+    data.write_bytes(fixed[: header_len] + raw[header_len:])
+    with pytest.raises(InputError, match=r"\(1000000000000, 2\).* holds 48 bytes"):
+        read_points(data)
+    np.save(tmp_path / "obj.npy", np.array([[1, None]], dtype=object), allow_pickle=True)
+    with pytest.raises(InputError, match="numeric array; got dtype object"):
+        read_points(tmp_path / "obj.npy")
+
+
+def test_ply_binary_header_with_a_huge_count_is_refused_without_allocating(tmp_path):
+    path = tmp_path / "huge.ply"
+    path.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\n"
+                     b"property float x\nproperty float y\nproperty float z\nend_header\n" + bytes(12))
+    with pytest.raises(InputError, match="declares 1000000000000 vertices but the file holds only 12 bytes"):
+        read_points(path)
+
+
+def test_bad_arguments():
+    with pytest.raises(TypeError, match="`path` must be a str"):
+        read_points(3)
+    with pytest.raises(TypeError, match="`columns` must hold"):
+        read_points("p.txt", columns=[1.5])
+    with pytest.raises(TypeError, match="`variable` must be a str"):
+        read_points("p.txt", variable=1)
+
+
+# ------------------------------------------------------------------ writing
+
+
+@pytest.mark.parametrize("suffix", WRITE_SUFFIXES)
+def test_every_written_format_round_trips_exactly(tmp_path, suffix):
+    points = CLOUD if suffix in (".ply", ".pcd", ".obj") else FLAT
+    path = write_points(tmp_path / "sub" / f"p{suffix}", points)
+    assert np.array_equal(read_points(path), points)
+
+
+def test_written_csv_is_read_by_pandas_with_default_arguments(tmp_path):
+    pandas = pytest.importorskip("pandas")
+    frame = pandas.read_csv(write_points(tmp_path / "p.csv", CLOUD))
+    assert list(frame.columns) == ["x", "y", "z"] and np.array_equal(frame.to_numpy(), CLOUD)
+
+
+def test_written_files_are_read_by_their_own_libraries(tmp_path):
+    meshio = pytest.importorskip("meshio")
+    o3d = pytest.importorskip("open3d")
+    from scipy.io import loadmat
+
+    assert np.array_equal(meshio.read(write_points(tmp_path / "p.ply", CLOUD)).points, CLOUD)
+    assert np.array_equal(meshio.read(write_points(tmp_path / "p.obj", CLOUD)).points, CLOUD)
+    assert np.allclose(np.asarray(o3d.io.read_point_cloud(str(write_points(tmp_path / "p.pcd", CLOUD))).points), CLOUD)
+    assert np.array_equal(loadmat(write_points(tmp_path / "p.mat", FLAT))["points"], FLAT)
+
+
+def test_nan_rows_round_trip_in_text_and_are_refused_by_3d_formats(tmp_path):
+    points = FLAT.copy()
+    points[2] = np.nan
+    got = read_points(write_points(tmp_path / "p.csv", points), nan_rows=True)
+    assert np.array_equal(got, points, equal_nan=True)
+    with pytest.raises(InputError, match="3D points; got 2D"):
+        write_points(tmp_path / "p.ply", FLAT)
+    with pytest.raises(InputError, match="cannot mark missing points"):
+        write_points(tmp_path / "p.pcd", np.vstack([CLOUD, np.full(3, np.nan)]))
+    with pytest.raises(InputError, match="row 0 is not"):
+        write_points(tmp_path / "p.csv", [[np.nan, 1.0]])
+    with pytest.raises(InputError, match="must end in one of"):
+        write_points(tmp_path / "p.xlsx", FLAT)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    points=arrays(np.float64, st.tuples(st.integers(1, 8), st.sampled_from([2, 3])),
+                  elements=st.floats(-1e300, 1e300, allow_nan=False, allow_infinity=False)),
+    suffix=st.sampled_from([".csv", ".txt", ".xyz", ".npy", ".mat"]),
+)
+def test_round_trip_property(tmp_path_factory, points, suffix):
+    path = write_points(tmp_path_factory.mktemp("rt") / f"p{suffix}", points)
+    assert np.array_equal(read_points(path), points)
