@@ -16,7 +16,14 @@ def _disk(n=20, r=6, value_in=1, value_out=0, dtype=np.uint8):
 
 @pytest.mark.parametrize(
     ("value_in", "value_out", "dtype"),
-    [(0, 255, np.uint8), (255, 0, np.uint8), (0, 65535, np.uint16), (0.1, 0.9, np.float32), (True, False, bool), (1, 0, np.int64)],
+    [
+        (0, 255, np.uint8),
+        (255, 0, np.uint8),
+        (0, 65535, np.uint16),
+        (0.1, 0.9, np.float32),
+        (True, False, bool),
+        (1, 0, np.int64),
+    ],
 )
 def test_auto_finds_the_shape_on_either_background(value_in, value_out, dtype):
     image, inside = _disk(value_in=value_in, value_out=value_out, dtype=dtype)

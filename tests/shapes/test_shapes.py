@@ -127,21 +127,21 @@ def test_comparisons_are_invariant_to_translation():
     image = np.zeros((60, 60), dtype=bool)
     image[10:30, 5:45] = _cross(3, 40)[10:30, :40]
     shifted = np.roll(image, (12, 9), axis=(0, 1))
-    comp = CentralityComparisons(n_comparisons=300, seed=1).fit([image])
+    comp = CentralityComparisons(n_comparisons=300, random_state=1).fit([image])
     np.testing.assert_array_equal(comp.transform([image]), comp.transform([shifted]))
 
 
 def test_comparisons_are_seeded():
-    a = CentralityComparisons(n_comparisons=20, seed=3).fit([_disk(5)])
-    b = CentralityComparisons(n_comparisons=20, seed=3).fit([_disk(5)])
-    c = CentralityComparisons(n_comparisons=20, seed=4).fit([_disk(5)])
+    a = CentralityComparisons(n_comparisons=20, random_state=3).fit([_disk(5)])
+    b = CentralityComparisons(n_comparisons=20, random_state=3).fit([_disk(5)])
+    c = CentralityComparisons(n_comparisons=20, random_state=4).fit([_disk(5)])
     np.testing.assert_array_equal(a.offsets_, b.offsets_)
     assert not np.array_equal(a.offsets_, c.offsets_)
 
 
 def test_forest_learns_toy_shapes_and_is_reproducible():
     images, labels = _toy_dataset()
-    clf = CentralityComparisonForest(n_estimators=50, n_comparisons=200, seed=0)
+    clf = CentralityComparisonForest(n_estimators=50, n_comparisons=200, random_state=0)
     assert cross_val_score(clf, images, labels, cv=4).mean() > 0.9
     p1 = clone(clf).fit(images, labels).predict_proba(images)
     p2 = clone(clf).fit(images, labels).predict_proba(images)

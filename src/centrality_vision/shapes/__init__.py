@@ -5,15 +5,25 @@
 - :class:`CentralityComparisons` and :class:`CentralityComparisonForest`: random binary
   comparisons of centrality values at shape-relative positions, and a random forest
   over them (thesis 4.3.3).
-- :func:`shape_centralities` and :data:`default_cache`: centralities per image, computed
-  once and cached.
+- :func:`shape_centralities` and :class:`CentralityCache`: centralities per image,
+  computed once and cached (in memory, or on disk shared by worker processes), in
+  parallel with ``n_jobs``.
 """
 
-from ._cache import SHAPE_CENTRALITIES, CentralityCache, as_shape_images, default_cache, shape_centralities
+from ._cache import (
+    PATH_CENTRALITIES,
+    SHAPE_CENTRALITIES,
+    CentralityCache,
+    as_shape_images,
+    default_cache,
+    resolve_cache,
+    shape_centralities,
+)
 from ._comparisons import CentralityComparisonForest, CentralityComparisons, centrality_map
 from ._histogram import CentralityHistogram
 
 __all__ = [
+    "PATH_CENTRALITIES",
     "SHAPE_CENTRALITIES",
     "CentralityCache",
     "CentralityComparisonForest",
@@ -22,5 +32,6 @@ __all__ = [
     "as_shape_images",
     "centrality_map",
     "default_cache",
+    "resolve_cache",
     "shape_centralities",
 ]

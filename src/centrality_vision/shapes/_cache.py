@@ -1,11 +1,21 @@
-"""Centralities of binary shapes, computed once per image and kept in a bounded cache."""
+"""Centralities of binary shapes, computed once per image and kept in a bounded cache.
+
+A :class:`CentralityCache` keys every result by the image's pixels (a hash of the
+mask), the neighbourhood and the edge lengths, so the same shape is never computed twice
+in a process; with a ``directory`` it also keeps the results on disk, where other
+processes (joblib or Dask workers, later runs) find them. Processes that share a
+directory also share the work: an image another process is computing is skipped and
+read when it is ready, so parallel cross-validation folds never compute the same image.
+"""
 
 from __future__ import annotations
 
 import hashlib
 import os
 import threading
+import time
 from collections import OrderedDict
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -15,17 +25,36 @@ from ..centrality import compute
 from ..exceptions import InputError
 from ..graphs import pixel_graph
 
-__all__ = ["SHAPE_CENTRALITIES", "CentralityCache", "default_cache", "as_shape_images", "shape_centralities"]
+__all__ = [
+    "SHAPE_CENTRALITIES",
+    "PATH_CENTRALITIES",
+    "CentralityCache",
+    "default_cache",
+    "resolve_cache",
+    "as_shape_images",
+    "shape_centralities",
+]
 
 #: The four centralities of the thesis' shape experiments, in the order "all" concatenates them.
 SHAPE_CENTRALITIES = ("betweenness", "closeness", "eigenvector", "degree")
+#: The centralities built on shortest paths: the ones ``weights=True`` changes.
+PATH_CENTRALITIES = ("betweenness", "closeness", "harmonic", "eccentricity")
+
+_STALE_LOCK_SECONDS = 600.0  # a lock this old (or whose process is gone) is taken over
+_POLL_SECONDS = 0.05
 
 
-def as_shape_images(images, *, name: str = "X") -> list[np.ndarray]:
-    """Validate a sequence of 2D binary shapes (sizes may differ); return boolean masks.
+def as_shape_images(
+    images, *, name: str = "X", foreground: str = "auto", threshold: float | None = None
+) -> list[np.ndarray]:
+    """Validate a sequence of 2D shapes (sizes may differ); return boolean masks.
 
-    A shape must have background too: an all-foreground image has no outline, which
-    usually means the image was passed inverted (light shape expected on dark).
+    Each image goes through :func:`centrality_vision._validation.as_binary_image`:
+    boolean and 0/1 images are masks (True/1 = shape); grey images (e.g. 0/255) are
+    split at ``threshold`` (default: half their range) and ``foreground="auto"`` takes
+    the side that touches less of the image border as the shape. A mask whose shape
+    touches most of the border gets a warning (it looks inverted). A shape must have
+    background too: an all-foreground image has no outline.
     """
     if isinstance(images, np.ndarray) and images.ndim == 2:
         raise InputError(
@@ -38,7 +67,9 @@ def as_shape_images(images, *, name: str = "X") -> list[np.ndarray]:
         raise InputError(f"`{name}` must hold at least one image; got an empty sequence.")
     masks = []
     for i, image in enumerate(images):
-        mask = as_binary_image(image, name=f"{name}[{i}]")
+        mask = as_binary_image(
+            image, name=f"{name}[{i}]", foreground=foreground, threshold=threshold, check_inverted=True
+        )
         if mask.all():
             raise InputError(
                 f"`{name}[{i}]` must have background pixels; got an all-foreground image of shape {mask.shape} "
@@ -48,9 +79,26 @@ def as_shape_images(images, *, name: str = "X") -> list[np.ndarray]:
     return masks
 
 
-def _key(mask: np.ndarray, connectivity: int) -> tuple:
+def _key(mask: np.ndarray, connectivity: int, weights: bool = False) -> tuple:
     digest = hashlib.blake2b(np.packbits(mask).tobytes(), digest_size=16).hexdigest()
-    return (mask.shape, connectivity, digest)
+    return (mask.shape, connectivity, bool(weights), digest)
+
+
+def _pid_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except (PermissionError, OSError):
+        return True
+    return True
+
+
+def _compute(mask: np.ndarray, name: str, connectivity: int, weights: bool, graph=None) -> np.ndarray:
+    if graph is None:
+        graph, _ = pixel_graph(mask, connectivity=connectivity)
+    options = {"weights": True} if weights and name in PATH_CENTRALITIES else {}
+    return compute(graph, name, **options)
 
 
 class CentralityCache:
@@ -67,8 +115,27 @@ class CentralityCache:
         centrality).
     directory : path, optional
         Also keep every computed centrality on disk, one ``.npy`` file per image and
-        centrality, written atomically. A later process (or a run that was stopped and
-        started again) reads them instead of recomputing.
+        centrality, named by a hash of the pixels and written atomically. Another
+        process (a joblib or Dask worker, or a later run) with a cache on the same
+        directory reads them instead of recomputing; while one process computes an
+        image it holds a ``.lock`` file there, and the others compute other images
+        first and then wait for it.
+
+    Notes
+    -----
+    A cache is a shared resource: copying it (``copy.deepcopy``, as
+    :func:`sklearn.base.clone` does with parameters) returns the same cache, and
+    pickling it (to send an estimator to a worker process) keeps only ``max_images``
+    and ``directory``, so the worker starts with an empty memory and the shared disk.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> cache = CentralityCache()
+    >>> square = np.zeros((5, 5), dtype=bool); square[1:4, 1:4] = True
+    >>> values, nodes = cache.get(square, "degree")
+    >>> values.reshape(3, 3)[1], (cache.hits, cache.misses)
+    (array([5., 8., 5.]), (0, 1))
     """
 
     def __init__(self, max_images: int = 4096, directory=None):
@@ -79,15 +146,31 @@ class CentralityCache:
         self.hits = 0
         self.misses = 0
 
+    def __repr__(self) -> str:
+        return f"CentralityCache(max_images={self.max_images}, directory={None if self.directory is None else str(self.directory)!r})"
+
+    def __deepcopy__(self, memo):
+        return self
+
+    def __getstate__(self):
+        return {"max_images": self.max_images, "directory": self.directory}
+
+    def __setstate__(self, state):
+        self.__init__(state["max_images"], state["directory"])
+
     def _path(self, key: tuple, name: str) -> Path:
-        (rows, cols), connectivity, digest = key
-        return self.directory / f"{digest}-{rows}x{cols}-c{connectivity}-{name}.npy"
+        (rows, cols), connectivity, weights, digest = key
+        suffix = "-w" if weights else ""  # unweighted files keep the names of earlier versions
+        return self.directory / f"{digest}-{rows}x{cols}-c{connectivity}{suffix}-{name}.npy"
 
     def _load(self, key: tuple, name: str):
         if self.directory is None:
             return None
         path = self._path(key, name)
-        return np.load(path) if path.exists() else None
+        try:
+            return np.load(path)
+        except (FileNotFoundError, EOFError, ValueError):  # absent, or a foreign partial file
+            return None
 
     def _save(self, key: tuple, name: str, values: np.ndarray) -> None:
         if self.directory is None:
@@ -99,39 +182,52 @@ class CentralityCache:
             np.save(handle, values)
         os.replace(tmp, path)
 
+    @contextmanager
+    def _claim(self, key: tuple, name: str):
+        """Yield True while this process holds the lock on (key, name); False if another does."""
+        if self.directory is None:
+            yield True
+            return
+        self.directory.mkdir(parents=True, exist_ok=True)
+        lock = self._path(key, name).with_suffix(".lock")
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+        except FileExistsError:
+            if not self._stale(lock):
+                yield False
+                return
+            lock.unlink(missing_ok=True)
+            try:
+                fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+            except FileExistsError:
+                yield False
+                return
+        try:
+            os.write(fd, str(os.getpid()).encode())
+            os.close(fd)
+            yield True
+        finally:
+            lock.unlink(missing_ok=True)
+
+    @staticmethod
+    def _stale(lock: Path) -> bool:
+        try:
+            age = time.time() - lock.stat().st_mtime
+            pid = int(lock.read_text() or "0")
+        except (FileNotFoundError, ValueError):
+            return True
+        return age > _STALE_LOCK_SECONDS or (pid > 0 and not _pid_alive(pid))
+
     def __len__(self) -> int:
         return len(self._store)
 
     def clear(self) -> None:
-        """Drop every entry and reset the hit and miss counts."""
+        """Drop every entry kept in memory and reset the hit and miss counts (the disk is kept)."""
         with self._lock:
             self._store.clear()
             self.hits = self.misses = 0
 
-    def get(self, mask: np.ndarray, name: str, *, connectivity: int = 8) -> tuple[np.ndarray, np.ndarray]:
-        """Centrality ``name`` of the pixel graph of ``mask`` and the pixel index of each node."""
-        key = _key(mask, connectivity)
-        with self._lock:
-            entry = self._store.get(key)
-            if entry is not None:
-                self._store.move_to_end(key)
-                if name in entry:
-                    self.hits += 1
-                    values = entry[name]
-                    if self.directory is not None and not self._path(key, name).exists():
-                        self._save(key, name, values)  # computed before a directory was set
-                    return values, entry["nodes"]
-        if entry is None:
-            entry = {"nodes": np.flatnonzero(mask)}  # pixel_graph's node order: row-major
-        values = self._load(key, name)
-        if values is not None:
-            self.hits += 1
-        else:
-            self.misses += 1
-            if "graph" not in entry:
-                entry["graph"], _ = pixel_graph(mask, connectivity=connectivity)
-            values = compute(entry["graph"], name)
-            self._save(key, name, values)
+    def _remember(self, key: tuple, entry: dict, name: str, values: np.ndarray) -> dict:
         values.setflags(write=False)
         entry["nodes"].setflags(write=False)
         with self._lock:
@@ -140,29 +236,196 @@ class CentralityCache:
             self._store.move_to_end(key)
             while len(self._store) > self.max_images:
                 self._store.popitem(last=False)
+        return entry
+
+    def lookup(self, mask: np.ndarray, name: str, *, connectivity: int = 8, weights: bool = False):
+        """The cached values (memory, then disk) or None; never computes."""
+        key = _key(mask, connectivity, weights)
+        with self._lock:
+            entry = self._store.get(key)
+            if entry is not None:
+                self._store.move_to_end(key)
+                if name in entry:
+                    self.hits += 1
+                    if self.directory is not None and not self._path(key, name).exists():
+                        self._save(key, name, entry[name])  # computed before a directory was set
+                    return entry[name], entry["nodes"]
+        values = self._load(key, name)
+        if values is None:
+            return None
+        with self._lock:
+            self.hits += 1
+        entry = self._remember(key, entry or {"nodes": np.flatnonzero(mask)}, name, values)
         return values, entry["nodes"]
 
+    def get(
+        self, mask: np.ndarray, name: str, *, connectivity: int = 8, weights: bool = False, wait: bool = True
+    ) -> tuple[np.ndarray, np.ndarray] | None:
+        """Centrality ``name`` of the pixel graph of ``mask`` and the pixel index of each node.
 
-#: The cache that every shape feature uses unless it is given another.
+        ``weights=True`` gives the shortest-path centralities (betweenness, closeness,
+        harmonic, eccentricity) Euclidean edge lengths 1 and sqrt 2; degree and
+        eigenvector are the same either way. With ``wait=False``, returns None instead
+        of waiting when another process holds the lock on this image.
+        """
+        found = self.lookup(mask, name, connectivity=connectivity, weights=weights)
+        if found is not None:
+            return found
+        key = _key(mask, connectivity, weights)
+        while True:
+            with self._claim(key, name) as mine:
+                if mine:
+                    values = self._load(key, name)  # written while we were looking
+                    if values is None:
+                        with self._lock:
+                            self.misses += 1
+                        values = _compute(mask, name, connectivity, weights)
+                        self._save(key, name, values)
+                    entry = self._remember(key, {"nodes": np.flatnonzero(mask)}, name, values)
+                    return values, entry["nodes"]
+            if not wait:
+                return None
+            time.sleep(_POLL_SECONDS)
+            found = self.lookup(mask, name, connectivity=connectivity, weights=weights)
+            if found is not None:
+                return found
+
+    def put(self, mask: np.ndarray, name: str, values: np.ndarray, *, connectivity: int = 8, weights: bool = False):
+        """Store values computed elsewhere (e.g. by a worker) under ``mask``'s key."""
+        key = _key(mask, connectivity, weights)
+        values = np.array(values, dtype=np.float64)
+        if values.shape != (int(np.count_nonzero(mask)),):
+            raise InputError(
+                f"`values` must hold one value per foreground pixel ({int(np.count_nonzero(mask))}); got shape {values.shape}."
+            )
+        if self.directory is not None and not self._path(key, name).exists():
+            self._save(key, name, values)
+        with self._lock:
+            entry = self._store.get(key)
+        return self._remember(key, entry or {"nodes": np.flatnonzero(mask)}, name, values)
+
+
+#: The process-wide in-memory cache that shape features use when given ``cache=None``.
 default_cache = CentralityCache()
+_directory_caches: dict[str, CentralityCache] = {}
+_registry_lock = threading.Lock()
+
+
+def resolve_cache(cache, *, name: str = "cache") -> CentralityCache:
+    """``None`` -> :data:`default_cache`; a :class:`CentralityCache` -> itself; a path ->
+    the process's cache on that directory (one per directory, so its memory is reused)."""
+    if cache is None:
+        return default_cache
+    if isinstance(cache, CentralityCache):
+        return cache
+    if isinstance(cache, (str, os.PathLike)):
+        directory = str(Path(cache).expanduser().resolve())
+        with _registry_lock:
+            if directory not in _directory_caches:
+                _directory_caches[directory] = CentralityCache(directory=directory)
+            return _directory_caches[directory]
+    raise TypeError(f"`{name}` must be None, a CentralityCache or a directory path; got {type(cache).__name__}.")
+
+
+def _kernel_threads(n_jobs: int) -> int:
+    """Kernel threads per job: the cores divided among the jobs.
+
+    Inside a joblib worker (which sets ``OMP_NUM_THREADS`` to its share of the cores)
+    that share is honoured too, so nested parallelism does not oversubscribe.
+    """
+    from .._parallel import available_cores, get_num_threads
+
+    threads = max(1, min(get_num_threads(), available_cores()) // max(1, n_jobs))
+    env = os.environ.get("OMP_NUM_THREADS", "")
+    if env.isdigit() and int(env) > 0:
+        threads = min(threads, int(env))
+    return threads
+
+
+@contextmanager
+def kernel_threads(n: int | None):
+    """Run the centrality kernels on ``n`` threads inside the block (None: leave as is).
+
+    Results do not depend on the thread count; only the speed does.
+    """
+    from .._parallel import _state, get_num_threads, set_num_threads
+
+    if n is None or n == get_num_threads():
+        yield
+        return
+    previous = _state["threads"]
+    set_num_threads(n)
+    try:
+        yield
+    finally:
+        set_num_threads(previous)
+
+
+def _worker(masks, names, connectivity, weights, cache, threads, parent):
+    """One joblib task: the centralities of some images, through the (pickled) cache.
+
+    In a worker process the kernels get the job's share of the cores; in a thread of
+    the parent (joblib's threading backend) the thread count, a process-wide setting,
+    is left alone.
+    """
+    with kernel_threads(threads if os.getpid() != parent else None):
+        out = []
+        for mask in masks:
+            record = {}
+            for name in names:
+                record[name], _ = cache.get(mask, name, connectivity=connectivity, weights=weights)
+            out.append(record)
+    return out
+
+
+def _effective_jobs(n_jobs) -> int:
+    from joblib import effective_n_jobs
+
+    if n_jobs is not None and (isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or n_jobs == 0):
+        raise InputError(f"`n_jobs` must be None, a positive int or a negative int (-1: all cores); got {n_jobs!r}.")
+    return effective_n_jobs(n_jobs)
 
 
 def shape_centralities(
-    images, names=SHAPE_CENTRALITIES, *, connectivity: int = 8, progress: bool = False, cache: CentralityCache | None = None
+    images,
+    names=SHAPE_CENTRALITIES,
+    *,
+    connectivity: int = 8,
+    weights: bool = False,
+    progress: bool = False,
+    cache=None,
+    n_jobs=None,
+    foreground: str = "auto",
+    threshold: float | None = None,
 ) -> list[dict[str, np.ndarray]]:
     """Centralities of the 8- (or 4-) neighbour pixel graph of each shape.
 
     Parameters
     ----------
-    images : sequence of 2D binary arrays
-        Shapes, True/1 on the shape; sizes may differ.
+    images : sequence of 2D arrays
+        Shapes; sizes may differ. Masks (True/1 = shape) or grey images (see
+        :func:`as_shape_images` for ``foreground`` and ``threshold``).
     names : sequence of str
         Centralities to compute (see :data:`centrality_vision.centrality.CENTRALITIES`).
     connectivity : {8, 4}
+    weights : bool, default=False
+        False counts hops (the thesis). True gives pixel edges their Euclidean lengths,
+        1 and sqrt 2, for the shortest-path centralities (betweenness, closeness,
+        harmonic, eccentricity), which makes them nearly invariant to rotation; degree
+        and eigenvector do not change.
     progress : bool
         Show a progress bar on stderr.
-    cache : CentralityCache, optional
-        Defaults to :data:`default_cache`.
+    cache : None, CentralityCache or path
+        Where results are kept: None is the process-wide in-memory
+        :data:`default_cache`; a directory path gives a cache on disk that processes
+        share (see :class:`CentralityCache`).
+    n_jobs : int, optional
+        Images computed at the same time, through :class:`joblib.Parallel` (so
+        ``joblib.parallel_backend("dask")`` sends them to a Dask cluster); the kernel
+        threads are divided among the jobs. None: one job (or the number set by an
+        enclosing ``joblib.parallel_config``). Results do not depend on it.
+    foreground, threshold :
+        How grey images become masks (see :func:`as_shape_images`).
 
     Returns
     -------
@@ -182,20 +445,76 @@ def shape_centralities(
     """
     from ..centrality import CENTRALITIES
 
-    masks = as_shape_images(images)
+    masks = as_shape_images(images, foreground=foreground, threshold=threshold)
     names = [check_choice(n, CENTRALITIES, name="centrality") for n in names]
     if connectivity not in (4, 8) or isinstance(connectivity, bool):
         raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
-    cache = default_cache if cache is None else cache
-    items = masks
-    if progress:
-        from tqdm.auto import tqdm
+    if not isinstance(weights, (bool, np.bool_)):
+        raise TypeError(f"`weights` must be True or False; got {weights!r}.")
+    weights = bool(weights)
+    cache = resolve_cache(cache)
+    jobs = _effective_jobs(n_jobs)
+    options = {"connectivity": connectivity, "weights": weights}
 
-        items = tqdm(masks, desc="centralities", unit="image", leave=False)
-    out = []
-    for mask in items:
+    records: list[dict | None] = [None] * len(masks)
+    missing = []
+    for i, mask in enumerate(masks):
         record = {}
         for name in names:
-            record[name], record["nodes"] = cache.get(mask, name, connectivity=connectivity)
-        out.append(record)
-    return out
+            found = cache.lookup(mask, name, **options)
+            if found is None:
+                missing.append(i)
+                break
+            record[name], record["nodes"] = found
+        else:
+            records[i] = record
+    if missing and jobs > 1 and len(missing) > 1:
+        from joblib import Parallel, delayed
+
+        chunks = [missing[k::jobs] for k in range(min(jobs, len(missing)))]
+        parts = Parallel(n_jobs=len(chunks))(
+            delayed(_worker)(
+                [masks[i] for i in chunk],
+                names,
+                connectivity,
+                weights,
+                cache,
+                _kernel_threads(len(chunks)),
+                os.getpid(),
+            )
+            for chunk in chunks
+        )
+        for chunk, part in zip(chunks, parts):
+            for i, record in zip(chunk, part):
+                for name in names:
+                    entry = cache.put(masks[i], name, record[name], **options)
+                records[i] = {name: entry[name] for name in names} | {"nodes": entry["nodes"]}
+        missing = []
+    bar = None
+    if progress and missing:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(missing), desc="centralities", unit="image", leave=False)
+    try:
+        with kernel_threads(_kernel_threads(1)):
+            # First pass: images no other process is computing; second: wait for the rest.
+            for wait in (False, True):
+                left = []
+                for i in missing:
+                    record = {}
+                    for name in names:
+                        found = cache.get(masks[i], name, wait=wait, **options)
+                        if found is None:
+                            break
+                        record[name], record["nodes"] = found
+                    else:
+                        records[i] = record
+                        if bar is not None:
+                            bar.update(1)
+                        continue
+                    left.append(i)
+                missing = left
+    finally:
+        if bar is not None:
+            bar.close()
+    return records

@@ -8,29 +8,80 @@ from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 
 from .._seeding import as_generator
 from .._validation import check_choice, check_float, check_int
-from ._cache import as_shape_images, shape_centralities
-from ._histogram import resolve_centralities
+from ..exceptions import InputError
+from ._histogram import ShapeInputMixin, resolve_centralities
 
 __all__ = ["CentralityComparisons", "CentralityComparisonForest", "centrality_map"]
 
 
-def centrality_map(mask: np.ndarray, values: np.ndarray, nodes: np.ndarray, *, reference: str = "centroid"):
+def _check_map_inputs(mask, values, nodes):
+    from .._validation import as_binary_image
+
+    mask = as_binary_image(mask, name="mask")
+    values = np.asarray(values)
+    nodes = np.asarray(nodes)
+    n = int(np.count_nonzero(mask))
+    if not np.issubdtype(values.dtype, np.number) or np.iscomplexobj(values):
+        raise TypeError(f"`values` must hold real numbers; got dtype {values.dtype}.")
+    if values.shape != (n,):
+        raise InputError(
+            f"`values` must hold one value per foreground pixel of `mask` ({n}); got shape {values.shape}."
+        )
+    if not np.all(np.isfinite(values)):
+        raise InputError("`values` must be finite; got NaN or inf.")
+    if not np.issubdtype(nodes.dtype, np.integer) or nodes.shape != (n,):
+        raise InputError(
+            f"`nodes` must be the {n} flat indices of the foreground pixels of `mask`; got shape {nodes.shape} "
+            f"and dtype {nodes.dtype}."
+        )
+    if not np.array_equal(np.sort(nodes), np.flatnonzero(mask)):
+        raise InputError("`nodes` must list each foreground pixel of `mask` once (flat row-major indices).")
+    return mask, values.astype(np.float64), nodes
+
+
+def centrality_map(mask, values, nodes, *, reference: str = "centroid"):
     """Dense centrality image of a shape, its reference point and its size.
 
     Every pixel takes the value of its nearest foreground pixel, so that a location that
     falls into a hole made by noise, or just off the outline, still reads the shape.
 
+    Parameters
+    ----------
+    mask : 2D binary array
+        The shape (see :func:`as_shape_images`).
+    values : ndarray of shape (n_foreground,)
+        One value per foreground pixel, aligned with ``nodes``.
+    nodes : ndarray of shape (n_foreground,)
+        Flat (row-major) pixel index of each value, each foreground pixel once (the
+        ``nodes`` of :func:`centrality_vision.graphs.pixel_graph`).
+    reference : {"centroid", "graph-centre"}, default="centroid"
+        The reference point: the centre of mass of the foreground, or the mean position
+        of the pixels of smallest value (the graph centre when ``values`` are
+        eccentricities).
+
     Returns
     -------
     dense : ndarray, same shape as ``mask``
     centre : ndarray of shape (2,)
-        (row, col) of the reference point: the centre of mass of the foreground, or the
-        mean position of the graph centre (the nodes of minimum eccentricity) when
-        ``reference="graph-centre"`` (pass eccentricities as ``values`` then).
+        (row, col) of the reference point.
     size : float
-        Root-mean-square distance of the foreground pixels from the centre of mass; it
-        is unchanged in expectation when pixels are removed at random.
+        Root-mean-square distance of the foreground pixels from the centre of mass (at
+        least 1); it is unchanged in expectation when pixels are removed at random.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> mask = np.zeros((3, 4), dtype=bool); mask[1, 1:4] = True
+    >>> dense, centre, size = centrality_map(mask, [1.0, 0.5, 2.0], [5, 6, 7], reference="graph-centre")
+    >>> dense
+    array([[1. , 1. , 0.5, 2. ],
+           [1. , 1. , 0.5, 2. ],
+           [1. , 1. , 0.5, 2. ]])
+    >>> centre.tolist(), round(size, 3)
+    ([1.0, 2.0], 1.0)
     """
+    check_choice(reference, ("centroid", "graph-centre"), name="reference")
+    mask, values, nodes = _check_map_inputs(mask, values, nodes)
     image = np.zeros(mask.shape)
     image.flat[nodes] = values
     _, (rows, cols) = ndimage.distance_transform_edt(~mask, return_indices=True)
@@ -38,10 +89,28 @@ def centrality_map(mask: np.ndarray, values: np.ndarray, nodes: np.ndarray, *, r
     coords = np.argwhere(mask).astype(float)
     centroid = coords.mean(axis=0)
     size = float(np.sqrt(np.mean(np.sum((coords - centroid) ** 2, axis=1))))
-    return dense, centroid, max(size, 1.0)
+    if reference == "graph-centre":
+        centre = np.stack(np.unravel_index(nodes[values == values.min()], mask.shape), axis=1).mean(axis=0)
+    else:
+        centre = centroid
+    return dense, centre, max(size, 1.0)
 
 
-class CentralityComparisons(TransformerMixin, BaseEstimator):
+def _random_state(estimator):
+    """``random_state``, or the deprecated ``seed`` when it was given (with a FutureWarning)."""
+    if estimator.seed is None:
+        return estimator.random_state
+    import warnings
+
+    warnings.warn(
+        f"`seed` of {type(estimator).__name__} is deprecated and will be removed; use `random_state`.",
+        FutureWarning,
+        stacklevel=3,
+    )
+    return estimator.seed
+
+
+class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
     """Random binary comparisons of centrality values at positions relative to the shape.
 
     Comparison ``k`` is a pair of offsets ``(a_k, b_k)`` drawn uniformly from
@@ -61,9 +130,14 @@ class CentralityComparisons(TransformerMixin, BaseEstimator):
         Largest offset, in units of the shape's RMS radius.
     reference : {"centroid", "graph-centre"}, default="centroid"
     connectivity : {8, 4}, default=8
-    seed : int, Generator or None, default=0
+    random_state : int, Generator or None, default=0
         Seed of the random comparisons.
     progress : bool, default=False
+    weights, foreground, threshold, cache, n_jobs :
+        As in :class:`CentralityHistogram` (``n_jobs`` also grows the trees in
+        parallel in the forest).
+    seed : deprecated
+        The former name of ``random_state``; giving it warns (FutureWarning).
 
     Attributes
     ----------
@@ -74,14 +148,36 @@ class CentralityComparisons(TransformerMixin, BaseEstimator):
     centralities_ : tuple of str
     """
 
-    def __init__(self, centrality="closeness", n_comparisons: int = 2000, extent: float = 2.0, reference: str = "centroid", connectivity: int = 8, seed=0, progress: bool = False):
+    def __init__(
+        self,
+        centrality="closeness",
+        n_comparisons: int = 2000,
+        extent: float = 2.0,
+        reference: str = "centroid",
+        connectivity: int = 8,
+        random_state=0,
+        progress: bool = False,
+        *,
+        weights: bool = False,
+        foreground: str = "auto",
+        threshold=None,
+        cache=None,
+        n_jobs=None,
+        seed=None,
+    ):
         self.centrality = centrality
         self.n_comparisons = n_comparisons
         self.extent = extent
         self.reference = reference
         self.connectivity = connectivity
-        self.seed = seed
+        self.random_state = random_state
         self.progress = progress
+        self.weights = weights
+        self.foreground = foreground
+        self.threshold = threshold
+        self.cache = cache
+        self.n_jobs = n_jobs
+        self.seed = seed
 
     def fit(self, X, y=None):
         """Draw the comparisons (the images are only checked)."""
@@ -89,8 +185,8 @@ class CentralityComparisons(TransformerMixin, BaseEstimator):
         n = check_int(self.n_comparisons, name="n_comparisons", low=1)
         extent = check_float(self.extent, name="extent", low=0.0, low_open=True)
         check_choice(self.reference, ("centroid", "graph-centre"), name="reference")
-        as_shape_images(X)
-        rng = as_generator(self.seed)
+        self._masks(X)
+        rng = as_generator(_random_state(self))
         self.centralities_ = names
         self.offsets_ = rng.uniform(-extent, extent, size=(n, 2, 2))
         self.which_ = rng.integers(0, len(names), size=n)
@@ -101,22 +197,17 @@ class CentralityComparisons(TransformerMixin, BaseEstimator):
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "offsets_")
-        masks = as_shape_images(X)
+        masks = self._masks(X)
         names = list(self.centralities_)
         if self.reference == "graph-centre" and "eccentricity" not in names:
             names.append("eccentricity")
-        records = shape_centralities(masks, names, connectivity=self.connectivity, progress=self.progress)
+        records = self._centralities(masks, names)
         out = np.empty((len(masks), self.offsets_.shape[0]))
         for i, (mask, record) in enumerate(zip(masks, records)):
             nodes = record["nodes"]
-            dense = []
-            for name in self.centralities_:
-                image, centre, size = centrality_map(mask, record[name], nodes)
-                dense.append(image)
-            if self.reference == "graph-centre":
-                ecc = record["eccentricity"]
-                centre = np.argwhere(mask)[ecc == ecc.min()].mean(axis=0)
-            stack = np.stack(dense)
+            stack = np.stack([centrality_map(mask, record[name], nodes)[0] for name in self.centralities_])
+            values = record["eccentricity"] if self.reference == "graph-centre" else record[self.centralities_[0]]
+            _, centre, size = centrality_map(mask, values, nodes, reference=self.reference)
             points = centre + size * self.offsets_  # (n, 2, 2)
             rows = np.clip(np.rint(points[..., 0]), 0, mask.shape[0] - 1).astype(np.int64)
             cols = np.clip(np.rint(points[..., 1]), 0, mask.shape[1] - 1).astype(np.int64)
@@ -132,7 +223,7 @@ class CentralityComparisons(TransformerMixin, BaseEstimator):
         return tags
 
 
-class CentralityComparisonForest(ClassifierMixin, BaseEstimator):
+class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator):
     """Shape classifier: a random forest over random binary comparisons of centralities.
 
     The proposal of thesis 4.3.3: features are random comparisons
@@ -151,9 +242,14 @@ class CentralityComparisonForest(ClassifierMixin, BaseEstimator):
     max_depth : int or None, default=None
     extent, reference, connectivity :
         As in :class:`CentralityComparisons`.
-    seed : int or None, default=0
+    random_state : int or None, default=0
         Seeds the comparisons and the trees.
     progress : bool, default=False
+    weights, foreground, threshold, cache, n_jobs :
+        As in :class:`CentralityHistogram` (``n_jobs`` also grows the trees in
+        parallel in the forest).
+    seed : deprecated
+        The former name of ``random_state``; giving it warns (FutureWarning).
 
     Attributes
     ----------
@@ -177,7 +273,26 @@ class CentralityComparisonForest(ClassifierMixin, BaseEstimator):
     [0, 1]
     """
 
-    def __init__(self, centrality="closeness", n_estimators: int = 300, n_comparisons: int = 2000, max_features="sqrt", max_depth=None, extent: float = 2.0, reference: str = "centroid", connectivity: int = 8, seed=0, progress: bool = False):
+    def __init__(
+        self,
+        centrality="closeness",
+        n_estimators: int = 300,
+        n_comparisons: int = 2000,
+        max_features="sqrt",
+        max_depth=None,
+        extent: float = 2.0,
+        reference: str = "centroid",
+        connectivity: int = 8,
+        random_state=0,
+        progress: bool = False,
+        *,
+        weights: bool = False,
+        foreground: str = "auto",
+        threshold=None,
+        cache=None,
+        n_jobs=None,
+        seed=None,
+    ):
         self.centrality = centrality
         self.n_estimators = n_estimators
         self.n_comparisons = n_comparisons
@@ -186,11 +301,17 @@ class CentralityComparisonForest(ClassifierMixin, BaseEstimator):
         self.extent = extent
         self.reference = reference
         self.connectivity = connectivity
-        self.seed = seed
+        self.random_state = random_state
         self.progress = progress
+        self.weights = weights
+        self.foreground = foreground
+        self.threshold = threshold
+        self.cache = cache
+        self.n_jobs = n_jobs
+        self.seed = seed
 
     def _seeds(self) -> tuple[int, int]:
-        rng = as_generator(self.seed)
+        rng = as_generator(_random_state(self))
         a, b = rng.integers(0, 2**31 - 1, size=2)
         return int(a), int(b)
 
@@ -204,7 +325,7 @@ class CentralityComparisonForest(ClassifierMixin, BaseEstimator):
             raise ValueError("CentralityComparisonForest requires y to be passed, but the target y is None.")
         y = check_array(y, ensure_2d=False, dtype=None, input_name="y")  # NaN/inf: sklearn's message
         check_classification_targets(y)
-        masks = as_shape_images(X)
+        masks = self._masks(X)
         if y.ndim != 1 or y.shape[0] != len(masks):
             raise ValueError(f"`y` must have one label per image ({len(masks)}); got shape {y.shape}.")
         check_int(self.n_estimators, name="n_estimators", low=1)
@@ -215,8 +336,11 @@ class CentralityComparisonForest(ClassifierMixin, BaseEstimator):
             extent=self.extent,
             reference=self.reference,
             connectivity=self.connectivity,
-            seed=comparison_seed,
+            random_state=comparison_seed,
             progress=self.progress,
+            weights=self.weights,
+            cache=self.cache,
+            n_jobs=self.n_jobs,
         ).fit(masks)
         self.forest_ = RandomForestClassifier(
             n_estimators=self.n_estimators,
@@ -224,6 +348,7 @@ class CentralityComparisonForest(ClassifierMixin, BaseEstimator):
             max_features=self.max_features,
             max_depth=self.max_depth,
             random_state=forest_seed,
+            n_jobs=self.n_jobs,
         ).fit(self.comparisons_.transform(masks), y)
         self.classes_ = self.forest_.classes_
         return self
@@ -233,7 +358,7 @@ class CentralityComparisonForest(ClassifierMixin, BaseEstimator):
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "forest_")
-        return self.forest_.predict_proba(self.comparisons_.transform(X))
+        return self.forest_.predict_proba(self.comparisons_.transform(self._masks(X)))
 
     def predict(self, X) -> np.ndarray:
         """Most probable class of each shape."""

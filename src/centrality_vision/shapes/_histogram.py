@@ -9,7 +9,30 @@ from .._validation import check_choice, check_int
 from ..centrality import CENTRALITIES
 from ._cache import SHAPE_CENTRALITIES, as_shape_images, shape_centralities
 
-__all__ = ["CentralityHistogram", "resolve_centralities"]
+__all__ = ["CentralityHistogram", "ShapeInputMixin", "resolve_centralities"]
+
+
+class ShapeInputMixin:
+    """How the shape estimators read images and get their centralities.
+
+    Uses the parameters ``connectivity``, ``weights``, ``foreground``, ``threshold``,
+    ``cache``, ``n_jobs`` and ``progress`` of the estimator (see
+    :func:`~centrality_vision.shapes.shape_centralities`).
+    """
+
+    def _masks(self, X):
+        return as_shape_images(X, foreground=self.foreground, threshold=self.threshold)
+
+    def _centralities(self, masks, names):
+        return shape_centralities(
+            masks,
+            names,
+            connectivity=self.connectivity,
+            weights=self.weights,
+            progress=self.progress,
+            cache=self.cache,
+            n_jobs=self.n_jobs,
+        )
 
 
 def resolve_centralities(centrality, *, name: str = "centrality") -> tuple[str, ...]:
@@ -37,7 +60,7 @@ def _histogram(values: np.ndarray, bins: int, scaling: str) -> np.ndarray:
     return counts / values.size
 
 
-class CentralityHistogram(TransformerMixin, BaseEstimator):
+class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
     """Normalised histograms of pixel-graph centralities, one row per shape.
 
     Each shape's 8-neighbour pixel graph gets the chosen centrality (thesis Algorithm 4.1);
@@ -46,9 +69,8 @@ class CentralityHistogram(TransformerMixin, BaseEstimator):
     not depend on the shape's size. ``centrality="all"`` concatenates betweenness,
     closeness, eigenvector and degree (4 x ``bins`` features).
 
-    Centralities are computed once per image and kept in
-    :data:`centrality_vision.shapes.default_cache`, so the same images under another
-    centrality, bin count or estimator are not recomputed.
+    Centralities are computed once per image and kept in ``cache``, so the same images
+    under another centrality, bin count or estimator are not recomputed.
 
     Parameters
     ----------
@@ -67,6 +89,25 @@ class CentralityHistogram(TransformerMixin, BaseEstimator):
         whose values are all equal falls in the first bin.
     progress : bool, default=False
         Show a progress bar on stderr while centralities are computed.
+    weights : bool, default=False
+        True gives pixel edges their Euclidean lengths (1 and sqrt 2) for the
+        shortest-path centralities (betweenness, closeness, eccentricity, harmonic), so
+        that a rotated shape gets nearly the same features; False counts hops (the
+        thesis). Degree and eigenvector do not change.
+    foreground : {"auto", "dark", "light"}, default="auto"
+        Which side of a grey image is the shape; ``"auto"``: the side that touches
+        less of the image border. Boolean and 0/1 images are masks (True/1 = shape).
+    threshold : float, optional
+        Grey level splitting grey images; default half their range, ``(min + max) / 2``.
+    cache : None, CentralityCache or path, default=None
+        Where centralities are kept: None is the process-wide in-memory
+        :data:`~centrality_vision.shapes.default_cache`; a directory gives an on-disk
+        cache, keyed by the pixels, that worker processes share (so parallel
+        cross-validation computes every image once).
+    n_jobs : int, optional
+        Images computed in parallel through joblib (``joblib.parallel_backend("dask")``
+        runs them on a Dask cluster); the kernel threads are divided among the jobs.
+        Results do not depend on it.
 
     Attributes
     ----------
@@ -83,19 +124,39 @@ class CentralityHistogram(TransformerMixin, BaseEstimator):
     ((2, 40), True)
     """
 
-    def __init__(self, centrality="closeness", bins: int = 40, connectivity: int = 8, scaling: str = "max", progress: bool = False):
+    def __init__(
+        self,
+        centrality="closeness",
+        bins: int = 40,
+        connectivity: int = 8,
+        scaling: str = "max",
+        progress: bool = False,
+        *,
+        weights: bool = False,
+        foreground: str = "auto",
+        threshold=None,
+        cache=None,
+        n_jobs=None,
+    ):
         self.centrality = centrality
         self.bins = bins
         self.connectivity = connectivity
         self.scaling = scaling
         self.progress = progress
+        self.weights = weights
+        self.foreground = foreground
+        self.threshold = threshold
+        self.cache = cache
+        self.n_jobs = n_jobs
 
     def _validate_params(self) -> tuple[str, ...]:
         names = resolve_centralities(self.centrality)
         check_int(self.bins, name="bins", low=1)
         check_choice(self.scaling, ("minmax", "max"), name="scaling")
         if self.connectivity not in (4, 8) or isinstance(self.connectivity, bool):
-            raise ValueError(f"The 'connectivity' parameter of CentralityHistogram must be 4 or 8. Got {self.connectivity!r} instead.")
+            raise ValueError(
+                f"The 'connectivity' parameter of CentralityHistogram must be 4 or 8. Got {self.connectivity!r} instead."
+            )
         return names
 
     def fit(self, X, y=None):
@@ -107,7 +168,7 @@ class CentralityHistogram(TransformerMixin, BaseEstimator):
         y : ignored
         """
         names = self._validate_params()
-        as_shape_images(X)
+        self._masks(X)
         self.centralities_ = names
         self.n_features_out_ = len(names) * self.bins
         return self
@@ -117,7 +178,7 @@ class CentralityHistogram(TransformerMixin, BaseEstimator):
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "centralities_")
-        records = shape_centralities(X, self.centralities_, connectivity=self.connectivity, progress=self.progress)
+        records = self._centralities(self._masks(X), self.centralities_)
         out = np.empty((len(records), self.n_features_out_))
         for i, record in enumerate(records):
             out[i] = np.concatenate([_histogram(record[name], self.bins, self.scaling) for name in self.centralities_])
