@@ -6,7 +6,7 @@ from importlib import resources
 import numpy as np
 import pytest
 
-from centrality_vision.datasets import Kimia99, PointSetPair, load_face, load_fish, load_kimia99
+from centrality_vision.datasets import MPEG7, Kimia99, PointSetPair, load_face, load_fish, load_kimia99, load_mpeg7
 from centrality_vision.exceptions import InputError
 
 CLASSES = ["airplane", "dude", "fish", "greeble", "hand", "quadruped", "rabbit", "ray", "tool"]
@@ -17,10 +17,18 @@ def kimia():
     return load_kimia99()
 
 
+def _face():
+    """The CPD face from the shared data folder; skip where it is not installed (it is GPL-2, not bundled)."""
+    try:
+        return load_face()
+    except FileNotFoundError:
+        pytest.skip("the CPD face is not bundled; set $CENTRALITY_VISION_DATA to a folder with cpd/face_*.txt")
+
+
 # --------------------------------------------------------------------------- point sets
 
 
-@pytest.mark.parametrize(("loader", "shape"), [(load_fish, (91, 2)), (load_face, (392, 3))])
+@pytest.mark.parametrize(("loader", "shape"), [(load_fish, (91, 2)), (_face, (392, 3))])
 def test_point_set_pair_shapes_and_dtypes(loader, shape):
     data = loader()
     assert isinstance(data, PointSetPair)
@@ -32,7 +40,7 @@ def test_point_set_pair_shapes_and_dtypes(loader, shape):
         assert np.all(np.isfinite(points))
 
 
-@pytest.mark.parametrize("loader", [load_fish, load_face])
+@pytest.mark.parametrize("loader", [load_fish, _face])
 def test_moving_differs_from_fixed(loader):
     moving, fixed = loader()
     assert not np.allclose(moving, fixed)
@@ -47,7 +55,7 @@ def test_fish_rows_match_the_source_and_target_files():
     np.testing.assert_array_equal(fixed[0], first_target)
 
 
-@pytest.mark.parametrize("loader", [load_fish, load_face])
+@pytest.mark.parametrize("loader", [load_fish, _face])
 def test_point_loaders_return_independent_arrays(loader):
     first = loader()
     expected = first.moving.copy(), first.fixed.copy()
@@ -146,3 +154,72 @@ def test_kimia99_repr_is_short(kimia):
 def test_kimia99_rejects_misaligned_fields():
     with pytest.raises(ValueError, match=r"same length; got 1, 2 and 1"):
         Kimia99(images=[np.ones((2, 2), bool)], labels=np.array(["a", "b"]), names=np.array(["x"]))
+
+
+# --------------------------------------------------------------------------- data kept out of the wheel
+
+
+def test_no_gpl_face_inside_the_package():
+    folder = resources.files("centrality_vision.datasets").joinpath("data", "cpd")
+    assert sorted(entry.name for entry in folder.iterdir() if entry.name.endswith(".txt")) == [
+        "fish_source.txt",
+        "fish_target.txt",
+    ]
+
+
+def test_load_face_reads_a_given_folder(tmp_path):
+    rng = np.random.default_rng(0)
+    moving, fixed = rng.normal(size=(5, 3)), rng.normal(size=(5, 3))
+    (tmp_path / "cpd").mkdir()
+    np.savetxt(tmp_path / "cpd" / "face_source.txt", moving)
+    np.savetxt(tmp_path / "cpd" / "face_target.txt", fixed)
+    for folder in (tmp_path, tmp_path / "cpd", str(tmp_path)):
+        data = load_face(folder)
+        np.testing.assert_allclose(data.moving, moving)
+        np.testing.assert_allclose(data.fixed, fixed)
+
+
+def test_load_face_missing_says_where_it_looked(tmp_path, monkeypatch):
+    monkeypatch.setenv("CENTRALITY_VISION_DATA", str(tmp_path / "nothing"))
+    with pytest.raises(FileNotFoundError, match="not bundled.*GPL-2.*Looked in"):
+        load_face(tmp_path)
+    with pytest.raises(TypeError, match="`path` must be a folder path"):
+        load_face(3)
+
+
+def test_load_face_rejects_wrong_columns(tmp_path):
+    np.savetxt(tmp_path / "face_source.txt", np.zeros((4, 2)))
+    np.savetxt(tmp_path / "face_target.txt", np.zeros((4, 2)))
+    with pytest.raises(InputError, match="3 coordinates"):
+        load_face(tmp_path)
+
+
+def _write_gif(path, mask):
+    from PIL import Image
+
+    Image.fromarray(np.where(mask, 255, 0).astype(np.uint8)).convert("RGB").save(path)
+
+
+def test_load_mpeg7_reads_gifs_by_class(tmp_path, monkeypatch):
+    square = np.zeros((12, 14), bool)
+    square[3:9, 4:10] = True
+    bar = np.zeros((10, 10), bool)
+    bar[4:6, 1:9] = True
+    _write_gif(tmp_path / "apple-1.gif", square)
+    _write_gif(tmp_path / "apple-02.gif", square)
+    _write_gif(tmp_path / "sea_snake-1.gif", bar)
+    data = load_mpeg7(tmp_path)
+    assert isinstance(data, MPEG7) and len(data) == 3
+    assert data.names.tolist() == ["apple-02", "apple-1", "sea_snake-1"]
+    assert data.labels.tolist() == ["apple", "apple", "sea_snake"]
+    np.testing.assert_array_equal(data.image("sea_snake-1"), bar)  # white on black: white is the shape
+    assert load_mpeg7(tmp_path, classes=["sea_snake"]).names.tolist() == ["sea_snake-1"]
+    monkeypatch.setenv("CENTRALITY_VISION_DATA", str(tmp_path))
+    assert len(load_mpeg7()) == 3  # $CENTRALITY_VISION_DATA itself holds the GIFs
+    with pytest.raises(InputError, match="unknown"):
+        load_mpeg7(tmp_path, classes=["pear"])
+    _write_gif(tmp_path / "noclass.gif", bar)
+    with pytest.raises(InputError, match="<class>-<number>"):
+        load_mpeg7(tmp_path)
+    with pytest.raises(FileNotFoundError, match="MPEG-7 is not bundled"):
+        load_mpeg7(tmp_path / "absent")

@@ -3,10 +3,17 @@
 - :func:`load_kimia99`: Kimia's 99 shapes, binary silhouettes in 9 classes of 11, from
   the LEMS vision group at Brown University (Sebastian, Klein and Kimia, IEEE PAMI 26(5),
   2004); used for the thesis' shape experiments (chapters 4 and 5).
-- :func:`load_fish` and :func:`load_face`: the 2D fish and 3D face point-set pairs of
-  Coherent Point Drift (Myronenko and Song, IEEE PAMI 32(12), 2010). The fish comes
-  from pycpd (MIT licence); the face from Myronenko's CPD MATLAB package, distributed
-  under the GNU GPL v2.
+- :func:`load_fish`: the 2D fish point-set pair of Coherent Point Drift (Myronenko and
+  Song, IEEE PAMI 32(12), 2010), from pycpd (MIT licence).
+
+Not bundled (their terms do not allow it in a BSD-3 wheel, or none are stated); the
+loaders read them from a folder you give, ``$CENTRALITY_VISION_DATA``, or the
+``shared/data`` folder beside a source checkout:
+
+- :func:`load_face`: the 3D face pair of CPD, from Myronenko's CPD MATLAB package
+  (GNU GPL v2).
+- :func:`load_mpeg7`: MPEG-7 CE-Shape-1 part B, 1,400 silhouettes in 70 classes, the
+  standard shape-retrieval benchmark.
 
 :func:`contour_points` samples point sets from the outlines of binary shapes.
 
@@ -15,6 +22,16 @@ provenance and licence notice of each.
 """
 
 from ._contours import contour_points
-from ._loaders import Kimia99, PointSetPair, load_face, load_fish, load_kimia99
+from ._loaders import DATA_ENV, MPEG7, Kimia99, PointSetPair, load_face, load_fish, load_kimia99, load_mpeg7
 
-__all__ = ["Kimia99", "PointSetPair", "contour_points", "load_face", "load_fish", "load_kimia99"]
+__all__ = [
+    "DATA_ENV",
+    "MPEG7",
+    "Kimia99",
+    "PointSetPair",
+    "contour_points",
+    "load_face",
+    "load_fish",
+    "load_kimia99",
+    "load_mpeg7",
+]

@@ -9,16 +9,18 @@ from __future__ import annotations
 
 import csv
 import io
+import os
 from dataclasses import dataclass
 from functools import lru_cache
 from importlib import resources
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
 from ..exceptions import InputError
 
-__all__ = ["PointSetPair", "Kimia99", "load_fish", "load_face", "load_kimia99"]
+__all__ = ["DATA_ENV", "PointSetPair", "Kimia99", "MPEG7", "load_fish", "load_face", "load_kimia99", "load_mpeg7"]
 
 _PACKAGE = "centrality_vision.datasets"
 _KIMIA_THRESHOLD = 128  # foreground (shape) = pixel value < 128 in the dark-on-white PNGs
@@ -84,17 +86,64 @@ def load_fish() -> PointSetPair:
     return PointSetPair(moving=_load_points("fish_source.txt", 2), fixed=_load_points("fish_target.txt", 2))
 
 
-def load_face() -> PointSetPair:
+#: Environment variable naming a folder laid out like the project's shared data
+#: (``cpd/face_*.txt``, ``mpeg7/*.gif``): where :func:`load_face` and :func:`load_mpeg7`
+#: look when given no path.
+DATA_ENV = "CENTRALITY_VISION_DATA"
+
+
+def _data_root(path, what: str, sub: str, needed: str, hint: str) -> Path:
+    """The folder holding a file matching ``needed`` (a glob): ``path``, ``path/sub``, ``$DATA_ENV/sub``, or the
+    ``shared/data/sub`` folder beside a source checkout; an error naming them otherwise."""
+    tried = []
+    if path is not None:
+        if not isinstance(path, (str, os.PathLike)):
+            raise TypeError(f"`path` must be a folder path (str or os.PathLike) or None; got {type(path).__name__}.")
+        candidates = [Path(path), Path(path) / sub]
+    else:
+        candidates = []
+        env = os.environ.get(DATA_ENV)
+        if env:
+            candidates += [Path(env) / sub, Path(env)]
+        checkout = Path(__file__).resolve().parents[3]  # <checkout>/src/centrality_vision/datasets
+        if (checkout / "pyproject.toml").is_file():
+            candidates.append(checkout.parent / "shared" / "data" / sub)
+    for folder in candidates:
+        tried.append(str(folder))
+        if folder.is_dir() and any(entry.is_file() for entry in folder.glob(needed)):
+            return folder
+    where = ", ".join(tried) if tried else f"nowhere (no `path` given and ${DATA_ENV} is not set)"
+    raise FileNotFoundError(
+        f"{what} is not bundled with centrality-vision ({hint}). Pass `path=` a folder holding {needed}, "
+        f"or set ${DATA_ENV} to a folder with a {sub}/ subfolder. Looked in: {where}."
+    )
+
+
+def load_face(path=None) -> PointSetPair:
     """The 3D face of the Coherent Point Drift package: two sets of 392 points.
 
     ``moving`` (CPD's Y) and ``fixed`` (CPD's X) are two versions of a face surface
     (thesis fig. 5.5). The data come from Myronenko's CPD MATLAB package, distributed
-    under the GNU GPL v2; see ``data/README.md``. Each call reads the data afresh.
+    under the GNU GPL v2, so they are not shipped with this BSD-3 package: the loader
+    reads ``face_source.txt`` (Y) and ``face_target.txt`` (X), one point per line,
+    from a folder you give. Each call reads the files afresh.
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        A folder holding the two files (or a ``cpd/`` subfolder holding them). By
+        default ``$CENTRALITY_VISION_DATA/cpd``, then, in a source checkout, the
+        ``shared/data/cpd`` folder beside it.
 
     Returns
     -------
     data : PointSetPair
         ``moving`` and ``fixed``, float64 arrays of shape (392, 3).
+
+    Raises
+    ------
+    FileNotFoundError
+        When no folder holds the files; the message lists where it looked.
 
     References
     ----------
@@ -103,11 +152,25 @@ def load_face() -> PointSetPair:
 
     Examples
     --------
-    >>> data = load_face()
-    >>> data.moving.shape, data.fixed.shape
-    ((392, 3), (392, 3))
+    >>> try:
+    ...     data = load_face()
+    ... except FileNotFoundError:  # the data is not installed with the package
+    ...     data = None
+    >>> data is None or (data.moving.shape, data.fixed.shape) == ((392, 3), (392, 3))
+    True
     """
-    return PointSetPair(moving=_load_points("face_source.txt", 3), fixed=_load_points("face_target.txt", 3))
+    folder = _data_root(
+        path, "The CPD face", "cpd", "face_source.txt", "it is GPL-2; copy face_*.txt of the CPD package to a folder"
+    )
+    pair = []
+    for name in ("face_source.txt", "face_target.txt"):
+        points = np.loadtxt(folder / name, dtype=np.float64, ndmin=2)
+        if points.ndim != 2 or points.shape[1] != 3:
+            raise InputError(
+                f"{folder / name}: must hold 3 coordinates per line; got an array of shape {points.shape}."
+            )
+        pair.append(points)
+    return PointSetPair(moving=pair[0], fixed=pair[1])
 
 
 @dataclass(frozen=True, eq=False, repr=False)
@@ -175,9 +238,7 @@ class Kimia99:
         hits = np.flatnonzero(self.names == name) if isinstance(name, str) else []
         if len(hits) == 0:
             shown = ", ".join(repr(str(s)) for s in self.names[:5])
-            raise InputError(
-                f"`name` must be one of the {len(self)} image names (e.g. {shown}, ...); got {name!r}."
-            )
+            raise InputError(f"`name` must be one of the {len(self)} image names (e.g. {shown}, ...); got {name!r}.")
         return self.images[int(hits[0])]
 
 
@@ -239,4 +300,99 @@ def load_kimia99() -> Kimia99:
         images=[mask.copy() for mask in masks],
         labels=np.array(labels, dtype=str),
         names=np.array(names, dtype=str),
+    )
+
+
+class MPEG7(Kimia99):
+    """MPEG-7 CE-Shape-1 part B: 1,400 silhouettes in 70 classes of 20.
+
+    Returned by :func:`load_mpeg7`; the same fields as :class:`Kimia99` (``images``,
+    ``labels``, ``names``, ``image(name)``), sorted by file name. Labels are the file
+    names' class part (``'apple'``, ``'Bone'``, ...); names are file stems
+    (``'apple-1'``).
+    """
+
+    def __repr__(self) -> str:
+        return f"MPEG7(n_images={len(self)}, n_classes={np.unique(self.labels).size})"
+
+
+def _read_gif_mask(path: Path) -> np.ndarray:
+    from skimage.io import imread
+
+    from .._validation import as_binary_image
+
+    pixels = np.asarray(imread(path))
+    while pixels.ndim > 2 and pixels.shape[0] == 1:  # a one-frame GIF: (1, rows, cols[, channels])
+        pixels = pixels[0]
+    if pixels.ndim == 3:
+        pixels = pixels[..., :3].mean(axis=2)
+    if pixels.ndim != 2:
+        raise InputError(f"{path}: must be a 2D grey or colour image; got an array of shape {pixels.shape}.")
+    return as_binary_image(pixels, name=str(path), foreground="light")
+
+
+def load_mpeg7(path=None, *, classes=None) -> MPEG7:
+    """MPEG-7 CE-Shape-1 part B, read from a folder of ``<class>-<i>.gif`` files.
+
+    The standard shape-retrieval set (Latecki, Lakaemper and Eckhardt, CVPR 2000):
+    1,400 binary silhouettes, white on black, 70 classes of 20. It is not shipped with
+    the package (no licence text comes with it); give the folder. A pixel is shape
+    when it is lighter than half the image's range.
+
+    Parameters
+    ----------
+    path : str or os.PathLike, optional
+        The folder holding the GIFs (or an ``mpeg7/`` subfolder holding them). By
+        default ``$CENTRALITY_VISION_DATA/mpeg7``, then, in a source checkout, the
+        ``shared/data/mpeg7`` folder beside it.
+    classes : sequence of str, optional
+        Read only these classes (all by default).
+
+    Returns
+    -------
+    data : MPEG7
+        ``images`` (2D bool arrays), ``labels`` and ``names`` (str arrays), sorted by
+        file name.
+
+    Raises
+    ------
+    FileNotFoundError
+        When no folder holds the GIFs; the message lists where it looked.
+    InputError
+        A file name without ``-<number>``, or an unknown class in ``classes``.
+
+    References
+    ----------
+    .. [1] L. J. Latecki, R. Lakaemper and U. Eckhardt, "Shape descriptors for non-rigid
+       shapes with a single closed contour", CVPR 2000.
+
+    Examples
+    --------
+    >>> try:
+    ...     data = load_mpeg7(classes=["apple"])
+    ... except FileNotFoundError:  # the data is not installed with the package
+    ...     data = None
+    >>> data is None or (len(data), set(data.labels.tolist())) == (20, {"apple"})
+    True
+    """
+    folder = _data_root(path, "MPEG-7", "mpeg7", "*.gif", "download CE-Shape-1 part B")
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() == ".gif")
+    labels = []
+    for file in files:
+        label, sep, number = file.stem.rpartition("-")
+        if not sep or not number.isdigit():
+            raise InputError(f"{file}: MPEG-7 file names must look like <class>-<number>.gif.")
+        labels.append(label)
+    if classes is not None:
+        if isinstance(classes, str):
+            classes = [classes]
+        unknown = sorted(set(classes) - set(labels))
+        if unknown:
+            raise InputError(f"`classes` must be MPEG-7 classes found in {folder}; got unknown {unknown}.")
+        keep = [i for i, label in enumerate(labels) if label in set(classes)]
+        files, labels = [files[i] for i in keep], [labels[i] for i in keep]
+    return MPEG7(
+        images=[_read_gif_mask(file) for file in files],
+        labels=np.array(labels, dtype=str),
+        names=np.array([file.stem for file in files], dtype=str),
     )
