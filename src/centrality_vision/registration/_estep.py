@@ -16,6 +16,8 @@ References
 from __future__ import annotations
 
 import math
+import threading
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -23,18 +25,21 @@ import numpy as np
 from .._parallel import get_num_threads, run_chunks
 from . import _kernels as K
 
-__all__ = ["Posteriors", "CentralityPrior", "E_STEP_METHODS", "_e_step", "dense_posterior"]
+__all__ = ["Posteriors", "CentralityPrior", "E_STEP_METHODS", "EStepPlanner", "_e_step", "dense_posterior"]
 
 E_STEP_METHODS = ("auto", "dense", "truncated", "fgt")
 
-# Above this many pairs "auto" considers the truncated path.
+# The FGT path recomputes its too-small rows exactly: densely up to this many pairs.
 _DENSE_PAIRS = 4_000_000
 # Grid cells per truncation radius r: a row visits the cells overlapping its box of side 2r,
 # about (2r + 2 cell)^2, of which the disc pi r^2 is 35% with cells of side r and 55% with r/4
 # (measured: 1.7x faster on 100,000 points).
 _CELLS_PER_REACH = 4
-# Elements per dense block: 128k doubles = 1 MiB, which stays in a core's L2 cache.
+# Truncated path: values buffered per call of its scores kernel (1 MiB, in a core's L2 cache).
 _BLOCK = 1 << 17
+# Chunks of fixed points whose partial sums are added in order (see _reduce_rows): enough
+# to balance 16 threads, few enough that the partials cost nothing to add.
+_CHUNKS = 16
 
 
 @dataclass(frozen=True)
@@ -111,6 +116,40 @@ def _prior_arrays(prior: CentralityPrior | None):
     return prior.log_weight, prior.v_moving, prior.v_fixed, float(prior.scale), float(prior.inv2phi2)
 
 
+def _reduce_rows(work, n_rows, n_moving, n_dims):
+    """Run ``work(lo, hi, p1, pxt)`` over chunks of rows on the thread pool and return the
+    summed ``p1`` (M,) and ``pxt`` (D, M).
+
+    The chunks depend only on ``n_rows`` (:data:`_CHUNKS` of them), each fills its own zeroed
+    partial sums, and the partials are added in chunk order as soon as their predecessors are
+    in: the same additions in the same order whatever the number of threads, so results are
+    bit-identical for any thread count; only a few partials are alive at a time.
+    """
+    n_chunks = min(n_rows, _CHUNKS)
+    edges = [i * n_rows // n_chunks for i in range(n_chunks + 1)]
+    total_p1 = np.zeros(n_moving)
+    total_pxt = np.zeros((n_dims, n_moving))
+    done = {}
+    state = {"next": 0}
+    lock = threading.Lock()
+
+    def task(lo, hi):
+        for c in range(lo, hi):
+            part_p1 = np.zeros(n_moving)
+            part_pxt = np.zeros((n_dims, n_moving))
+            work(edges[c], edges[c + 1], part_p1, part_pxt)
+            with lock:
+                done[c] = (part_p1, part_pxt)
+                while state["next"] in done:
+                    a, b = done.pop(state["next"])
+                    np.add(total_p1, a, out=total_p1)
+                    np.add(total_pxt, b, out=total_pxt)
+                    state["next"] += 1
+
+    run_chunks(task, n_chunks)
+    return total_p1, total_pxt
+
+
 def _dense(moving_t, fixed, inv2s2, log_c, prior):
     n_moving, n_dims = moving_t.shape
     n_fixed = fixed.shape[0]
@@ -119,24 +158,12 @@ def _dense(moving_t, fixed, inv2s2, log_c, prior):
     pt1 = np.empty(n_fixed)
     log_den = np.empty(n_fixed)
     best = np.empty(n_fixed, dtype=np.int64)
-    rows = max(1, _BLOCK // max(n_moving, 1))
 
-    def task(lo, hi):
-        p1 = np.zeros(n_moving)
-        pxt = np.zeros((n_dims, n_moving))
-        block = np.empty((rows, n_moving))
-        ref = np.empty(rows)
-        for a in range(lo, hi, rows):
-            b = min(a + rows, hi)
-            out = block[: b - a]
-            K.dense_scores(fixed, yt, a, b, inv2s2, log_c, lw, vy, vx, scale, inv2phi2, out, ref, best)
-            np.exp(out, out=out)
-            K.dense_accumulate(out, fixed, a, b, ref, log_c, p1, pxt, pt1, log_den)
-        return p1, pxt
+    def work(lo, hi, p1, pxt):
+        row = np.empty(n_moving)
+        K.dense_rows(fixed, yt, lo, hi, inv2s2, log_c, lw, vy, vx, scale, inv2phi2, row, p1, pxt, pt1, log_den, best)
 
-    parts = run_chunks(task, n_fixed)
-    p1 = sum(part[2][0] for part in parts)
-    pxt = sum(part[2][1] for part in parts)
+    p1, pxt = _reduce_rows(work, n_fixed, n_moving, n_dims)
     return p1, pxt.T.copy(), pt1, log_den, best
 
 
@@ -191,9 +218,7 @@ def _truncated(moving_t, fixed, sigma2, inv2s2, log_c, prior, tau, grid=None, ne
     best = np.empty(n_fixed, dtype=np.int64)
     capacity = max(n_moving, _BLOCK)
 
-    def task(lo, hi):
-        p1 = np.zeros(n_moving)
-        pxt = np.zeros((n_dims, n_moving))
+    def work(lo, hi, p1, pxt):
         index = np.empty(capacity, dtype=np.int64)
         value = np.empty(capacity)
         row_ptr = np.empty(capacity + 1, dtype=np.int64)
@@ -206,16 +231,10 @@ def _truncated(moving_t, fixed, sigma2, inv2s2, log_c, prior, tau, grid=None, ne
             )
             if b <= a:  # pragma: no cover - capacity >= M makes this impossible
                 raise RuntimeError("truncated E-step: a row did not fit its buffer")
-            used = row_ptr[b - a]
-            e = value[:used]
-            np.exp(e, out=e)
-            K.sparse_accumulate(index, e, row_ptr, fixed, a, b, ref, log_c, p1, pxt, pt1, log_den)
+            K.sparse_accumulate(index, value, row_ptr, fixed, a, b, ref, log_c, p1, pxt, pt1, log_den)
             a = b
-        return p1, pxt
 
-    parts = run_chunks(task, n_fixed)
-    p1_sorted = sum(part[2][0] for part in parts)
-    pxt_sorted = sum(part[2][1] for part in parts)
+    p1_sorted, pxt_sorted = _reduce_rows(work, n_fixed, n_moving, n_dims)
     p1 = np.empty(n_moving)
     p1[grid.order] = p1_sorted
     px = np.empty((n_moving, n_dims))
@@ -338,9 +357,12 @@ def _fgt(moving_t, fixed, sigma2, log_c, eps, nearest=None):
 # The FGT's expansion coefficients may not take more memory than this.
 _FGT_MAX_BYTES = 2**32
 
-# Measured costs on 2 cores (nanoseconds): a dense pair, a pair the truncated path visits,
-# one FGT term for one right-hand side. They only rank the paths; any is correct.
-_COST_DENSE, _COST_TRUNCATED, _COST_FGT = 2.0, 4.5, 1.0
+# Costs per unit of work (nanoseconds, 2 cores): a dense pair, a pair the truncated path
+# visits, one FGT term for one right-hand side. They only order the paths before a planner
+# has timed them (and choose when there is no planner); every path is correct.
+_COST_DENSE, _COST_TRUNCATED, _COST_FGT = 0.8, 4.5, 1.0
+# Below this many pairs the dense path takes microseconds: nothing else is considered.
+_PLAN_PAIRS = 1 << 16
 
 
 def _fgt_cost(moving_t, fixed, sigma2, eps):
@@ -371,12 +393,10 @@ def _fgt_cost(moving_t, fixed, sigma2, eps):
     return _COST_FGT * (transform_cost(moving_t, fixed, 1) + transform_cost(fixed, moving_t, 1 + n_dims))
 
 
-def _choose(moving_t, fixed, sigma2, prior, tau, eps):
-    """The cheapest path by a cost model (the truncated cost from 256 sampled rows), and what
-    the chosen path can reuse: the nearest moving points and, for the truncated path, the grid."""
+def _model_costs(moving_t, fixed, sigma2, prior, tau, eps):
+    """Estimated cost (ns) of each candidate path (the truncated one from 256 sampled rows),
+    and what the paths can reuse: the nearest moving points and the truncated path's grid."""
     n_moving, n_fixed = moving_t.shape[0], fixed.shape[0]
-    if n_moving * n_fixed <= _DENSE_PAIRS:
-        return "dense", {}
     costs = {"dense": _COST_DENSE * n_moving * n_fixed}
     nearest = _nearest(moving_t, fixed)
     d2_min = _reach_d2(nearest[0])
@@ -384,43 +404,141 @@ def _choose(moving_t, fixed, sigma2, prior, tau, eps):
     grid = _Grid(moving_t, math.sqrt(extra) / _CELLS_PER_REACH)
     rows = np.linspace(0, n_fixed - 1, min(256, n_fixed)).astype(np.int64)
     visited = K.count_candidates(fixed, rows, grid.keys, grid.origin, grid.cell, grid.dims, d2_min, extra)
-    costs["truncated"] = _COST_TRUNCATED * visited.mean() * n_fixed
+    costs["truncated"] = _COST_TRUNCATED * max(float(visited.mean()), 1.0) * n_fixed
     if prior is None or prior.scale == 0:
         costs["fgt"] = _fgt_cost(moving_t, fixed, sigma2, eps)
-    method = min(costs, key=costs.get)
-    return method, {"nearest": nearest, "grid": grid if method == "truncated" else None}
+    return costs, {"nearest": nearest, "grid": grid}
 
 
-def _e_step(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None, *, method="auto", tau=None, eps=1e-8):
-    """The shared E-step; see the module docstring.
+def _choose(moving_t, fixed, sigma2, prior, tau, eps):
+    """The cheapest path by the cost model alone (``method='auto'`` without a planner)."""
+    if moving_t.shape[0] * fixed.shape[0] <= _PLAN_PAIRS:
+        return "dense", {}
+    costs, cached = _model_costs(moving_t, fixed, sigma2, prior, tau, eps)
+    return min(costs, key=costs.get), cached
 
-    ``method``: 'dense' (every pair), 'truncated' (pairs within ``tau`` of each row's largest
-    exponent; exact to rounding with the default ``tau = 36.8 + log M``), 'fgt' (fast Gauss
-    transform, absolute error about ``eps`` times the total weight; CPD only) or 'auto' (the
-    cheapest by a cost model; dense below 4 million pairs).
-    """
+
+def _run(method, moving_t, fixed, sigma2, w, prior, tau, eps, cached):
+    """One E-step by the given path; ``cached`` holds what :func:`_model_costs` computed."""
     n_moving, n_dims = moving_t.shape
     n_fixed = fixed.shape[0]
     inv2s2 = 1.0 / (2.0 * sigma2)
     log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
-    if tau is None:
-        # keep every term above 1e-16 of its row's largest, summed over all M of them
-        tau = 36.8 + math.log(n_moving)
-    cached = {}
-    if method == "auto":
-        method, cached = _choose(moving_t, fixed, sigma2, log_prior, tau, eps)
-    if method == "fgt" and log_prior is not None and log_prior.scale != 0:
-        raise ValueError("`method='fgt'` computes CPD's posterior only; GPD's prior needs 'dense' or 'truncated'.")
     if method == "dense":
-        p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, log_prior)
+        p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, prior)
     elif method == "fgt":
         p1, px, pt1, log_den, best = _fgt(moving_t, fixed, sigma2, log_c, eps, cached.get("nearest"))
     else:
         p1, px, pt1, log_den, best = _truncated(
-            moving_t, fixed, sigma2, inv2s2, log_c, log_prior, tau, cached.get("grid"), cached.get("nearest")
+            moving_t, fixed, sigma2, inv2s2, log_c, prior, tau, cached.get("grid"), cached.get("nearest")
         )
     nll = float(-np.sum(log_den) + 0.5 * n_fixed * n_dims * math.log(sigma2))
     return Posteriors(p1=p1, pt1=pt1, px=px, n_p=float(np.sum(pt1)), neg_log_likelihood=nll, best=best, method=method)
+
+
+class EStepPlanner:
+    """Chooses the E-step path of one fit by timing the candidates (``method='auto'``).
+
+    A probe runs the candidate paths ('dense', 'truncated' and, without a prior, 'fgt') on
+    the current state, in the order of a cost model, each timed; it keeps the fastest as the
+    winner and returns the winner's statistics. Later calls run the winner alone until sigma2
+    has moved more than ``reprobe_factor`` times away from the sigma2 of the last probe (the
+    ranking follows sigma2: the FGT's box count grows as sigma2^(-D/2), the truncated path's
+    neighbourhoods as sigma2^(D/2)) or ``reprobe_calls`` calls have passed, then probes again.
+
+    A probe skips a path predicted slower than ``skip_factor`` times the fastest time
+    measured in it: the prediction is the cost model scaled by that path's last measured
+    time over its modelled cost, so a path measured slow once is not retried while the model
+    says so. Below 65,536 pairs only 'dense' is run (it takes microseconds there).
+
+    Timings decide, so two runs of one fit may take different paths; every path equals the
+    dense one to its bound ('truncated' to rounding, 'fgt' to about ``eps`` of the total
+    weight). Pass a fixed ``method`` for results bit-identical across runs and thread counts.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> planner = EStepPlanner()
+    >>> post = planner(rng.random((400, 2)), rng.random((300, 2)), 0.01, 0.0)
+    >>> post.method in ("dense", "truncated", "fgt"), planner.winner == post.method
+    (True, True)
+    """
+
+    def __init__(self, *, reprobe_factor=4.0, reprobe_calls=25, skip_factor=3.0):
+        self.reprobe_factor = reprobe_factor
+        self.reprobe_calls = reprobe_calls
+        self.skip_factor = skip_factor
+        self.winner = None
+        self.probes = 0
+        self.timings = {}  # path -> seconds at the last probe that ran it
+        self._scale = {}  # path -> measured seconds per modelled ns
+        self._sigma2 = None
+        self._calls = 0
+
+    def _due(self, sigma2):
+        if self.winner is None or self._calls >= self.reprobe_calls:
+            return True
+        return abs(math.log(sigma2 / self._sigma2)) > math.log(self.reprobe_factor)
+
+    def __call__(self, moving_t, fixed, sigma2, w, prior=None, *, tau=None, eps=1e-8):
+        """One E-step (see :func:`_e_step` for the arguments) by the path the planner picks."""
+        tau = _default_tau(moving_t.shape[0]) if tau is None else tau
+        if moving_t.shape[0] * fixed.shape[0] <= _PLAN_PAIRS:
+            self.winner = "dense"
+            return _run("dense", moving_t, fixed, sigma2, w, prior, tau, eps, {})
+        if not self._due(sigma2):
+            self._calls += 1
+            return _run(self.winner, moving_t, fixed, sigma2, w, prior, tau, eps, {})
+        costs, cached = _model_costs(moving_t, fixed, sigma2, prior, tau, eps)
+        order = sorted((c, m) for m, c in costs.items() if math.isfinite(c))
+        results = {}
+        best_time = math.inf
+        for cost, path in order:
+            predicted = cost * self._scale.get(path, 1e-9)
+            if results and predicted > self.skip_factor * best_time:
+                continue
+            start = time.perf_counter()
+            results[path] = _run(path, moving_t, fixed, sigma2, w, prior, tau, eps, cached)
+            elapsed = time.perf_counter() - start
+            self.timings[path] = elapsed
+            self._scale[path] = elapsed / max(cost, 1e-300)
+            if elapsed < best_time:
+                best_time, self.winner = elapsed, path
+        self.probes += 1
+        self._sigma2 = sigma2
+        self._calls = 1
+        return results[self.winner]
+
+
+def _default_tau(n_moving):
+    # keep every term above 1e-16 of its row's largest, summed over all M of them
+    return 36.8 + math.log(n_moving)
+
+
+def _e_step(
+    moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None, *, method="auto", tau=None, eps=1e-8,
+    planner: EStepPlanner | None = None,
+):
+    """The shared E-step; see the module docstring.
+
+    ``method``: 'dense' (every pair), 'truncated' (pairs within ``tau`` of each row's largest
+    exponent; exact to rounding with the default ``tau = 36.8 + log M``), 'fgt' (fast Gauss
+    transform, absolute error about ``eps`` times the total weight; CPD only) or 'auto': the
+    fastest by timing when a ``planner`` (one :class:`EStepPlanner` per fit) is given, else
+    the cheapest by a cost model (dense below 65,536 pairs).
+    """
+    if tau is None:
+        tau = _default_tau(moving_t.shape[0])
+    if method == "auto":
+        if planner is not None:
+            return planner(moving_t, fixed, sigma2, w, log_prior, tau=tau, eps=eps)
+        method, cached = _choose(moving_t, fixed, sigma2, log_prior, tau, eps)
+    else:
+        cached = {}
+    if method == "fgt" and log_prior is not None and log_prior.scale != 0:
+        raise ValueError("`method='fgt'` computes CPD's posterior only; GPD's prior needs 'dense' or 'truncated'.")
+    return _run(method, moving_t, fixed, sigma2, w, log_prior, tau, eps, cached)
 
 
 def dense_posterior(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None) -> np.ndarray:
