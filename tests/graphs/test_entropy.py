@@ -4,15 +4,30 @@ import itertools
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components
 
-from centrality_vision.centrality import degree_entropy
-from centrality_vision.graphs import emst_graph, mstme_graph, mwme_graph, nhdd_graph
+from centrality_vision.graphs import _entropy_kernels as kernels
+from centrality_vision.graphs import (
+    complete_graph,
+    delaunay_graph,
+    emst_graph,
+    mstme_graph,
+    mwme_degrees,
+    mwme_graph,
+    nhdd_graph,
+)
+from centrality_vision.graphs._entropy import entropy_of_degrees
 
 
 def _degrees(graph):
     return np.diff(sparse.csr_array(graph).indptr)
+
+
+def degree_entropy(graph):
+    return entropy_of_degrees(_degrees(graph))
 
 
 def _edge_set(graph):
@@ -136,9 +151,9 @@ def _brute_force_mstme(points, lam):
 
 
 def test_fig_7_1_mst_and_mstme():
-    mst = mstme_graph(FIG_7_1, lam=0.0, normalize=False)
+    mst = mstme_graph(FIG_7_1, lam=0.0, normalize="none")
     assert round(mst.weight, 2) == 4.0 and round(mst.entropy, 2) == 0.72
-    tree = mstme_graph(FIG_7_1, lam=1.0, normalize=False)
+    tree = mstme_graph(FIG_7_1, lam=1.0, normalize="none")
     assert sorted(_degrees(tree.graph).tolist(), reverse=True) == [3, 2, 1, 1, 1]
     assert round(tree.weight, 2) == 4.41 and round(tree.entropy, 2) == 1.37 and round(tree.cost, 2) == 3.04
     assert tree.cost < mst.weight - mst.entropy
@@ -185,7 +200,13 @@ def test_mstme_normalized_is_scale_invariant():
         (lambda: mwme_graph(np.random.default_rng(0).random((21, 2)), method="exact"), ValueError, "up to 20 points"),
         (lambda: mwme_graph(np.eye(3), method="best"), ValueError, "`method`"),
         (lambda: mstme_graph(FIG_7_1, lam=-0.1), ValueError, "`lam`"),
-        (lambda: mstme_graph(FIG_7_1, normalize="yes"), TypeError, "`normalize`"),
+        (lambda: mstme_graph(FIG_7_1, normalize="yes"), ValueError, "`normalize`"),
+        (lambda: mstme_graph(FIG_7_1, normalize=1.5), TypeError, "`normalize`"),
+        (lambda: mwme_graph(np.eye(3), metric="cosine"), ValueError, "`metric`"),
+        (lambda: mwme_graph([[0, 1, 2], [1, 0, 1], [2, 1, 0.5]], metric="precomputed"), ValueError, "zero diagonal"),
+        (lambda: mwme_graph([[0, 1], [1, 0]], metric="precomputed"), ValueError, "at least 3 rows"),
+        (lambda: mwme_degrees(np.random.default_rng(0).random((2, 21, 2))), ValueError, "n_points <= 20"),
+        (lambda: mwme_degrees(np.zeros((2, 4, 2))), ValueError, "duplicate"),
         (lambda: mstme_graph([[0, 0], [1, 1]]), ValueError, "at least 3 points"),
         (lambda: nhdd_graph(2), ValueError, "`n`"),
     ],
@@ -201,3 +222,113 @@ def test_inputs_not_modified():
     mwme_graph(points, method="exact")
     mstme_graph(points, method="exchange")
     np.testing.assert_array_equal(points, before)
+
+
+# --- extreme scales (fuzz findings: segfaults in the kernels) ----------------------------
+
+
+@settings(max_examples=25, deadline=None)
+@given(exponent=st.integers(-320, 307), seed=st.integers(0, 2**16), n=st.integers(4, 12))
+def test_entropy_graphs_at_any_scale(exponent, seed, n):
+    """Points scaled by 10^k anywhere in float64's range: the same graphs as at unit scale
+    (lengths and costs scaled), or an InputError naming the overflow; never a crash."""
+    points = np.random.default_rng(seed).random((n, 2)) - 0.5
+    scaled = points * 10.0**exponent
+    if len(np.unique(scaled, axis=0)) < n:  # subnormal inputs may collapse: that is a duplicate error
+        with pytest.raises(ValueError, match="duplicate"):
+            mwme_graph(scaled)
+        return
+    for build in (
+        lambda p: mwme_graph(p, method="exact"),
+        lambda p: mwme_graph(p, method="local"),
+        lambda p: mstme_graph(p),
+        lambda p: mstme_graph(p, lam=0.3, normalize="edge", method="exchange"),
+    ):
+        reference = build(points)
+        try:
+            result = build(scaled)
+        except ValueError as exc:
+            assert "overflows" in str(exc) and exponent > 300
+            continue
+        assert np.all(np.isfinite(result.graph.data)) and np.all(result.graph.data > 0)
+        if -290 < exponent:  # away from subnormals the rescaled arithmetic is the same
+            assert _edge_set(result.graph) == _edge_set(reference.graph)
+            assert result.cost == pytest.approx(
+                reference.cost * (10.0**exponent if hasattr(result, "order") else 1.0), rel=1e-9
+            )
+
+
+@pytest.mark.parametrize("factor", [1e-300, 1e300, 1e155, 1e-155])
+def test_fuzz_cases_from_the_report(factor):
+    points = np.random.default_rng(0).random((8, 2))
+    for tree in (mstme_graph(points * factor), mstme_graph(points * factor, normalize="none", lam=0.1)):
+        assert tree.graph.nnz == 14 and np.all(np.isfinite(tree.graph.data))
+    exact = mwme_graph(points * factor, method="exact")
+    assert exact.cost == pytest.approx(mwme_graph(points, method="exact").cost * factor, rel=1e-12)
+
+
+def test_overflowing_and_degenerate_ranges_are_refused():
+    with pytest.raises(ValueError, match="overflows"):
+        mwme_graph(np.array([[-1.7e308, 0.0], [1.7e308, 0.0], [0.0, 1.0e308]]))
+    with pytest.raises(ValueError, match="dynamic range"):
+        mstme_graph(np.array([[0.0, 0.0], [1e-200, 0.0], [1.0, 0.0]]))
+
+
+def test_kernels_raise_instead_of_writing_out_of_bounds():
+    nan = np.full((5, 5), np.nan)
+    with pytest.raises(ValueError, match="finite"):
+        kernels.mstme_greedy(nan, 0.5)
+    with pytest.raises(ValueError, match="finite"):
+        kernels.mwme_exact(np.full((5, 5), np.inf), np.array([False, True, False, True, True]))
+
+
+# --- the thesis' worked examples --------------------------------------------------------
+
+#: Table 6.1 / fig. 6.3: the four nodes a, b, c, d and their six edge weights 1..6, read
+#: from the figure's traceback (d-c 3, d-a 4, a-c 2, a-b 1) and its first row (c joins a, b
+#: for 7: b-c 5; so b-d 6). Not Euclidean (b-c > a-b + a-c), hence a precomputed metric.
+TABLE_6_1 = np.array([[0, 1, 2, 4], [1, 0, 5, 6], [2, 5, 0, 3], [4, 6, 3, 0]], dtype=float)
+
+
+def test_table_6_1_optimum_cost_10():
+    exact = mwme_graph(TABLE_6_1, method="exact", metric="precomputed")
+    assert exact.cost == 10.0
+    # the optimum: the triangle a, c, d and b hanging from a (degrees a 3, b 1, c 2, d 2)
+    assert exact.degrees.tolist() == [3, 1, 2, 2]
+    assert _edge_set(exact.graph) == {(0, 1), (0, 2), (0, 3), (2, 3)}
+    assert mwme_graph(TABLE_6_1, method="local", metric="precomputed").cost == 10.0
+    assert mwme_graph(TABLE_6_1, method="greedy", metric="precomputed").cost >= 10.0
+
+
+def test_fig_6_1_entropies():
+    """Six vertices: complete graph 0, a triangulation 0.91, both NHDD graphs 2.25 bits."""
+    points = np.array([[0, 0], [3, 0], [3, 2], [0, 2], [1.1, 1.0], [1.9, 1.05]])
+    entropy = degree_entropy
+    assert entropy(complete_graph(points)) == 0.0
+    assert round(entropy(delaunay_graph(points)), 2) == 0.92  # the thesis prints 0.91 (truncated)
+    assert round(entropy(nhdd_graph(6)), 2) == round(entropy(nhdd_graph(6, connected=False)), 2) == 2.25
+    assert round(entropy(mwme_graph(points, method="exact").graph), 2) == 2.25
+
+
+def test_mwme_degrees_is_the_exact_graph_batched():
+    sets = np.random.default_rng(4).random((6, 9, 2))
+    degrees = mwme_degrees(sets)
+    for b in range(6):
+        np.testing.assert_array_equal(degrees[b], mwme_graph(sets[b], method="exact").degrees)
+
+
+# --- MSTME normalisation ----------------------------------------------------------------
+
+
+def test_mstme_default_changes_a_quarter_of_the_fish():
+    from centrality_vision.datasets import load_fish
+
+    fish = load_fish().fixed
+    tree = mstme_graph(fish)
+    mst = _edge_set(emst_graph(fish))
+    share = len(_edge_set(tree.graph) - mst) / len(mst)
+    assert share == pytest.approx(tree.mst_share) and share >= 0.25
+    # the old normalisation (mean MST edge) leaves the MST: the reason for the new default
+    assert mstme_graph(fish, lam=0.5, normalize="edge").mst_share == 0.0
+    assert tree.scale == pytest.approx(emst_graph(fish).sum() / 2)  # weights / total MST length
+    assert mstme_graph(fish, normalize=True).mst_share == tree.mst_share  # True means "tree"

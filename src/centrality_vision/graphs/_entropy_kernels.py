@@ -1,11 +1,24 @@
-"""Compiled kernels for the entropy graphs (MWME, MSTME); see ``_entropy.py``."""
+"""Compiled kernels for the entropy graphs (MWME, MSTME); see ``_entropy.py``.
+
+The callers pass finite, positive distances (``_entropy._distance_matrix`` rescales the
+points so that they are); still, no kernel indexes with a choice it failed to make: when
+every candidate compares false (NaN weights), it raises instead of writing out of bounds.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
 
-__all__ = ["order_cost", "mwme_exact", "mwme_greedy_starts", "mwme_greedy_order", "mwme_local", "mstme_greedy", "mstme_exchange"]
+__all__ = [
+    "order_cost",
+    "mwme_exact",
+    "mwme_greedy_starts",
+    "mwme_greedy_order",
+    "mwme_local",
+    "mstme_greedy",
+    "mstme_exchange",
+]
 
 
 @njit(cache=True, nogil=True)
@@ -66,6 +79,8 @@ def mwme_exact(dist, joining):
     s = full - 1
     for k in range(n - 1, -1, -1):
         p = parent[s]
+        if p < 0:
+            raise ValueError("mwme_exact: no finite-cost order (non-finite distances)")
         order[k] = p
         s ^= 1 << p
     return order, dp[full - 1]
@@ -116,6 +131,8 @@ def mwme_greedy_order(dist, joining, start, key):
             if best < 0 or _better(value, key[q], best_value, key[best]):
                 best_value = value
                 best = q
+        if best < 0:
+            raise ValueError("mwme_greedy_order: no point left to place")
         if joining[k]:
             cost += acc[best]
         order[k] = best
@@ -265,6 +282,8 @@ def mstme_greedy(weight, lam):
                     best = score
                     bu = u
                     bv = v
+        if bu < 0:
+            raise ValueError("mstme_greedy: no edge with a finite score (non-finite weights)")
         edges[it, 0] = bu
         edges[it, 1] = bv
         _move_degrees(degree, counts, bu, bv, 1)

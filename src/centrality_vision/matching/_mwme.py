@@ -1,4 +1,4 @@
-"""Canonical matching with MWME graphs (thesis 6.5, SPEC section 4)."""
+"""Canonical matching with MWME graphs (thesis 6.5)."""
 
 from __future__ import annotations
 
@@ -7,12 +7,15 @@ import numpy as np
 from .._validation import as_points
 from ..exceptions import InputError
 from ..graphs import mwme_graph
-from ..transforms import SimilarityTransform, fit_similarity
+from ..transforms import SimilarityTransform
+from ._common import fit_pairs, normalise, similarity_to_units
 
 __all__ = ["mwme_match"]
 
 
-def mwme_match(moving, fixed, /, *, method: str = "local", scale: bool = True) -> tuple[np.ndarray, SimilarityTransform]:
+def mwme_match(
+    moving, fixed, /, *, method: str = "local", scale: bool = True
+) -> tuple[np.ndarray, SimilarityTransform]:
     """Match two point sets through the degrees of their MWME graphs.
 
     Each set gets its minimum-weight maximum-entropy graph (:func:`~centrality_vision.graphs.mwme_graph`),
@@ -22,6 +25,12 @@ def mwme_match(moving, fixed, /, *, method: str = "local", scale: bool = True) -
     matching is exact under similarity transforms whenever both graphs are the same
     optimum, which holds for the exact solver and, in general position, for the
     deterministic greedy and local solvers too (they see only distances, up to scale).
+    Both sets are centred and divided by a power of two first (exactly), so coordinates
+    anywhere in float64's range give finite products and SVD inputs.
+
+    This is the global method: every point moves every degree, so a little noise or a
+    resampled outline changes the graphs (see :func:`~centrality_vision.matching.match`
+    with ``method="robust"`` for sets with noise, outliers or missing parts).
 
     Parameters
     ----------
@@ -57,8 +66,9 @@ def mwme_match(moving, fixed, /, *, method: str = "local", scale: bool = True) -
             f"`moving` and `fixed` must have the same shape for MWME matching; got {moving.shape} and {fixed.shape}."
         )
     n = moving.shape[0]
-    graph_m = mwme_graph(moving, method=method)
-    graph_f = mwme_graph(fixed, method=method)
+    norm_m, norm_f = normalise(moving), normalise(fixed)
+    graph_m = mwme_graph(norm_m.points, method=method)
+    graph_f = mwme_graph(norm_f.points, method=method)
     repeated = n // 2
     by_degree_f = np.full(n, -1, dtype=np.int64)
     for node, deg in enumerate(graph_f.degrees):
@@ -74,8 +84,12 @@ def mwme_match(moving, fixed, /, *, method: str = "local", scale: bool = True) -
     for candidate in (pair_f, pair_f[::-1]):
         trial = correspondence.copy()
         trial[pair_m] = candidate
-        transform = fit_similarity(moving, fixed[trial], scale=scale)
-        residual = float(np.sum((transform(moving) - fixed[trial]) ** 2))
+        rotation, translation, s = fit_pairs(norm_m.points, norm_f.points[trial], scale=scale)
+        if not scale:  # a rigid fit in normalised units must undo the unit change
+            s = float(np.ldexp(1.0, norm_m.exponent - norm_f.exponent))
+            translation = norm_f.points[trial].mean(axis=0) - s * rotation @ norm_m.points.mean(axis=0)
+        moved = s * norm_m.points @ rotation.T + translation
+        residual = float(np.sum((moved - norm_f.points[trial]) ** 2))
         if best is None or residual < best[0]:
-            best = (residual, trial, transform)
-    return best[1], best[2]
+            best = (residual, trial, (rotation, translation, s))
+    return best[1], similarity_to_units(*best[2], norm_m, norm_f)

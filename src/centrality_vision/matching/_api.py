@@ -1,0 +1,139 @@
+"""One entry point for point-set matching: ``match(moving, fixed, method=...)``."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._validation import as_points, check_choice, check_float, check_int
+from ..exceptions import InputError
+from ._common import MatchResult, fit_pairs, normalise, similarity_to_units
+
+__all__ = ["METHODS", "match"]
+
+#: The methods :func:`match` offers.
+METHODS = ("robust", "mwme", "shape-context")
+
+
+def match(
+    moving,
+    fixed,
+    /,
+    *,
+    method: str = "robust",
+    scale: bool = True,
+    n_neighbours: int = 8,
+    n_candidates: int = 6,
+    refine: str = "icp",
+    outlier_weight: float = 0.3,
+    mwme_method: str = "local",
+) -> MatchResult:
+    """Correspondences from ``moving`` to ``fixed`` and the similarity transform between them.
+
+    Parameters
+    ----------
+    moving, fixed : array_like of shape (n_points, 2)
+        Point sets, possibly of different sizes, with outliers or missing parts (except for
+        ``method="mwme"``); at least 4 distinct points each. ``"mwme"`` also takes 3D sets.
+    method : {"robust", "mwme", "shape-context"}, default="robust"
+        ``"robust"``: MWME graphs of every point's neighbourhood as rotation- and
+        scale-invariant signatures, one similarity hypothesis per likely pair, the
+        hypothesis most points agree with (a one-pair RANSAC scored on all points), refined
+        by trimmed nearest-neighbour fits (and CPD with ``refine="cpd"``); each moving point
+        then takes its nearest fixed point within two sampling steps, else -1 (see
+        :mod:`centrality_vision.matching._robust`).
+        ``"mwme"``: the thesis' global MWME matching (:func:`mwme_match`): exact under
+        similarity transforms of the same points, but needs sets of equal size and breaks
+        under noise or resampling.
+        ``"shape-context"``: the baseline: Belongie et al.'s log-polar shape contexts
+        (angles from each point's tangent), chi-squared costs and a one-to-one Hungarian
+        assignment (:func:`scipy.optimize.linear_sum_assignment`) with dummy partners
+        of cost 0.25 for unmatched points; the transform is fitted to the pairs.
+    scale : bool, default=True
+        Fit a similarity (True) or a rigid transform (False).
+    n_neighbours : int in [3, 19], default=8
+        ``"robust"``: neighbours in each local MWME graph.
+    n_candidates : int >= 1, default=6
+        ``"robust"``: likely partners (hence hypotheses) per moving point.
+    refine : {"icp", "cpd"}, default="icp"
+        ``"robust"``: the refinement after consensus: trimmed nearest-neighbour similarity
+        fits alone, or followed by similarity CPD with outlier weight ``outlier_weight``.
+    outlier_weight : float in [0, 1), default=0.3
+        The CPD outlier weight for ``refine="cpd"``.
+    mwme_method : {"local", "greedy", "exact"}, default="local"
+        ``"mwme"``: the MWME solver.
+
+    Returns
+    -------
+    MatchResult
+        Unpacks as ``correspondence, transform``: ``moving[i]`` matches
+        ``fixed[correspondence[i]]`` (-1: unmatched), and ``transform`` takes ``moving``
+        onto ``fixed``.
+
+    Examples
+    --------
+    A rotated, scaled and shifted outline, resampled elsewhere along the contour, with a
+    third of it missing and 20 outliers added:
+
+    >>> import numpy as np
+    >>> t = np.linspace(0, 2 * np.pi, 80, endpoint=False)
+    >>> outline = lambda u: np.c_[np.cos(u) * (1 + 0.3 * np.cos(3 * u)), np.sin(u) * (1 + 0.3 * np.cos(3 * u))]
+    >>> fixed = outline(t)
+    >>> angle = 1.0
+    >>> rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    >>> kept = outline(t[:55] + 0.5 * (t[1] - t[0]))
+    >>> noise = np.random.default_rng(0).uniform(-1.5, 1.5, (20, 2))
+    >>> moving = 2.0 * np.vstack([kept, noise]) @ rot.T + [5.0, -3.0]
+    >>> result = match(moving, fixed)
+    >>> round(result.transform.scale, 2)
+    0.5
+    >>> truth = result.transform(moving[:55])
+    >>> bool(np.all(np.linalg.norm(fixed[result.correspondence[:55]] - truth, axis=1) < t[1]))
+    True
+    """
+    method = check_choice(method, METHODS, name="method")
+    if not isinstance(scale, (bool, np.bool_)):
+        raise TypeError(f"`scale` must be True or False; got {scale!r}.")
+    if method == "mwme":
+        from ._mwme import mwme_match
+
+        moving_arr = as_points(moving, name="moving", n_dims=(2, 3), min_points=3, allow_duplicates=False)
+        correspondence, transform = mwme_match(moving_arr, fixed, method=mwme_method, scale=bool(scale))
+        return MatchResult(correspondence, transform, method, int(moving_arr.shape[0]), {"mwme_method": mwme_method})
+    n_neighbours = check_int(n_neighbours, name="n_neighbours", low=3, high=19)
+    n_candidates = check_int(n_candidates, name="n_candidates", low=1)
+    refine = check_choice(refine, ("icp", "cpd"), name="refine")
+    outlier_weight = check_float(outlier_weight, name="outlier_weight", low=0.0, high=1.0)
+    if outlier_weight >= 1.0:
+        raise InputError(f"`outlier_weight` must be in [0, 1); got {outlier_weight!r}.")
+    moving = as_points(moving, name="moving", n_dims=(2,), min_points=4, allow_duplicates=False)
+    fixed = as_points(fixed, name="fixed", n_dims=(2,), min_points=4, allow_duplicates=False)
+    norm_m, norm_f = normalise(moving), normalise(fixed)
+    unit_ratio = float(np.ldexp(1.0, norm_m.exponent - norm_f.exponent))  # scale 1 in the caller's units
+    if method == "robust":
+        from ._robust import robust_pose
+
+        rot, t, s, correspondence, info = robust_pose(
+            norm_m.points,
+            norm_f.points,
+            n_neighbours=n_neighbours,
+            n_candidates=n_candidates,
+            refine=refine,
+            scale=bool(scale),
+            unit_ratio=unit_ratio,
+            outlier_weight=outlier_weight,
+        )
+    else:
+        from ._shape_context import shape_context_assignment
+
+        correspondence, info = shape_context_assignment(norm_m.points, norm_f.points)
+        pairs = correspondence >= 0
+        if pairs.sum() < 2:
+            rot, t, s = np.eye(2), np.zeros(2), 1.0 if not scale else 1.0
+        else:
+            rot, t, s = fit_pairs(norm_m.points[pairs], norm_f.points[correspondence[pairs]], scale=bool(scale))
+        if not scale:
+            s = unit_ratio
+            if pairs.sum() >= 2:
+                t = norm_f.points[correspondence[pairs]].mean(axis=0) - s * rot @ norm_m.points[pairs].mean(axis=0)
+    transform = similarity_to_units(rot, t, s, norm_m, norm_f)
+    return MatchResult(correspondence, transform, method, int(np.sum(correspondence >= 0)), info)

@@ -1,0 +1,109 @@
+"""What the matching methods share: the result type, unit normalisation, transform algebra."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..exceptions import InputError
+from ..transforms import SimilarityTransform, least_squares_similarity
+
+__all__ = ["MatchResult", "Normalised", "normalise", "similarity_to_units", "assign_nearest"]
+
+
+@dataclass(frozen=True)
+class MatchResult:
+    """Correspondences from ``moving`` to ``fixed`` and the similarity transform they give.
+
+    Unpacks as ``correspondence, transform = match(moving, fixed)``.
+
+    Attributes
+    ----------
+    correspondence : ndarray of int, shape (n_moving,)
+        ``moving[i]`` matches ``fixed[correspondence[i]]``; -1 where ``moving[i]`` has no
+        partner (an outlier, or a part missing from ``fixed``).
+    transform : SimilarityTransform
+        The fitted transform taking ``moving`` onto ``fixed``.
+    method : str
+    n_matched : int
+        Number of moving points with a partner.
+    info : dict
+        Method-specific diagnostics (e.g. the number of similarity hypotheses tried, the
+        inlier count of the best one); for reading, not for computing.
+    """
+
+    correspondence: np.ndarray
+    transform: SimilarityTransform
+    method: str
+    n_matched: int
+    info: dict = field(default_factory=dict, compare=False)
+
+    def __iter__(self):
+        yield self.correspondence
+        yield self.transform
+
+
+@dataclass(frozen=True)
+class Normalised:
+    """Points centred and divided by powers of two (exact), so that every product and sum
+    of squares the matching forms stays finite, whatever the input's scale:
+    ``x = 2^first (2^second points + centre)``."""
+
+    points: np.ndarray
+    centre: np.ndarray
+    first: int
+    second: int
+
+    @property
+    def exponent(self) -> int:
+        return self.first + self.second
+
+
+def normalise(points: np.ndarray) -> Normalised:
+    """Centre ``points`` and bring their coordinates into (-1, 1) by exact powers of two."""
+    first = int(np.frexp(np.abs(points).max())[1])
+    scaled = np.ldexp(points, -first)
+    centre = scaled.mean(axis=0)
+    centre = centre + (scaled - centre).mean(axis=0)  # second pass: accurate far from the origin
+    centred = scaled - centre
+    peak = np.abs(centred).max()
+    second = int(np.frexp(peak)[1]) if peak > 0 else 0
+    return Normalised(np.ldexp(centred, -second), centre, first, second)
+
+
+def similarity_to_units(rotation, translation, scale, moving: Normalised, fixed: Normalised) -> SimilarityTransform:
+    """The transform in the caller's units from ``f = s R m + t`` fitted between normalised sets.
+
+    Substituting ``x = 2^a_m (2^b_m m + c_m)`` and ``y = 2^a_f (2^b_f f + c_f)`` gives
+    ``y = s 2^(e_f - e_m) R x + 2^a_f (2^b_f t - 2^(b_f - b_m) s R c_m + c_f)``; every power of
+    two is applied with ``ldexp``, so nothing overflows before the final values, which
+    must fit in float64.
+    """
+    rotation = np.asarray(rotation, dtype=float)
+    s = float(np.ldexp(scale, fixed.exponent - moving.exponent))
+    with np.errstate(over="ignore", invalid="ignore"):
+        inner = (
+            np.ldexp(np.asarray(translation, dtype=float), fixed.second)
+            - np.ldexp(scale * (rotation @ moving.centre), fixed.second - moving.second)
+            + fixed.centre
+        )
+        translation_units = np.ldexp(inner, fixed.first)
+    if not (np.isfinite(s) and s > 0 and np.all(np.isfinite(translation_units))):
+        raise InputError(
+            "`moving` and `fixed` differ in scale or position beyond float64: the fitted transform "
+            "overflows; rescale them."
+        )
+    return SimilarityTransform(rotation, translation_units, s)
+
+
+def fit_pairs(moving: np.ndarray, fixed: np.ndarray, *, scale: bool = True):
+    """Least-squares ``(R, t, s)`` between paired, finite, normalised rows."""
+    return least_squares_similarity(moving, fixed, scale=scale)
+
+
+def assign_nearest(moved: np.ndarray, fixed_tree: cKDTree, radius: float) -> np.ndarray:
+    """Each moved point's nearest fixed point, or -1 when it is farther than ``radius``."""
+    dist, index = fixed_tree.query(moved)
+    return np.where(dist <= radius, index, -1).astype(np.int64)
