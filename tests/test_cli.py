@@ -10,12 +10,15 @@ from centrality_vision.cli import main
 def test_demo_writes_figures_and_results(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path)]) == 0
     names = {p.name for p in tmp_path.iterdir()}
-    assert {"fish_delaunay_closeness.png", "fish_delaunay_centralities.png", "cow1_closeness.png", "demo.json"} <= names
+    assert {"fish_delaunay_closeness.png", "fish_delaunay_centralities.png", "cow1_closeness.png", "fish_registration.png",
+            "fish_registration_errors.png", "demo.json"} <= names
     record = json.loads((tmp_path / "demo.json").read_text())
     assert record["graph"]["n_nodes"] == 91
     saved = np.load(tmp_path / "fish_delaunay_centralities.npz")
     assert saved["closeness"].shape == (91,) and np.all(saved["closeness"] > 0)
     assert "most central points by closeness" in capsys.readouterr().out
+    rms = record["registration"]["final_rms"]
+    assert rms["CPD"] < 1e-6 and rms["GPD (closeness)"] < 1e-6  # both recover the similarity
 
 
 def test_demo_unknown_shape_is_a_one_line_error(tmp_path, capsys):
@@ -86,8 +89,10 @@ def test_graph_delaunay_has_3n_3_h_edges(tmp_path, out):
             length = saved["lengths"]
             assert json.loads(str(saved["parameters"]))["kind"] == "delaunay"
     else:
-        table = np.loadtxt(tmp_path / out, delimiter=",", skiprows=2)
+        table = np.loadtxt(tmp_path / out, delimiter=",", skiprows=1)
         i, j, length = table[:, 0].astype(int), table[:, 1].astype(int), table[:, 2]
+        side = json.loads((tmp_path / "g.json").read_text())
+        assert side["columns"] == ["i", "j", "length"] and side["parameters"]["kind"] == "delaunay"
     assert len(i) == 3 * n - 3 - h and np.all(i < j)
     assert np.allclose(length, np.linalg.norm(points[i] - points[j], axis=1))
 
@@ -121,11 +126,11 @@ def test_centrality_of_points_matches_the_graph(tmp_path):
     out = tmp_path / "c.csv"
     assert main(["centrality", str(tmp_path / "p.csv"), "--measure", "all", "--out", str(out), "--plot", str(tmp_path / "c.png")]) == 0
     lines = out.read_text().splitlines()
-    parameters = json.loads(lines[0].removeprefix("# parameters: "))
+    parameters = json.loads((tmp_path / "c.json").read_text())["parameters"]
     assert parameters["measure"] == "all" and parameters["graph"] == "delaunay" and parameters["seed"] is None
-    header = lines[1].split(",")
+    header = lines[0].split(",")
     assert header == ["node", "x", "y", "degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity"]
-    table = np.loadtxt(out, delimiter=",", skiprows=2)
+    table = np.loadtxt(out, delimiter=",", skiprows=1)
     graph = delaunay_graph(points)
     assert np.array_equal(table[:, 0], np.arange(12)) and np.allclose(table[:, 1:3], points)
     assert np.array_equal(table[:, 3], (graph > 0).sum(axis=1))
@@ -133,7 +138,7 @@ def test_centrality_of_points_matches_the_graph(tmp_path):
     assert (tmp_path / "c.png").stat().st_size > 0
 
     assert main(["centrality", str(tmp_path / "p.csv"), "--measure", "closeness", "--weights", "--out", str(tmp_path / "w.npy")]) == 0
-    side = json.loads((tmp_path / "w.parameters.json").read_text())
+    side = json.loads((tmp_path / "w.json").read_text())
     assert side["columns"] == ["node", "x", "y", "closeness"] and side["parameters"]["weights"] is True
     assert np.allclose(np.load(tmp_path / "w.npy")[:, 3], closeness(graph, weights=True))
 
@@ -171,19 +176,19 @@ def test_register_recovers_a_known_similarity(tmp_path, out):
     if out.endswith(".json"):
         record = json.loads((tmp_path / out).read_text())
         transform, parameters = record["transform"], record["parameters"]
-        history_error = record["history"]["error"]
+        history_error = record["history"]["alignment_rms"]
         assert record["correspondence"] == list(range(91))
     else:
         with np.load(tmp_path / out, allow_pickle=False) as saved:
             record = {key: saved[key] for key in saved.files}
         transform = {key.removeprefix("transform_"): record[key] for key in record if key.startswith("transform_")}
         parameters = json.loads(str(record["parameters"]))
-        history_error = record["history_error"]
+        history_error = record["history_alignment_rms"]
     assert str(transform["type"]) == "similarity"
     assert abs(float(transform["scale"]) - scale) < 1e-6
     assert np.allclose(transform["rotation"], rotation, atol=1e-6) and np.allclose(transform["translation"], translation, atol=1e-6)
     assert np.allclose(record["moving_transformed"], fixed, atol=1e-6)
-    assert bool(record["converged"]) and int(record["n_iter"]) >= 1 and float(record["final_error"]) < 1e-6
+    assert bool(record["converged"]) and int(record["n_iter"]) >= 1 and float(record["final_alignment_rms"]) < 1e-6
     assert len(history_error) == int(record["n_iter"]) + 1
     assert parameters["tol"] == 1e-10 and parameters["max_iter"] == 500 and parameters["method"] == "cpd"
     assert (tmp_path / "r.png").stat().st_size > 0
@@ -310,7 +315,7 @@ def test_bad_point_files_are_one_line_errors(tmp_path, capsys, command, content,
     assert not list(tmp_path.glob("[gcrm].json"))
 
 
-@pytest.mark.parametrize(("content", "message"), [(b"GIF89a not a png", "not a readable image"), (b"", "empty"), (None, "no such file")])
+@pytest.mark.parametrize(("content", "message"), [(b"GIF89a not a png", "not a readable PNG image"), (b"", "empty"), (None, "no such file")])
 def test_bad_images_are_one_line_errors(tmp_path, capsys, content, message):
     path = tmp_path / "bad.png"
     if content is not None:

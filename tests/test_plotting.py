@@ -300,21 +300,96 @@ def test_importing_plotting_does_not_import_matplotlib():
     assert result.returncode == 0, result.stderr
 
 
-def test_registration_figures():
-    from centrality_vision.plotting import plot_alignment_errors, plot_registration_snapshots
+def test_registration_snapshots_fixed_rows_final_row_and_legend():
+    from centrality_vision.plotting import plot_registration_snapshots
 
     x = np.random.default_rng(0).random((15, 2))
     fig = plot_registration_snapshots(x, {"A": {0: x, 3: x + 0.1}, "B": {0: x}}, iterations=[0, 3])
-    assert len(fig.axes) == 4
-    # B stopped at iteration 0: its second panel shows that frame and says so
-    assert fig.axes[3].get_title() == "B: 0"
-    fig3 = plot_registration_snapshots(np.random.default_rng(1).random((10, 3)), {"A": {1: np.zeros((4, 3))}})
+    assert len(fig.axes) == 6  # rows 0, 3 and final; columns A, B
+    # B stopped at iteration 0: its row-3 panel shows that frame and says so
+    assert fig.axes[3].get_title() == "B: stopped at 0"
+    assert [ax.get_ylabel() for ax in fig.axes[::2]] == ["iteration 0", "iteration 3", "final"]
+    assert fig.axes[4].get_title() == "A: final (3 it.)"
+    np.testing.assert_array_equal(fig.axes[4].collections[1].get_offsets(), x + 0.1)
+    assert [t.get_text() for t in fig.legends[0].get_texts()] == ["fixed", "moving"]
+    # by default, rows are the iterations every method recorded, not each one's last
+    fig2 = plot_registration_snapshots(x, {"A": {0: x, 2: x, 7: x}, "B": {0: x, 2: x, 4: x}}, final=False)
+    assert [ax.get_ylabel() for ax in fig2.axes[::2]] == ["iteration 0", "iteration 2"]
+
+
+def test_registration_panels_3d_equal_aspect_small_markers():
+    from centrality_vision.plotting import plot_registration, plot_registration_snapshots
+
+    cloud = np.random.default_rng(1).random((10, 3)) * [10, 1, 1]
+    ax = plot_registration(cloud, cloud + 0.5)
+    span = np.ptp(np.vstack([cloud, cloud + 0.5]), axis=0)
+    box = np.asarray(ax.get_box_aspect())
+    assert ax.name == "3d" and np.allclose(box / box.max(), span / span.max())
+    assert box[0] > 3 * box[1]  # the long axis is drawn long
+    assert max(ax.collections[0].get_sizes()) < 10
+    fig3 = plot_registration_snapshots(cloud, {"A": {1: np.zeros((4, 3))}})
     assert fig3.axes[0].name == "3d"
-    ax = plot_alignment_errors({"A": [3.0, 1.0], "B": [3.0, 2.0, 0.5]}, log=True)
-    assert [line.get_xdata().tolist() for line in ax.lines] == [[0, 1], [0, 1, 2]]
-    with pytest.raises(TypeError, match="snapshots"):
-        plot_registration_snapshots(x, {})
+    with pytest.raises(ValueError, match="3D Axes"):
+        plot_registration(cloud, cloud, ax=plt.figure().add_subplot())
+
+
+def test_alignment_errors_log_axis_distinct_styles_and_per_point_rms():
+    from centrality_vision.plotting import plot_alignment_errors
+
+    ax = plot_alignment_errors({"A": [3.0, 1.0], "B": [3.0, 2.0, 0.5], "C": [3.0, 2.0, 0.0]}, n_points=9)
+    assert [line.get_xdata().tolist() for line in ax.lines] == [[0, 1], [0, 1, 2], [0, 1, 2]]
+    assert ax.lines[1].get_ydata().tolist() == [1.0, 2.0 / 3.0, 0.5 / 3.0]  # |.| / sqrt(9)
+    assert ax.get_yscale() == "log" and ax.get_ylabel() == "per-point RMS error"
+    styles = {(line.get_linestyle(), line.get_marker()) for line in ax.lines}
+    assert len(styles) == 3  # no two methods drawn alike
+    assert plot_alignment_errors({"A": [1.0, 2.0]}, log=False).get_yscale() == "linear"
+    with pytest.raises(TypeError, match="errors"):
+        plot_alignment_errors([1.0, 2.0])
     with pytest.raises(ValueError, match="true_moving"):
         plot_alignment_errors({"A": None})
+
+
+def test_snapshots_bad_inputs():
+    from centrality_vision.plotting import plot_registration_snapshots
+
+    x = np.random.default_rng(0).random((15, 2))
+    with pytest.raises(TypeError, match="snapshots"):
+        plot_registration_snapshots(x, {})
     with pytest.raises(ValueError, match="snapshots"):
         plot_registration_snapshots(x, {"A": {0: np.zeros((3, 3))}})
+
+
+@pytest.mark.parametrize("norm", ["log", "power"])
+def test_centrality_norms_spread_skewed_values(norm):
+    values = np.array([0.0, 1.0, 10.0, 100.0, 1000.0])
+    ax = plot_centrality_image(values, np.arange(5), (1, 5), norm=norm)
+    shown = ax.images[0].norm(values[2:4])
+    linear = values[2:4] / 1000.0
+    assert np.all(np.asarray(shown) > 3 * linear)  # the middle values get visibly lighter colours
+    ax2 = plot_graph(np.random.default_rng(0).random((5, 2)), sparse.csr_array((5, 5)), values, norm=norm)
+    assert type(ax2.collections[1].norm).__name__ == ("LogNorm" if norm == "log" else "PowerNorm")
+
+
+def test_norm_bad_values():
+    with pytest.raises(ValueError, match="`norm` must be one of"):
+        plot_centrality_image([1.0, 2.0], [0, 1], (1, 2), norm="sqrt")
+    with pytest.raises(ValueError, match="at least one value > 0"):
+        plot_centrality_image([0.0, 0.0], [0, 1], (1, 2), norm="log")
+
+
+def test_matching_shows_matches_not_a_hairball():
+    from centrality_vision.plotting import plot_matching
+
+    rng = np.random.default_rng(0)
+    x = rng.random((120, 2))
+    perm = rng.permutation(120)
+    dense = sparse.csr_array(np.ones((120, 120)) - np.eye(120))  # 7140 edges
+    ax = plot_matching(x[perm], x, perm, moving_graph=dense, fixed_graph=dense)
+    lines = [c for c in ax.collections if isinstance(c, LineCollection)]
+    assert len(lines) == 1 and len(lines[0].get_segments()) == 60  # the sampled matches only
+    assert any("not drawn" in t.get_text() for t in ax.get_legend().get_texts())
+    moving_dots, fixed_dots = [c for c in ax.collections if isinstance(c, PathCollection)]
+    # matched points share a colour
+    np.testing.assert_allclose(moving_dots.get_facecolors(), fixed_dots.get_facecolors()[perm])
+    with pytest.raises(ValueError, match="correspondence"):
+        plot_matching(x, x, np.arange(5))

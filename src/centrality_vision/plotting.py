@@ -22,10 +22,46 @@ __all__ = [
     "plot_graph",
     "plot_centrality_image",
     "plot_matching",
+    "plot_registration",
     "plot_registration_snapshots",
     "plot_alignment_errors",
     "save_figure",
 ]
+
+_NORMS = ("linear", "log", "power")
+
+
+def _norm(norm, values: np.ndarray):
+    """A matplotlib ``Normalize`` for ``norm``: "linear" (None), "log", "power" (square root) or one given.
+
+    Centralities such as betweenness span orders of magnitude: on a linear scale all but
+    the largest few values share the darkest colour. "log" spaces decades evenly (values
+    at or below 0 are drawn in the lowest colour, as the smallest positive value);
+    "power" takes the square root, which keeps zeros.
+    """
+    from matplotlib import colors
+
+    if norm is None or (isinstance(norm, str) and norm == "linear"):
+        return None
+    if isinstance(norm, colors.Normalize):
+        return norm
+    if norm == "log":
+        positive = values[values > 0]
+        if positive.size == 0:
+            raise InputError("`norm='log'` needs at least one value > 0; got none (use 'power' or 'linear').")
+        return colors.LogNorm(vmin=float(positive.min()), vmax=float(values.max()), clip=True)
+    if norm == "power":
+        low, high = float(values.min()), float(values.max())
+        return colors.PowerNorm(gamma=0.5, vmin=low, vmax=high if high > low else low + 1)
+    raise InputError(f"`norm` must be one of {', '.join(map(repr, _NORMS))} or a matplotlib Normalize; got {norm!r}.")
+
+
+def _equal_3d(ax, points: np.ndarray) -> None:
+    """Equal scale on the three axes of a 3D Axes (matplotlib's "equal" aspect is per-box), small ticks."""
+    span = np.ptp(points, axis=0)
+    span = np.where(span > 0, span, max(float(span.max()), 1.0) * 0.05)
+    ax.set_box_aspect(tuple(span / span.max()))
+    ax.tick_params(labelsize=7, pad=0)
 
 
 def _as_values(values, *, n: int, other: str) -> np.ndarray:
@@ -65,12 +101,13 @@ def plot_graph(
     *,
     ax=None,
     cmap="viridis",
-    node_size: float = 30,
+    node_size: float | None = None,
     edge_color="0.6",
     edge_width: float = 0.8,
     colorbar: bool = True,
     label: str | None = None,
     title: str | None = None,
+    norm=None,
 ):
     """Draw a graph over its points, nodes coloured by a value such as a centrality.
 
@@ -78,7 +115,7 @@ def plot_graph(
     :class:`~matplotlib.collections.LineCollection` (a
     :class:`~mpl_toolkits.mplot3d.art3d.Line3DCollection` for 3D points), below a
     scatter of the nodes. 2D plots have equal aspect; 3D plots use a 3D Axes, created
-    when ``ax`` is None.
+    when ``ax`` is None, with the same scale on all three axes.
 
     Parameters
     ----------
@@ -95,8 +132,9 @@ def plot_graph(
         If None, a new figure and Axes are created.
     cmap : str or matplotlib.colors.Colormap, default="viridis"
         Colormap of the node colours.
-    node_size : float, default=30
-        Marker area in points squared, >= 0.
+    node_size : float, optional
+        Marker area in points squared, >= 0; by default 30 in 2D and 6 in 3D, where
+        hundreds of points would otherwise merge into a blob.
     edge_color : color, default="0.6"
         Colour of the edges (any matplotlib colour; the default is a mid grey).
     edge_width : float, default=0.8
@@ -107,6 +145,9 @@ def plot_graph(
         Label of the colorbar.
     title : str, optional
         Title of the Axes.
+    norm : {"linear", "log", "power"} or matplotlib.colors.Normalize, optional
+        Colour scale of ``values``: linear (the default), logarithmic, or the square root
+        ("power"), for values that span orders of magnitude such as betweenness.
 
     Returns
     -------
@@ -135,16 +176,17 @@ def plot_graph(
         )
     if values is not None:
         values = _as_values(values, n=n, other="points")
-    node_size = check_float(node_size, name="node_size", low=0)
-    edge_width = check_float(edge_width, name="edge_width", low=0)
     three_d = n_dims == 3
+    node_size = check_float((6 if three_d else 30) if node_size is None else node_size, name="node_size", low=0)
+    edge_width = check_float(edge_width, name="edge_width", low=0)
+    color_norm = None if values is None else _norm(norm, values)
     if ax is not None:
         _check_ax(ax, three_d=three_d, why=f"for points of shape (n_points, {n_dims})")
 
     import matplotlib.pyplot as plt
 
     if ax is None:
-        fig = plt.figure()
+        fig = plt.figure(layout="constrained")
         ax = fig.add_subplot(projection="3d" if three_d else None)
 
     # Each undirected edge once: the upper triangle, read straight from the CSR arrays.
@@ -167,12 +209,15 @@ def plot_graph(
         nodes = ax.scatter(*coords, s=node_size, c="C0", zorder=2, **({"depthshade": False} if three_d else {}))
     else:
         nodes = ax.scatter(
-            *coords, s=node_size, c=values, cmap=cmap, zorder=2, **({"depthshade": False} if three_d else {})
+            *coords, s=node_size, c=values, cmap=cmap, norm=color_norm, zorder=2,
+            **({"depthshade": False} if three_d else {}),
         )
         if colorbar:
             ax.figure.colorbar(nodes, ax=ax, label=label, shrink=0.75 if three_d else 1.0)
-    ax.set_aspect("equal")
-    if not three_d:
+    if three_d:
+        _equal_3d(ax, points)
+    else:
+        ax.set_aspect("equal")
         ax.autoscale_view()
     if title is not None:
         ax.set_title(title)
@@ -225,12 +270,14 @@ def plot_centrality_image(
     colorbar: bool = True,
     label: str | None = None,
     title: str | None = None,
+    norm=None,
+    crop: bool = True,
 ):
     """Show the centrality of a pixel graph's nodes as an image (as in thesis fig. 4.2).
 
     Pixel ``nodes[i]`` of an image of ``shape`` gets the value ``values[i]``; all
     other pixels get ``background``, which by default is NaN and so masked: drawn
-    blank, outside the colour scale.
+    blank, outside the colour scale. Row 0 of the image is at the top, as in the file.
 
     Parameters
     ----------
@@ -254,6 +301,13 @@ def plot_centrality_image(
         Label of the colorbar.
     title : str, optional
         Title of the Axes.
+    norm : {"linear", "log", "power"} or matplotlib.colors.Normalize, optional
+        Colour scale: linear (the default), logarithmic, or the square root ("power").
+        Betweenness on a pixel graph is large on a few pixels and near zero elsewhere;
+        "power" or "log" show its structure.
+    crop : bool, default=True
+        Show only the nodes' bounding box (with a margin of 3 pixels) rather than the
+        whole image, most of which is background in a silhouette file.
 
     Returns
     -------
@@ -291,13 +345,18 @@ def plot_centrality_image(
     import matplotlib.pyplot as plt
 
     if ax is None:
-        fig = plt.figure()
+        fig = plt.figure(layout="constrained")
         ax = fig.add_subplot()
 
     image = np.full(size, float(background))
     image[nodes] = values
     image = np.ma.masked_invalid(image.reshape(shape))
-    shown = ax.imshow(image, cmap=cmap, interpolation="nearest")
+    color_norm = _norm(norm, image.compressed())
+    shown = ax.imshow(image, cmap=cmap, norm=color_norm, interpolation="nearest")
+    if crop:
+        rows, cols = np.divmod(nodes, shape[1])
+        ax.set_xlim(max(cols.min() - 3, 0) - 0.5, min(cols.max() + 3, shape[1] - 1) + 0.5)
+        ax.set_ylim(min(rows.max() + 3, shape[0] - 1) + 0.5, max(rows.min() - 3, 0) - 0.5)  # row 0 at the top
     ax.set_axis_off()
     if colorbar:
         ax.figure.colorbar(shown, ax=ax, label=label)
@@ -350,11 +409,46 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
     return path
 
 
-def plot_matching(moving, fixed, correspondence, *, moving_graph=None, fixed_graph=None, ax=None, title=None):
-    """Two 2D point sets side by side, their graphs, and lines joining matched points (thesis fig. 6.4).
+def plot_matching(
+    moving, fixed, correspondence, *, moving_graph=None, fixed_graph=None, ax=None, title=None,
+    max_lines: int = 60, max_edges: int | None = None,
+):
+    """Two 2D point sets side by side and their matching (thesis fig. 6.4).
 
-    ``moving`` is drawn on the left and ``fixed`` shifted to its right; line ``i`` joins
-    ``moving[i]`` and ``fixed[correspondence[i]]``. Returns the Axes.
+    ``moving`` is drawn on the left and ``fixed`` shifted to its right. Matched points
+    share a colour: ``moving[i]`` and ``fixed[correspondence[i]]`` get the colour of
+    ``i``'s place along the moving set, so a correct matching shows the same colour
+    sequence on both sides. At most ``max_lines`` matches (evenly spread over the
+    moving set) are also joined by a line, so the figure stays readable for hundreds
+    of points. The graphs, if given, are drawn faintly underneath, unless they have
+    more than ``max_edges`` edges (an MWME graph has about n^2/4: a hairball that hides
+    the matching); a note in the legend says when a graph was left out.
+
+    Parameters
+    ----------
+    moving, fixed : array_like of shape (n, 2)
+    correspondence : array_like of int, shape (n,)
+        ``moving[i]`` matches ``fixed[correspondence[i]]``.
+    moving_graph, fixed_graph : sparse array of shape (n, n), optional
+    ax : matplotlib Axes, optional
+    title : str, optional
+    max_lines : int, default=60
+        Most match lines drawn (0 for none).
+    max_edges : int, optional
+        Most edges of a graph drawn; by default 3 n (a planar graph's size).
+
+    Returns
+    -------
+    ax : matplotlib Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> x = np.random.default_rng(0).random((10, 2))
+    >>> ax = plot_matching(x, x[::-1], np.arange(10)[::-1], max_lines=4)
+    >>> len(ax.collections[0].get_segments())  # four of the ten matches drawn as lines
+    4
     """
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
@@ -362,36 +456,113 @@ def plot_matching(moving, fixed, correspondence, *, moving_graph=None, fixed_gra
     moving = as_points(moving, name="moving", n_dims=(2,))
     fixed = as_points(fixed, name="fixed", n_dims=(2,))
     correspondence = np.asarray(correspondence)
-    if correspondence.shape != (moving.shape[0],) or not np.issubdtype(correspondence.dtype, np.integer):
-        raise ValueError(
-            f"`correspondence` must be an integer array of shape ({moving.shape[0]},); got {correspondence.shape} "
+    n = moving.shape[0]
+    if correspondence.shape != (n,) or not np.issubdtype(correspondence.dtype, np.integer):
+        raise InputError(
+            f"`correspondence` must be an integer array of shape ({n},); got {correspondence.shape} "
             f"of dtype {correspondence.dtype}."
         )
     if correspondence.size and (correspondence.min() < 0 or correspondence.max() >= fixed.shape[0]):
-        raise ValueError(f"`correspondence` must index into `fixed` (0 .. {fixed.shape[0] - 1}); got out-of-range values.")
+        raise InputError(f"`correspondence` must index into `fixed` (0 .. {fixed.shape[0] - 1}); got out-of-range values.")
+    max_lines = int(max_lines)
+    max_edges = 3 * n if max_edges is None else int(max_edges)
     if ax is None:
-        _, ax = plt.subplots(figsize=(10, 5))
+        _, ax = plt.subplots(figsize=(10, 5), layout="constrained")
     span = np.ptp(np.vstack([moving, fixed]), axis=0)
     right = fixed + np.array([moving[:, 0].max() - fixed[:, 0].min() + 0.3 * max(span[0], 1e-12), 0.0])
-    for pts, graph in ((moving, moving_graph), (right, fixed_graph)):
-        if graph is not None:
-            coo = sparse.triu(sparse.csr_array(graph), k=1).tocoo()
-            ax.add_collection(LineCollection(np.stack([pts[coo.row], pts[coo.col]], axis=1), colors="0.75", linewidths=0.5))
-    ax.add_collection(
-        LineCollection(np.stack([moving, right[correspondence]], axis=1), colors="tab:orange", linewidths=0.8, alpha=0.8)
-    )
-    ax.scatter(moving[:, 0], moving[:, 1], s=12, color="tab:blue", zorder=3, label="moving")
-    ax.scatter(right[:, 0], right[:, 1], s=12, color="tab:green", zorder=3, label="fixed")
+    colours = plt.get_cmap("hsv")(np.linspace(0, 0.9, n)) if n else np.empty((0, 4))
+    shown = np.unique(np.linspace(0, n - 1, min(max_lines, n)).round().astype(int)) if n and max_lines > 0 else []
+    ax.add_collection(LineCollection(
+        np.stack([moving[shown], right[correspondence[shown]]], axis=1) if len(shown) else np.empty((0, 2, 2)),
+        colors=colours[shown] if len(shown) else "0.5", linewidths=0.6, alpha=0.7, zorder=2,
+    ))
+    for pts, graph, name in ((moving, moving_graph, "moving"), (right, fixed_graph, "fixed")):
+        if graph is None:
+            continue
+        coo = sparse.triu(sparse.csr_array(graph), k=1).tocoo()
+        if coo.nnz > max_edges:
+            ax.plot([], [], " ", label=f"{name} graph: {coo.nnz} edges, not drawn")
+            continue
+        ax.add_collection(LineCollection(np.stack([pts[coo.row], pts[coo.col]], axis=1), colors="0.8", linewidths=0.4,
+                                         zorder=1))
+    fixed_colours = np.empty_like(colours)
+    fixed_colours[correspondence] = colours
+    ax.scatter(moving[:, 0], moving[:, 1], s=14, c=colours, edgecolors="k", linewidths=0.3, zorder=3, label="moving")
+    ax.scatter(right[:, 0], right[:, 1], s=14, c=fixed_colours, marker="s", edgecolors="k", linewidths=0.3, zorder=3,
+               label="fixed (matched point in the same colour)")
     ax.set_aspect("equal")
     ax.autoscale_view()
-    ax.legend(loc="upper right")
+    ax.set_xticks([])
+    ax.set_yticks([])
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.02), ncol=2, fontsize=8, frameon=False)
     if title:
         ax.set_title(title)
     return ax
 
 
-def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, title=None):
+def plot_registration(fixed, moving, *, ax=None, title=None, fixed_label="fixed", moving_label="moving", legend=True):
+    """One panel of a registration: the fixed set (red stars) and the moving set (blue circles).
+
+    Use it twice for a before/after pair. 2D panels have equal aspect; 3D panels (a 3D
+    Axes, created when ``ax`` is None) have the same scale on every axis and small
+    markers.
+
+    Parameters
+    ----------
+    fixed : array_like of shape (N, D), D in {2, 3}
+    moving : array_like of shape (M, D)
+        E.g. the moving set before registration, or ``estimator.moving_transformed_``.
+    ax : matplotlib Axes, optional
+    title, fixed_label, moving_label : str, optional
+    legend : bool, default=True
+
+    Returns
+    -------
+    ax : matplotlib Axes
+
+    Examples
+    --------
+    >>> import matplotlib
+    >>> matplotlib.use("Agg")
+    >>> x = np.random.default_rng(0).random((20, 3))
+    >>> ax = plot_registration(x, x + 0.1, title="before")
+    >>> ax.name, len(ax.collections)
+    ('3d', 2)
+    """
+    import matplotlib.pyplot as plt
+
+    fixed = as_points(fixed, name="fixed", n_dims=(2, 3))
+    moving = as_points(moving, name="moving", n_dims=(fixed.shape[1],))
+    three_d = fixed.shape[1] == 3
+    if ax is None:
+        fig = plt.figure(figsize=(4.5, 4.2), layout="constrained")
+        ax = fig.add_subplot(projection="3d" if three_d else None)
+    else:
+        _check_ax(ax, three_d=three_d, why=f"for {fixed.shape[1]}D points")
+    size = 5 if three_d else 14
+    extra = {"depthshade": False} if three_d else {}
+    ax.scatter(*fixed.T, marker="*", s=size * 1.6, color="tab:red", label=fixed_label, **extra)
+    ax.scatter(*moving.T, marker="o", s=size, facecolors="none", edgecolors="tab:blue", linewidths=0.7,
+               label=moving_label, **extra)
+    if three_d:
+        _equal_3d(ax, np.vstack([fixed, moving]))
+    else:
+        ax.set_aspect("equal")
+        ax.tick_params(labelsize=7)
+    if legend:
+        ax.legend(fontsize=7, loc="best")
+    if title:
+        ax.set_title(title, fontsize=10)
+    return ax
+
+
+def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, title=None, final=True):
     """A grid of registrations: one column per method, one row per iteration (thesis figs. 5.4, 5.5).
+
+    Every method is shown at the same iterations (the rows), so the columns compare
+    like with like; a method that stopped before an iteration shows its last state, with
+    the iteration it is from in its title. With ``final`` a last row shows each method's
+    final state. One legend (fixed: red stars, moving: blue circles) serves the grid.
 
     Parameters
     ----------
@@ -401,10 +572,12 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
         ``{method label: {iteration: moving points (M, D)}}``, e.g. from
         :class:`centrality_vision.registration.Snapshots`; drawn as blue circles.
     iterations : sequence of int, optional
-        Rows to draw; by default every iteration any method recorded. A method that stopped
-        earlier shows its last recorded state, titled with the iteration it is from.
+        Rows to draw; by default the iterations recorded by every method (or, if they
+        share none, by any method), without each method's final frame.
     fig : matplotlib Figure, optional
     title : str, optional
+    final : bool, default=True
+        Add a row with each method's last recorded state.
 
     Returns
     -------
@@ -414,13 +587,13 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
     --------
     >>> import matplotlib
     >>> matplotlib.use("Agg")
-    >>> import numpy as np
     >>> x = np.random.default_rng(0).random((20, 2))
-    >>> fig = plot_registration_snapshots(x, {"CPD": {1: x + 0.1, 2: x}, "GPD": {1: x}})
-    >>> len(fig.axes)
+    >>> fig = plot_registration_snapshots(x, {"CPD": {0: x + 0.2, 1: x + 0.1, 2: x}, "GPD": {0: x + 0.2, 1: x}})
+    >>> len(fig.axes)  # rows: iteration 0 (recorded by both) and the final states; two columns
     4
     """
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     fixed = as_points(fixed, name="fixed", n_dims=(2, 3))
     dim = fixed.shape[1]
@@ -431,53 +604,88 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
         if not isinstance(record, dict) or not record:
             raise InputError(f"`snapshots[{label!r}]` must be a non-empty dict {{iteration: points}}; got {_describe(record)}.")
         frames[label] = {int(k): as_points(v, name=f"snapshots[{label!r}][{k}]", n_dims=(dim,)) for k, v in record.items()}
-    rows = sorted({k for record in frames.values() for k in record}) if iterations is None else [int(i) for i in iterations]
-    if not rows:
+    if iterations is None:
+        inner = [set(record) - {max(record)} for record in frames.values()]
+        rows = sorted(set.intersection(*inner)) or sorted(set.union(*inner))
+    else:
+        rows = [int(i) for i in iterations]
+    if not rows and not final:
         raise InputError("`iterations` must name at least one iteration.")
     cols = list(frames)
+    n_rows = len(rows) + bool(final)
     if fig is None:
         span = np.ptp(fixed, axis=0)
         aspect = float(span[1] / span[0]) if dim == 2 and span[0] > 0 else 1.0
-        fig = plt.figure(figsize=(2.6 * len(cols), 0.6 + 2.6 * min(max(aspect, 0.4), 1.5) * len(rows)))
+        fig = plt.figure(figsize=(2.6 * len(cols), 0.9 + 2.6 * min(max(aspect, 0.4), 1.5) * n_rows))
     kw = {"projection": "3d"} if dim == 3 else {}
-    for r, iteration in enumerate(rows):
+    extra = {"depthshade": False} if dim == 3 else {}
+    size = 4 if dim == 3 else 10
+    for r in range(n_rows):
+        iteration = rows[r] if r < len(rows) else None
         for c, label in enumerate(cols):
-            ax = fig.add_subplot(len(rows), len(cols), r * len(cols) + c + 1, **kw)
+            ax = fig.add_subplot(n_rows, len(cols), r * len(cols) + c + 1, **kw)
             record = frames[label]
-            shown = max((k for k in record if k <= iteration), default=min(record))
+            last = max(record)
+            if iteration is None:
+                shown = last
+                heading = f"{label}: final ({last} it.)"
+            else:
+                shown = max((k for k in record if k <= iteration), default=min(record))
+                heading = label if shown == iteration else f"{label}: stopped at {shown}"
+                if r > 0 and shown == iteration:
+                    heading = ""
             moving = record[shown]
-            ax.scatter(*fixed.T, marker="*", s=14, color="tab:red", label="fixed")
-            ax.scatter(*moving.T, marker="o", s=10, facecolors="none", edgecolors="tab:blue", label="moving")
+            ax.scatter(*fixed.T, marker="*", s=size * 1.4, color="tab:red", **extra)
+            ax.scatter(*moving.T, marker="o", s=size, facecolors="none", edgecolors="tab:blue", linewidths=0.6, **extra)
             if dim == 2:
                 ax.set_aspect("equal")
+            else:
+                _equal_3d(ax, np.vstack([fixed, moving]))
+                ax.set_zticks([])
             ax.set_xticks([])
             ax.set_yticks([])
-            if dim == 3:
-                ax.set_zticks([])
-            heading = f"{label}: {shown}" if shown != iteration else label
-            ax.set_title(heading if r == 0 or shown != iteration else "", fontsize=9)
+            ax.set_title(heading, fontsize=8)
+            row_name = "final" if iteration is None else f"iteration {iteration}"
             if c == 0 and dim == 3:
-                ax.text2D(-0.1, 0.5, f"iteration {iteration}", transform=ax.transAxes, rotation=90, va="center")
+                ax.text2D(-0.1, 0.5, row_name, transform=ax.transAxes, rotation=90, va="center", fontsize=8)
             elif c == 0:
-                ax.set_ylabel(f"iteration {iteration}")
+                ax.set_ylabel(row_name, fontsize=8)
+    handles = [Line2D([], [], marker="*", color="tab:red", ls="", label="fixed"),
+               Line2D([], [], marker="o", mfc="none", mec="tab:blue", ls="", label="moving")]
+    fig.legend(handles=handles, loc="upper right", ncol=2, fontsize=8, frameon=False)
     if title:
-        fig.suptitle(title)
-    fig.tight_layout()
+        fig.suptitle(title, x=0.02, ha="left", fontsize=10)
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
     return fig
 
 
-def plot_alignment_errors(errors, *, ax=None, title=None, log=False):
+_LINE_STYLES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1)))
+_MARKERS = ("o", "s", "^", "D", "v", "x")
+
+
+def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=None, ylabel=None):
     """Alignment error per iteration for several methods on one plot (thesis figs. 5.3, 5.6, 5.8).
+
+    Each method gets its own colour, line style and marker (placed every few
+    iterations), so lines that coincide stay distinguishable; the error axis is
+    logarithmic by default, where convergence rates are straight lines and the late
+    iterations are not squashed onto zero (values <= 0 are left out of a log axis).
 
     Parameters
     ----------
     errors : dict
-        ``{method label: sequence of errors}``, entry ``k`` after ``k`` iterations
-        (e.g. ``estimator.history_["error"]``).
+        ``{method label: sequence of errors}``, entry ``k`` after ``k`` iterations.
     ax : matplotlib Axes, optional
     title : str, optional
-    log : bool, default=False
+    log : bool, default=True
         Logarithmic error axis.
+    n_points : int, optional
+        If given, ``errors`` are Frobenius norms ``|X - T(Y)|`` over ``n_points``
+        points (e.g. ``estimator.history_["error"]``) and are drawn as the per-point
+        RMS error ``|X - T(Y)| / sqrt(n_points)``, which does not grow with the size
+        of the set.
+    ylabel : str, optional
+        Label of the error axis (by default it says which error is drawn).
 
     Returns
     -------
@@ -487,29 +695,43 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=False):
     --------
     >>> import matplotlib
     >>> matplotlib.use("Agg")
-    >>> ax = plot_alignment_errors({"CPD": [4.0, 2.0, 1.0], "GPD (closeness)": [4.0, 1.0, 0.5]})
-    >>> len(ax.lines)
-    2
+    >>> ax = plot_alignment_errors({"CPD": [4.0, 2.0, 1.0], "GPD (closeness)": [4.0, 1.0, 0.5]}, n_points=4)
+    >>> len(ax.lines), ax.get_yscale(), ax.lines[0].get_ydata().tolist()
+    (2, 'log', [2.0, 1.0, 0.5])
     """
     import matplotlib.pyplot as plt
 
     if not isinstance(errors, dict) or not errors:
         raise TypeError(f"`errors` must be a non-empty dict {{label: errors per iteration}}; got {_describe(errors)}.")
+    scale = 1.0
+    if n_points is not None:
+        n_points = int(check_float(n_points, name="n_points", low=1))
+        scale = 1.0 / np.sqrt(n_points)
     if ax is None:
-        _, ax = plt.subplots(figsize=(5, 3.5))
+        _, ax = plt.subplots(figsize=(5.5, 3.8), layout="constrained")
     else:
         _check_ax(ax, three_d=False, why="for error curves")
-    for label, values in errors.items():
+    top, low = 0.0, np.inf
+    for k, (label, values) in enumerate(errors.items()):
         if values is None:
             raise InputError(f"`errors[{label!r}]` is None: fit with `true_moving=` to record alignment errors.")
-        v = _as_values(values, n=len(values), other=f"errors[{label!r}]")
-        ax.plot(np.arange(v.size), v, label=str(label), lw=1.5)
+        v = _as_values(values, n=len(values), other=f"errors[{label!r}]") * scale
+        top = max(top, float(v.max(initial=0.0)))
+        low = min(low, float(v[v > 0].min(initial=np.inf)))
+        every = max(1, v.size // 8)
+        ax.plot(np.arange(v.size), v, label=str(label), lw=1.4, color=f"C{k % 10}",
+                ls=_LINE_STYLES[k % len(_LINE_STYLES)], marker=_MARKERS[k % len(_MARKERS)], ms=4,
+                markevery=(k % every, every), alpha=0.9)
     ax.set_xlabel("iteration")
-    ax.set_ylabel(r"$\|X - T(Y)\|$")
+    if ylabel is None:
+        ylabel = "per-point RMS error" if n_points is not None else "alignment error"
+    ax.set_ylabel(ylabel)
     if log:
-        ax.set_yscale("log")
+        ax.set_yscale("log", nonpositive="mask")
+        if np.isfinite(low) and top > 0:  # rounding-level tails (1e-16) would squash the curves
+            ax.set_ylim(bottom=max(low, top * 1e-10) / 2, top=top * 2)
     ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
+    ax.grid(alpha=0.3, which="both")
     if title:
-        ax.set_title(title)
+        ax.set_title(title, fontsize=10)
     return ax

@@ -1,0 +1,93 @@
+"""The ``centrality-vision`` command.
+
+One module per subcommand, each holding its arguments beside its handler
+(``add_parser(sub)`` and ``run(args) -> int``): :mod:`.graph`, :mod:`.centrality`,
+:mod:`.register`, :mod:`.match`, :mod:`.classify`, :mod:`.demo` and :mod:`.reproduce`
+(which reads the one registry of experiments, :mod:`centrality_vision.experiments`).
+Files are read by :mod:`centrality_vision.io` and written by one output writer
+(:mod:`._output`), always with the run's parameters. Heavy imports happen inside each
+handler; progress bars, notes and warnings go to stderr, one line each, and bars only
+when stderr is a terminal unless ``--progress``/``--no-progress`` says otherwise. The
+command line, not the library, chooses matplotlib's Agg backend.
+
+``main(argv) -> int`` returns the exit status: 0 success; 2 a usage error, a bad input
+(:class:`~centrality_vision.exceptions.InputError`) or a file that cannot be read or
+written (``OSError``), each told in one line; 130 interrupted; 1 a bug, shown with its
+traceback.
+"""
+
+from __future__ import annotations
+
+import sys
+
+from . import centrality, classify, demo, graph, match, register, reproduce
+from ._common import CENTRALITY_NAMES, GPD_GRAPHS, GRAPH_KINDS, Parser, quiet_progress, progress_on
+
+__all__ = ["main", "build_parser", "CENTRALITY_NAMES", "GPD_GRAPHS", "GRAPH_KINDS"]
+
+#: The subcommands, in the order of ``--help``.
+COMMANDS = (demo, reproduce, graph, centrality, register, match, classify)
+
+
+def build_parser() -> Parser:
+    """The argument parser of ``centrality-vision`` with every subcommand."""
+    from .. import __version__
+
+    parser = Parser(prog="centrality-vision", description="Graph centrality for computer vision (de Sousa, TU Wien, 2015).")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for command in COMMANDS:
+        command.add_parser(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; return the exit status (0 success, 2 bad input, 1 a bug, 130 interrupted).
+
+    Usage errors exit through :class:`SystemExit` (status 2), as argparse does. Bad inputs
+    (:class:`~centrality_vision.exceptions.InputError`) and files that cannot be read or
+    written (``OSError``) are printed as one line on stderr and give status 2. Any other
+    exception is a bug: its traceback is printed and the status is 1. Warnings are
+    printed as one line each and recorded in the outputs that keep them.
+    """
+    import traceback
+    import warnings
+
+    from ..exceptions import InputError
+
+    parser = build_parser()
+    args, extras = parser.parse_known_args(argv)
+    if extras:  # argparse would blame the top-level parser; name the subcommand instead
+        getattr(args, "_parser", parser).error(f"unrecognized arguments: {' '.join(extras)}")
+    if args.command is None:
+        parser.print_help()
+        return 0
+    prog = f"centrality-vision {args.command}"
+    args._warnings = []
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        text = " ".join(str(message).split())
+        args._warnings.append(f"{category.__name__}: {text}")
+        print(f"{prog}: warning: {text}", file=sys.stderr)
+
+    try:
+        with warnings.catch_warnings(), quiet_progress(progress_on(args)):
+            warnings.filterwarnings("always", category=UserWarning)  # shown on one line, never raised
+            warnings.showwarning = show
+            return args.run(args)
+    except (InputError, OSError) as exc:
+        message = " ".join(str(exc).split()) or type(exc).__name__
+        print(f"{prog}: error: {message}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+    except Exception:
+        traceback.print_exc()
+        print(f"{prog}: internal error (a bug in centrality-vision; please report it with the traceback above)",
+              file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

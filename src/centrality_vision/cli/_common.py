@@ -1,0 +1,250 @@
+"""What the subcommands share: argument types and options, messages, progress, figures."""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import sys
+from pathlib import Path
+
+__all__ = [
+    "GRAPH_KINDS", "GPD_GRAPHS", "CENTRALITY_NAMES", "FIGURE_SUFFIXES", "Parser", "subparser", "number", "out_file",
+    "add_out", "add_plot", "add_progress", "add_point_options", "progress_on", "quiet_progress", "say", "options",
+    "suffix", "pyplot", "data_graph", "edge_list", "transform_record",
+]
+
+# Spelled out here so that building the parser imports nothing heavy; tests check them
+# against centrality_vision.centrality.CENTRALITIES and centrality_vision.registration.GRAPHS.
+GRAPH_KINDS = ("delaunay", "gabriel", "emst", "knn", "complete", "mwme", "mstme")
+GPD_GRAPHS = ("delaunay", "gabriel", "emst", "knn", "complete")
+CENTRALITY_NAMES = ("degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity")
+FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
+POINT_FILES = ".csv, .txt, .xyz, .npy, .mat, .ply, .pcd or .obj"
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse, with usage errors on one line (the message and where to find help)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see '{self.prog} --help')\n")
+
+
+def subparser(sub, name: str, *, summary: str, description: str, example: str) -> argparse.ArgumentParser:
+    """A subcommand whose help shows ``summary``, ``description`` and an example."""
+    return sub.add_parser(
+        name,
+        help=summary,
+        description=summary + "\n\n" + description,
+        epilog="example:\n  " + example.strip().replace("\n", "\n  "),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+
+
+def number(kind, *, low=None, low_open=False, high=None, high_open=False):
+    """An argparse type: an int or float in a range."""
+
+    def check(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            wanted = "an integer" if kind is int else "a number"
+            raise argparse.ArgumentTypeError(f"must be {wanted}; got {text!r}") from None
+        if kind is float and value != value:
+            raise argparse.ArgumentTypeError(f"must be a number; got {text!r}")
+        too_low = low is not None and (value <= low if low_open else value < low)
+        too_high = high is not None and (value >= high if high_open else value > high)
+        if too_low or too_high:
+            left = "(" if low_open else "["
+            right = ")" if high_open else "]"
+            span = f"{left}{'-inf' if low is None else low}, {'inf' if high is None else high}{right}"
+            raise argparse.ArgumentTypeError(f"must be in {span}; got {text}")
+        return value
+
+    check.__name__ = "integer" if kind is int else "number"
+    return check
+
+
+def suffix(path) -> str:
+    return Path(path).suffix.lower()
+
+
+def out_file(*suffixes: str):
+    """An argparse type: an output path whose suffix is one of ``suffixes``."""
+
+    def check(text: str) -> str:
+        if suffix(text) not in suffixes:
+            raise argparse.ArgumentTypeError(f"{text!r} must end in {' or '.join(suffixes)}")
+        return text
+
+    check.__name__ = "output file"
+    return check
+
+
+def add_out(parser: argparse.ArgumentParser, *suffixes: str, what: str = "") -> None:
+    kinds = ", ".join(suffixes)
+    parser.add_argument("--out", required=True, metavar="FILE", type=out_file(*suffixes),
+                        help=f"output file ({kinds}){what}")
+
+
+def add_plot(parser: argparse.ArgumentParser, what: str) -> None:
+    kinds = ", ".join(FIGURE_SUFFIXES[:-1])
+    parser.add_argument("--plot", metavar="FILE.png", type=out_file(*FIGURE_SUFFIXES), help=f"also draw {what} ({kinds})")
+
+
+def add_progress(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "--progress", action=argparse.BooleanOptionalAction, default=None,
+        help="show progress bars on stderr (default: only when stderr is a terminal)",
+    )
+
+
+def add_point_options(parser: argparse.ArgumentParser) -> None:
+    """--columns and --variable, for commands that read point sets."""
+    parser.add_argument(
+        "--columns", metavar="COLS",
+        help="coordinate columns of text, PLY and PCD files, by name or 0-based index, e.g. x,y,z or 1,2 "
+        "(default: the columns named x, y[, z], else all columns but an index column)",
+    )
+    parser.add_argument("--variable", metavar="NAME", help="the array to read from .mat files (default: the only 2D array)")
+
+
+def progress_on(args: argparse.Namespace) -> bool:
+    """--progress / --no-progress, and by default whether stderr is a terminal."""
+    chosen = getattr(args, "progress", None)
+    if chosen is not None:
+        return bool(chosen)
+    isatty = getattr(sys.stderr, "isatty", None)
+    return bool(isatty and isatty())
+
+
+@contextlib.contextmanager
+def quiet_progress(enabled: bool):
+    """With ``enabled`` False, every tqdm bar created meanwhile in this process is disabled.
+
+    The subcommands pass ``progress=`` to the library explicitly; this also covers bars in
+    code they call indirectly (experiments, shape caches), so that no bar text reaches a
+    log file when progress is off.
+    """
+    if enabled:
+        yield
+        return
+    from functools import partialmethod
+
+    from tqdm import std
+
+    original = std.tqdm.__init__
+    std.tqdm.__init__ = partialmethod(original, disable=True)
+    try:
+        yield
+    finally:
+        std.tqdm.__init__ = original
+
+
+def say(message: str) -> None:
+    """Progress and notes go to stderr; stdout is kept for results a user asked to see."""
+    print(message, file=sys.stderr)
+
+
+def options(args: argparse.Namespace) -> dict:
+    """Every option of the run, for the "parameters" block of the outputs."""
+    return {key: value for key, value in vars(args).items() if key not in ("run", "progress") and not key.startswith("_")}
+
+
+def pyplot():
+    """matplotlib.pyplot with the Agg backend: the command line writes files, never opens a window.
+
+    The command line is the one place that chooses the backend; the library never does.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def read_point_file(path, args: argparse.Namespace, **kwargs):
+    """``centrality_vision.io.read_points`` with the command's --columns and --variable."""
+    from ..io import read_points
+
+    return read_points(path, columns=getattr(args, "columns", None), variable=getattr(args, "variable", None), **kwargs)
+
+
+def data_graph(points, kind: str, *, k: int, lam: float, source=None, progress: bool = False):
+    """The data-graph ``kind`` of ``points``, and a dict of what the builder reports beside it.
+
+    An :class:`InputError` about the points (too few, duplicates, collinear) is raised
+    again with ``source``, the file they came from, in front.
+    """
+    from ..exceptions import InputError
+
+    try:
+        return _build_graph(points, kind, k=k, lam=lam, progress=progress)
+    except InputError as exc:
+        if source is None:
+            raise
+        raise InputError(f"{source}: {kind} graph: {exc}") from None
+
+
+def _build_graph(points, kind: str, *, k: int, lam: float, progress: bool):
+    from .. import graphs
+    from ..exceptions import InputError
+
+    if kind == "knn":
+        if k >= points.shape[0]:
+            raise InputError(f"--k must be smaller than the number of points ({points.shape[0]}); got {k}.")
+        return graphs.knn_graph(points, k=k), {}
+    if kind == "mwme":
+        result = graphs.mwme_graph(points, progress=progress)
+        return result.graph, {"cost": float(result.cost), "degrees": result.degrees}
+    if kind == "mstme":
+        result = graphs.mstme_graph(points, lam=lam)
+        extra = {"cost": float(result.cost), "weight": float(result.weight), "entropy": float(result.entropy)}
+        return result.graph, extra
+    builder = {
+        "delaunay": graphs.delaunay_graph,
+        "gabriel": graphs.gabriel_graph,
+        "emst": graphs.emst_graph,
+        "complete": graphs.complete_graph,
+    }[kind]
+    return builder(points), {}
+
+
+def add_graph_options(parser: argparse.ArgumentParser, flag: str, *, help_text: str) -> None:
+    parser.add_argument(flag, choices=GRAPH_KINDS, default="delaunay", help=help_text + " (default: %(default)s)")
+    parser.add_argument(
+        "--k", type=number(int, low=1), default=6, help="neighbours per point for the knn graph (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--lam", type=number(float, low=0), default=0.5,
+        help="weight of the degree entropy for the mstme graph; 0 gives the EMST (default: %(default)s)",
+    )
+
+
+def edge_list(points, graph):
+    """Edges ``i < j`` of a symmetric sparse graph, sorted, with their Euclidean lengths."""
+    import numpy as np
+    from scipy import sparse
+
+    upper = sparse.triu(sparse.coo_array(graph), k=1).tocoo()
+    order = np.lexsort((upper.col, upper.row))
+    i = upper.row[order].astype(np.int64)
+    j = upper.col[order].astype(np.int64)
+    return i, j, np.linalg.norm(points[i] - points[j], axis=1)
+
+
+def transform_record(transform) -> dict:
+    """A transform as named arrays: type, rotation/linear, translation, scale, matrix, or the kernel parts."""
+    from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, SimilarityTransform
+
+    if isinstance(transform, NonRigidTransform):
+        return {"type": "nonrigid", "control_points": transform.control_points,
+                "coefficients": transform.coefficients, "beta": float(transform.beta)}
+    if isinstance(transform, AffineTransform):
+        return {"type": "affine", "linear": transform.linear, "translation": transform.translation,
+                "matrix": transform.matrix}
+    if isinstance(transform, SimilarityTransform):
+        kind = "rigid" if isinstance(transform, RigidTransform) else "similarity"
+        return {"type": kind, "rotation": transform.rotation, "translation": transform.translation,
+                "scale": float(transform.scale), "matrix": transform.matrix}
+    raise TypeError(f"unknown transform type {type(transform).__name__}")  # pragma: no cover

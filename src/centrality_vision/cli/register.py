@@ -1,0 +1,225 @@
+"""``centrality-vision register``: align a moving point set onto a fixed one (CPD, GPD, ICP)."""
+
+from __future__ import annotations
+
+import argparse
+import time
+from pathlib import Path
+
+from ._common import (CENTRALITY_NAMES, GPD_GRAPHS, POINT_FILES, add_out, add_plot, add_point_options, add_progress,
+                      number, options, progress_on, pyplot, read_point_file, say, subparser, suffix, transform_record)
+from ._output import parameters_block, write_output
+
+NAME = "register"
+POINT_OUTPUTS = (".csv", ".txt", ".xyz", ".npy", ".mat", ".ply", ".pcd", ".obj")
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    parser = subparser(
+        sub, NAME,
+        summary="Align a moving point set onto a fixed one (CPD, GPD or ICP) and write the result.",
+        description=f"MOVING and FIXED are point-set files ({POINT_FILES}) of the same dimension\n"
+        "(2 or 3); they need not have the same number of points. cpd is Coherent Point Drift,\n"
+        "gpd the thesis' Graph-based Point Drift (CPD whose matching also compares a centrality\n"
+        "of each point in a data-graph, ch. 5), icp Iterative Closest Point (rigid or similarity).\n"
+        "--true-moving: where each moving point truly belongs in the fixed frame (a row of NaN\n"
+        "marks a point with no true position, e.g. an outlier); the per-point RMS alignment\n"
+        "error over the other points is then recorded per iteration (and plotted with --plot).\n"
+        "--out .json/.npz: the transform, the aligned moving set, iterations, convergence, the\n"
+        "history of objective/sigma2/error, the correspondences and every parameter.\n"
+        f"--out a point-set file ({', '.join(POINT_OUTPUTS)}): the aligned moving set, and all the\n"
+        "rest in NAME.json beside it.",
+        example="centrality-vision register fish_moving.txt fish_fixed.txt --method gpd --transform nonrigid \\\n"
+        "    --centrality closeness --out aligned.ply --plot aligned.png",
+    )
+    parser.add_argument("moving", metavar="MOVING", help="point set to move")
+    parser.add_argument("fixed", metavar="FIXED", help="point set to align onto")
+    add_point_options(parser)
+    parser.add_argument(
+        "--method", choices=("cpd", "gpd", "icp"), default="cpd", help="registration method (default: %(default)s)"
+    )
+    parser.add_argument("--transform", choices=("rigid", "similarity", "affine", "nonrigid"), default="similarity",
+                        help="transform family; similarity = rigid + isotropic scale (default: %(default)s)")
+    parser.add_argument("--centrality", choices=CENTRALITY_NAMES, default="closeness",
+                        help="GPD only: centrality of the points (default: %(default)s)")
+    parser.add_argument("--graph", choices=GPD_GRAPHS, default="delaunay",
+                        help="GPD only: data-graph the centrality is computed on (default: %(default)s)")
+    parser.add_argument("--k", type=number(int, low=1), default=6,
+                        help="GPD only: neighbours for --graph knn (default: %(default)s)")
+    parser.add_argument("--kappa", type=number(float, low=0, low_open=True, high=1), default=0.5,
+                        help="GPD only: geometry-vs-centrality balance, 1 = plain CPD (default: %(default)s)")
+    parser.add_argument("--w", type=number(float, low=0, high=1, high_open=True), default=0.0,
+                        help="CPD/GPD: weight of the outlier component, in [0, 1) (default: %(default)s)")
+    parser.add_argument("--max-iter", type=number(int, low=1), default=150, help="most iterations (default: %(default)s)")
+    parser.add_argument("--tol", type=number(float, low=0, low_open=True), default=1e-5,
+                        help="stop when the objective changes by less than this, relatively (default: %(default)s)")
+    parser.add_argument("--beta", type=number(float, low=0, low_open=True), default=2.0,
+                        help="nonrigid: width of the Gaussian kernel (default: %(default)s)")
+    parser.add_argument("--lam", type=number(float, low=0, low_open=True), default=2.0,
+                        help="nonrigid: smoothness weight (default: %(default)s)")
+    parser.add_argument("--true-moving", metavar="FILE",
+                        help="true positions of the moving points (NaN rows allowed), to record the alignment error")
+    add_out(parser, ".json", ".npz", *POINT_OUTPUTS)
+    add_plot(parser, "the fixed set and the moving set before and after, and the error curve with --true-moving")
+    add_progress(parser)
+    parser.set_defaults(run=run, _parser=parser)
+    return parser
+
+
+def _estimator(args: argparse.Namespace, callback):
+    from ..exceptions import InputError
+    from ..registration import GPD, ICP, AffineCPD, NonRigidCPD, RigidCPD
+
+    if args.method == "icp":
+        if args.transform not in ("rigid", "similarity"):
+            raise InputError(
+                f"ICP fits rigid or similarity transforms only; got --transform {args.transform}. "
+                "Use --method cpd or gpd for affine and nonrigid."
+            )
+        return ICP(scale=args.transform == "similarity", max_iter=args.max_iter, tol=args.tol, callback=callback)
+    common = {"w": args.w, "max_iter": args.max_iter, "tol": args.tol, "callback": callback}
+    if args.transform in ("rigid", "similarity"):
+        base = RigidCPD(scale=args.transform == "similarity", **common)
+    elif args.transform == "affine":
+        base = AffineCPD(**common)
+    else:
+        base = NonRigidCPD(beta=args.beta, lam=args.lam, **common)
+    if args.method == "cpd":
+        return base
+    return GPD(base, centrality=args.centrality, graph=args.graph, kappa=args.kappa, k=args.k)
+
+
+class _Watch:
+    """The callback of the run: a progress bar over iterations and the per-point RMS error."""
+
+    def __init__(self, *, total: int, label: str, show: bool, true_moving=None):
+        import numpy as np
+
+        self.rms: list[float] = []
+        self.first = None
+        self.true_moving = true_moving
+        self.known = None if true_moving is None else ~np.isnan(true_moving).any(axis=1)
+        self.bar = None
+        if show:
+            from tqdm.auto import tqdm
+
+            self.bar = tqdm(total=total, desc=label, unit="iter", leave=False)
+
+    def __call__(self, info) -> None:
+        import numpy as np
+
+        moved = np.asarray(info.moving_transformed)
+        if self.first is None:
+            self.first = moved.copy()
+        if self.true_moving is not None:
+            diff = moved[self.known] - self.true_moving[self.known]
+            self.rms.append(float(np.sqrt(np.mean(np.sum(diff**2, axis=1)))))
+        if self.bar is not None and info.iteration > 0:
+            self.bar.update(1)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def run(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ..exceptions import InputError
+
+    started = time.perf_counter()
+    _estimator(args, None)  # a bad combination fails before any reading
+    moving = read_point_file(args.moving, args)
+    fixed = read_point_file(args.fixed, args)
+    if moving.shape[1] != fixed.shape[1]:
+        raise InputError(
+            f"{args.moving} and {args.fixed}: the point sets must have the same dimension; "
+            f"got {moving.shape[1]} and {fixed.shape[1]} columns."
+        )
+    if suffix(args.out) in (".ply", ".pcd", ".obj") and moving.shape[1] != 3:
+        raise InputError(f"--out {args.out}: {suffix(args.out)} files hold 3D points; got 2D sets "
+                         "(write .csv, .txt, .npy or .mat).")
+    true_moving = None
+    if args.true_moving is not None:
+        true_moving = read_point_file(args.true_moving, args, nan_rows=True)
+        if true_moving.shape != moving.shape:
+            raise InputError(
+                f"{args.true_moving}: --true-moving must have the shape of the moving set {moving.shape}; "
+                f"got {true_moving.shape}."
+            )
+        if np.isnan(true_moving).all():
+            raise InputError(f"{args.true_moving}: every row is NaN; no point has a true position.")
+    label = f"{args.method.upper()} ({args.transform})"
+    if args.method == "gpd":
+        label = f"GPD ({args.transform}, {args.centrality}, {args.graph})"
+    say(f"{label}: moving {args.moving} ({moving.shape[0]} points), fixed {args.fixed} ({fixed.shape[0]} points), "
+        f"{moving.shape[1]}D")
+    watch = _Watch(total=args.max_iter, label=label, show=progress_on(args), true_moving=true_moving)
+    estimator = _estimator(args, watch)
+    try:
+        estimator.fit(moving, fixed)
+    finally:
+        watch.close()
+    seconds = time.perf_counter() - started
+    status = "converged" if estimator.converged_ else "stopped at --max-iter without converging"
+    say(f"{label}: {status} after {estimator.n_iter_} iterations in {seconds:.2f} s")
+
+    history = {key: (None if value is None or all(v is None for v in value) else np.asarray(value))
+               for key, value in estimator.history_.items() if key != "error"}
+    history["alignment_rms"] = np.asarray(watch.rms) if true_moving is not None else None
+    sigma2 = getattr(estimator, "sigma2_", None)
+    transform = transform_record(estimator.transform_)
+    record = {
+        "command": NAME,
+        "parameters": parameters_block(options(args)),
+        "estimator": " ".join(repr(estimator).split()),
+        "transform": transform,
+        "n_iter": int(estimator.n_iter_),
+        "converged": bool(estimator.converged_),
+        "sigma2": None if sigma2 is None else float(sigma2),
+        "final_alignment_rms": watch.rms[-1] if watch.rms else None,
+        "n_true_points": None if true_moving is None else int(watch.known.sum()),
+        "history": history,
+        "correspondence": np.asarray(estimator.correspondence_, dtype=np.int64),
+        "correspondence_meaning": "for each fixed point, the index of the moving point it is matched to"
+        + ("" if args.method == "icp" else " (the most probable; -1 for an outlier)"),
+        "warnings": list(getattr(args, "_warnings", [])),
+        "seconds": round(seconds, 3),
+    }
+    if args.method == "gpd":
+        record["moving_centrality"] = estimator.moving_centrality_
+        record["fixed_centrality"] = estimator.fixed_centrality_
+    aligned = estimator.moving_transformed_
+    if suffix(args.out) in (".json", ".npz"):
+        record["moving_transformed"] = aligned
+    arrays = {f"transform_{key}": value for key, value in transform.items()}
+    arrays.update({f"history_{key}": value for key, value in history.items()})
+    arrays.update({key: value for key, value in record.items()
+                   if key not in ("transform", "history", "warnings", "parameters", "command")})
+    arrays["warnings"] = np.array(record["warnings"], dtype=str)
+    written = write_output(args.out, record, arrays=arrays, points=aligned)
+    if args.plot:
+        _plot(args, fixed, watch.first if watch.first is not None else moving, aligned, watch.rms, label)
+        written.append(Path(args.plot))
+    say(f"wrote {', '.join(map(str, written))}")
+    return 0
+
+
+def _plot(args, fixed, before, after, rms, label) -> None:
+    from ..plotting import plot_alignment_errors, plot_registration, save_figure
+
+    plt = pyplot()
+    three_d = fixed.shape[1] == 3
+    n_panels = 3 if rms else 2
+    fig = plt.figure(figsize=(4.2 * n_panels, 4.2), layout="constrained")
+    kw = {"projection": "3d"} if three_d else {}
+    axes = [fig.add_subplot(1, n_panels, k + 1, **kw) for k in range(2)]
+    plot_registration(fixed, before, ax=axes[0], title="before", moving_label=f"moving ({Path(args.moving).name})",
+                      fixed_label=f"fixed ({Path(args.fixed).name})")
+    plot_registration(fixed, after, ax=axes[1], title="after", moving_label="moving, aligned",
+                      fixed_label=f"fixed ({Path(args.fixed).name})")
+    if rms:
+        ax = fig.add_subplot(1, n_panels, 3)
+        plot_alignment_errors({label: rms}, ax=ax, title="alignment error")
+    fig.suptitle(label)
+    save_figure(fig, args.plot)

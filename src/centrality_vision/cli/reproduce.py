@@ -1,0 +1,54 @@
+"""``centrality-vision reproduce``: re-run a thesis experiment from the one registry of experiments."""
+
+from __future__ import annotations
+
+import argparse
+
+from ._common import add_progress
+
+NAME = "reproduce"
+
+
+def add_parser(sub) -> argparse.ArgumentParser:
+    from ..experiments import EXPERIMENTS, RUNNER_EXPERIMENTS
+
+    parser = sub.add_parser(
+        NAME,
+        help="Re-run one of the thesis' experiments and print our numbers beside the thesis'.",
+        description="Re-run a thesis experiment; tables and figures are written under --out/<experiment>/. "
+        "'all' runs every experiment and writes --out/report.md with every table and figure.",
+    )
+    parser.add_argument("experiment", choices=[*EXPERIMENTS, "all"], help="which table or figure, or all of them with a report")
+    parser.add_argument("--quick", action="store_true", help="a small version, for a first look or a test")
+    parser.add_argument("--seed", type=int, default=0, help="seed of every random choice (default: %(default)s)")
+    parser.add_argument("--out", default="results", help="output folder (default: %(default)s)")
+    parser.add_argument(
+        "--scheduler",
+        default=None,
+        help=f"where the units of {', '.join(RUNNER_EXPERIMENTS)} run: serial, processes (default), dask (a local "
+        "cluster started for the run) or tcp://host:port (a running Dask scheduler); finished units are kept and "
+        "skipped on a re-run",
+    )
+    add_progress(parser)
+    parser.set_defaults(run=run, _parser=parser)
+    return parser
+
+
+def run(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    from ..exceptions import InputError
+    from ..experiments import RUNNER_EXPERIMENTS, run_experiment
+
+    if args.experiment == "all":
+        from ..experiments.report import run_all
+
+        path = run_all(args.out, quick=args.quick, seed=args.seed, scheduler=args.scheduler)
+        print(f"wrote {path}")
+        return 0
+    if args.scheduler is not None and args.experiment not in RUNNER_EXPERIMENTS:
+        raise InputError(
+            f"`--scheduler` applies to {', '.join(RUNNER_EXPERIMENTS)} (and all); got it for {args.experiment}."
+        )
+    return run_experiment(args.experiment, Path(args.out) / args.experiment, quick=args.quick, seed=args.seed,
+                          scheduler=args.scheduler)
