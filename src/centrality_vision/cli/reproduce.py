@@ -10,7 +10,7 @@ NAME = "reproduce"
 
 
 def add_parser(sub) -> argparse.ArgumentParser:
-    from ..experiments import EXPERIMENTS, RUNNER_EXPERIMENTS
+    from ..experiments import EXPERIMENTS
 
     parser = sub.add_parser(
         NAME,
@@ -25,7 +25,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     parser.add_argument(
         "--scheduler",
         default=None,
-        help=f"where the units of {', '.join(RUNNER_EXPERIMENTS)} run: serial, processes (default), dask (a local "
+        help="where the units of the long experiments run: serial, processes (default), dask (a local "
         "cluster started for the run) or tcp://host:port (a running Dask scheduler); finished units are kept and "
         "skipped on a re-run",
     )
