@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from centrality_vision import __version__
+from centrality_vision import cli
 from centrality_vision.cli import main
 
 
@@ -129,7 +130,7 @@ def test_centrality_of_points_matches_the_graph(tmp_path):
     parameters = json.loads((tmp_path / "c.json").read_text())["parameters"]
     assert parameters["measure"] == "all" and parameters["graph"] == "delaunay" and parameters["seed"] is None
     header = lines[0].split(",")
-    assert header == ["node", "x", "y", "degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity"]
+    assert header == ["node", "x", "y", *cli.CENTRALITY_NAMES]
     table = np.loadtxt(out, delimiter=",", skiprows=1)
     graph = delaunay_graph(points)
     assert np.array_equal(table[:, 0], np.arange(12)) and np.allclose(table[:, 1:3], points)
@@ -177,7 +178,7 @@ def test_register_recovers_a_known_similarity(tmp_path, out):
         record = json.loads((tmp_path / out).read_text())
         transform, parameters = record["transform"], record["parameters"]
         history_error = record["history"]["alignment_rms"]
-        assert record["correspondence"] == list(range(91))
+        assert record["fixed_to_moving"] == list(range(91))
     else:
         with np.load(tmp_path / out, allow_pickle=False) as saved:
             record = {key: saved[key] for key in saved.files}

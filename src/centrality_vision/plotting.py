@@ -61,6 +61,10 @@ def _equal_3d(ax, points: np.ndarray) -> None:
     span = np.ptp(points, axis=0)
     span = np.where(span > 0, span, max(float(span.max()), 1.0) * 0.05)
     ax.set_box_aspect(tuple(span / span.max()))
+    from matplotlib.ticker import MaxNLocator
+
+    for axis, length in zip((ax.xaxis, ax.yaxis, ax.zaxis), span / span.max()):
+        axis.set_major_locator(MaxNLocator(nbins=max(2, int(round(5 * length))), prune="both"))
     ax.tick_params(labelsize=7, pad=0)
 
 
@@ -138,7 +142,9 @@ def plot_graph(
     edge_color : color, default="0.6"
         Colour of the edges (any matplotlib colour; the default is a mid grey).
     edge_width : float, default=0.8
-        Line width of the edges in points, >= 0.
+        Line width of the edges in points, >= 0. Graphs with more than 3 edges per node
+        (k-NN with large k, MWME, complete graphs) get translucent edges, so that the
+        nodes and the density of the edges stay visible.
     colorbar : bool, default=True
         Add a colorbar for ``values`` (ignored when ``values`` is None).
     label : str, optional
@@ -194,7 +200,9 @@ def plot_graph(
     cols = np.asarray(graph.indices, dtype=np.intp)
     upper = rows < cols
     segments = np.stack([points[rows[upper]], points[cols[upper]]], axis=1)  # (n_edges, 2, n_dims)
-    line_style = dict(colors=edge_color, linewidths=edge_width, zorder=1)
+    n_edges = int(np.count_nonzero(upper))
+    alpha = 1.0 if n_edges <= 3 * n else max(0.05, 3 * n / n_edges)
+    line_style = dict(colors=edge_color, linewidths=edge_width, alpha=alpha, zorder=1)
     if three_d:
         from mpl_toolkits.mplot3d.art3d import Line3DCollection
 

@@ -17,7 +17,7 @@ __all__ = [
 # against centrality_vision.centrality.CENTRALITIES and centrality_vision.registration.GRAPHS.
 GRAPH_KINDS = ("delaunay", "gabriel", "emst", "knn", "complete", "mwme", "mstme")
 GPD_GRAPHS = ("delaunay", "gabriel", "emst", "knn", "complete")
-CENTRALITY_NAMES = ("degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity")
+CENTRALITY_NAMES = ("degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity", "pagerank", "katz")
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 POINT_FILES = ".csv, .txt, .xyz, .npy, .mat, .ply, .pcd or .obj"
 

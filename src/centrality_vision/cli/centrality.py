@@ -23,7 +23,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "or an image (.png, .bmp, .gif, .tif, .jpg, ...), whose foreground pixels are joined to\n"
         "their 8 (or 4) neighbours (thesis ch. 4). Images are thresholded at half their range\n"
         "(or --threshold); by default the shape is the side that covers less of the border.\n"
-        "Centralities count hops unless --weights is given. Output rows: node, coordinates\n"
+        "Path-based centralities count hops unless --weights is given. Output rows: node, coordinates\n"
         "(x, y[, z] for points; row, col for pixels, row 0 at the top), one column per centrality.\n"
         ".csv/.npy: that table (the parameters go to NAME.json beside it);\n"
         ".json/.npz: the same columns by name, plus the parameters.",
@@ -42,7 +42,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
                         help="which side of the threshold is the shape in images (default: %(default)s)")
     parser.add_argument("--threshold", type=float, default=None,
                         help="grey level between background and shape (default: half the image's range)")
-    parser.add_argument("--weights", action="store_true", help="use Euclidean edge lengths instead of hop counts")
+    parser.add_argument("--weights", action="store_true",
+                        help="path-based measures (betweenness, closeness, harmonic, eccentricity): shortest paths "
+                        "by Euclidean edge length instead of hop counts")
+    parser.add_argument("--strengths", action="store_true",
+                        help="degree-like measures (degree, eigenvector, pagerank, katz): sum the edge lengths "
+                        "instead of counting edges")
     add_out(parser, ".json", ".csv", ".npy", ".npz")
     add_plot(parser, "the values (graph or image)")
     parser.add_argument("--norm", choices=("auto", "linear", "log", "power"), default="auto",
@@ -91,9 +96,12 @@ def run(args: argparse.Namespace) -> int:
     show = progress_on(args) and (args.progress is True or n_nodes >= _PROGRESS_FROM)
     values = {}
     for name in names:
-        extra_options = {"progress": show} if name in _WITH_PROGRESS else {}
+        if name in _WITH_PROGRESS:  # the path-based measures
+            extra_options = {"weights": args.weights, "progress": show}
+        else:
+            extra_options = {"strengths": args.strengths}
         tic = time.perf_counter()
-        values[name] = np.asarray(cen.compute(graph, name, weights=args.weights, **extra_options), dtype=np.float64)
+        values[name] = np.asarray(cen.compute(graph, name, **extra_options), dtype=np.float64)
         say(f"{name}: {n_nodes} nodes in {time.perf_counter() - tic:.2f} s")
     node = np.arange(n_nodes, dtype=np.int64)
     record = {"command": NAME, "parameters": parameters_block(options(args)), **info}

@@ -55,7 +55,12 @@ def run(args: argparse.Namespace) -> int:
         from ..plotting import plot_graph, save_figure
 
         pyplot()
-        ax = plot_graph(points, graph, title=f"{args.kind} graph of {Path(args.points).name}")
+        title = f"{args.kind} graph of {Path(args.points).name}: {points.shape[0]} nodes, {i.size} edges"
+        if args.kind in ("mwme", "mstme"):  # entropy graphs: what matters is the degree of each node
+            degree = np.diff(graph.tocsr().indptr)
+            ax = plot_graph(points, graph, degree, label="degree", title=title)
+        else:
+            ax = plot_graph(points, graph, title=title)
         save_figure(ax.figure, args.plot)
         written.append(Path(args.plot))
     say(f"wrote {', '.join(map(str, written))} in {time.perf_counter() - started:.1f} s")

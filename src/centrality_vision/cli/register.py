@@ -122,6 +122,12 @@ class _Watch:
             self.bar.close()
 
 
+def _fixed_to_moving(estimator):
+    """For each fixed point its moving point (``fixed_to_moving_``; ``correspondence_`` before the rename)."""
+    found = getattr(estimator, "fixed_to_moving_", None)
+    return estimator.correspondence_ if found is None else found
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -180,8 +186,8 @@ def run(args: argparse.Namespace) -> int:
         "final_alignment_rms": watch.rms[-1] if watch.rms else None,
         "n_true_points": None if true_moving is None else int(watch.known.sum()),
         "history": history,
-        "correspondence": np.asarray(estimator.correspondence_, dtype=np.int64),
-        "correspondence_meaning": "for each fixed point, the index of the moving point it is matched to"
+        "fixed_to_moving": np.asarray(_fixed_to_moving(estimator), dtype=np.int64),
+        "fixed_to_moving_meaning": "for each fixed point, the index of the moving point it is matched to"
         + ("" if args.method == "icp" else " (the most probable; -1 for an outlier)"),
         "warnings": list(getattr(args, "_warnings", [])),
         "seconds": round(seconds, 3),
