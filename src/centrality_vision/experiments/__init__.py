@@ -28,6 +28,7 @@ EXPERIMENTS = {
     "fig-5.5": "fig_5_5",
     "fig-5.7": "fig_5_7",
     "table-5.1": "table_5_1",
+    "fig-6.1": "fig_6_1",
     "fig-6.4": "fig_6_4",
     "fig-7.1": "fig_7_1",
     "fig-7.4": "fig_7_4",
