@@ -3,16 +3,21 @@ import json
 import numpy as np
 import pytest
 
-from centrality_vision import __version__
-from centrality_vision import cli
+from centrality_vision import __version__, cli
 from centrality_vision.cli import main
 
 
 def test_demo_writes_figures_and_results(tmp_path, capsys):
     assert main(["demo", "--out", str(tmp_path)]) == 0
     names = {p.name for p in tmp_path.iterdir()}
-    assert {"fish_delaunay_closeness.png", "fish_delaunay_centralities.png", "cow1_closeness.png", "fish_registration.png",
-            "fish_registration_errors.png", "demo.json"} <= names
+    assert {
+        "fish_delaunay_closeness.png",
+        "fish_delaunay_centralities.png",
+        "cow1_closeness.png",
+        "fish_registration.png",
+        "fish_registration_errors.png",
+        "demo.json",
+    } <= names
     record = json.loads((tmp_path / "demo.json").read_text())
     assert record["graph"]["n_nodes"] == 91
     saved = np.load(tmp_path / "fish_delaunay_centralities.npz")
@@ -43,6 +48,7 @@ def test_reproduce_rejects_unknown_experiment(capsys):
 # --------------------------------------------------------------------------------------
 # capability subcommands: graph, centrality, register, match, classify
 # --------------------------------------------------------------------------------------
+
 
 def _points(n=12, seed=0):
     return np.random.default_rng(seed).random((n, 2))
@@ -100,11 +106,27 @@ def test_graph_delaunay_has_3n_3_h_edges(tmp_path, out):
 
 @pytest.mark.parametrize(
     ("kind", "extra", "n_edges"),
-    [("emst", [], 11), ("complete", [], 66), ("mstme", ["--lam", "1.5"], 11), ("mwme", [], None), ("knn", ["--k", "3"], None)],
+    [
+        ("emst", [], 11),
+        ("complete", [], 66),
+        ("mstme", ["--lam", "1.5"], 11),
+        ("mwme", [], None),
+        ("knn", ["--k", "3"], None),
+    ],
 )
 def test_graph_kinds_and_plot(tmp_path, kind, extra, n_edges):
     np.save(tmp_path / "p.npy", _points())
-    argv = ["graph", str(tmp_path / "p.npy"), "--kind", kind, *extra, "--out", str(tmp_path / "g.json"), "--plot", str(tmp_path / "g.png")]
+    argv = [
+        "graph",
+        str(tmp_path / "p.npy"),
+        "--kind",
+        kind,
+        *extra,
+        "--out",
+        str(tmp_path / "g.json"),
+        "--plot",
+        str(tmp_path / "g.png"),
+    ]
     assert main(argv) == 0
     record = json.loads((tmp_path / "g.json").read_text())
     assert (tmp_path / "g.png").stat().st_size > 0
@@ -125,7 +147,21 @@ def test_centrality_of_points_matches_the_graph(tmp_path):
     points = _points()
     np.savetxt(tmp_path / "p.csv", points, delimiter=",", header="x,y", comments="")
     out = tmp_path / "c.csv"
-    assert main(["centrality", str(tmp_path / "p.csv"), "--measure", "all", "--out", str(out), "--plot", str(tmp_path / "c.png")]) == 0
+    assert (
+        main(
+            [
+                "centrality",
+                str(tmp_path / "p.csv"),
+                "--measure",
+                "all",
+                "--out",
+                str(out),
+                "--plot",
+                str(tmp_path / "c.png"),
+            ]
+        )
+        == 0
+    )
     lines = out.read_text().splitlines()
     parameters = json.loads((tmp_path / "c.json").read_text())["parameters"]
     assert parameters["measure"] == "all" and parameters["graph"] == "delaunay" and parameters["seed"] is None
@@ -138,7 +174,20 @@ def test_centrality_of_points_matches_the_graph(tmp_path):
     assert np.allclose(table[:, 5], closeness(graph))
     assert (tmp_path / "c.png").stat().st_size > 0
 
-    assert main(["centrality", str(tmp_path / "p.csv"), "--measure", "closeness", "--weights", "--out", str(tmp_path / "w.npy")]) == 0
+    assert (
+        main(
+            [
+                "centrality",
+                str(tmp_path / "p.csv"),
+                "--measure",
+                "closeness",
+                "--weights",
+                "--out",
+                str(tmp_path / "w.npy"),
+            ]
+        )
+        == 0
+    )
     side = json.loads((tmp_path / "w.json").read_text())
     assert side["columns"] == ["node", "x", "y", "closeness"] and side["parameters"]["weights"] is True
     assert np.allclose(np.load(tmp_path / "w.npy")[:, 3], closeness(graph, weights=True))
@@ -149,7 +198,21 @@ def test_centrality_of_an_image_gives_pixel_coordinates(tmp_path, capsys):
     pixels[2:5, 3:6] = 0
     _png(tmp_path / "square.png", pixels)
     out = tmp_path / "c.json"
-    assert main(["centrality", str(tmp_path / "square.png"), "--measure", "degree", "--out", str(out), "--plot", str(tmp_path / "c.png")]) == 0
+    assert (
+        main(
+            [
+                "centrality",
+                str(tmp_path / "square.png"),
+                "--measure",
+                "degree",
+                "--out",
+                str(out),
+                "--plot",
+                str(tmp_path / "c.png"),
+            ]
+        )
+        == 0
+    )
     record = json.loads(out.read_text())
     assert record["input_kind"] == "image" and record["image_shape"] == [7, 8] and record["n_nodes"] == 9
     rows, cols = np.array(record["coordinates"]["row"]), np.array(record["coordinates"]["col"])
@@ -170,9 +233,25 @@ def test_register_recovers_a_known_similarity(tmp_path, out):
     np.savetxt(tmp_path / "moving.txt", moving)
     np.save(tmp_path / "fixed.npy", fixed)
     np.save(tmp_path / "true.npy", fixed)
-    argv = ["register", str(tmp_path / "moving.txt"), str(tmp_path / "fixed.npy"), "--method", "cpd", "--transform", "similarity",
-            "--tol", "1e-10", "--max-iter", "500", "--true-moving", str(tmp_path / "true.npy"),
-            "--out", str(tmp_path / out), "--plot", str(tmp_path / "r.png")]
+    argv = [
+        "register",
+        str(tmp_path / "moving.txt"),
+        str(tmp_path / "fixed.npy"),
+        "--method",
+        "cpd",
+        "--transform",
+        "similarity",
+        "--tol",
+        "1e-10",
+        "--max-iter",
+        "500",
+        "--true-moving",
+        str(tmp_path / "true.npy"),
+        "--out",
+        str(tmp_path / out),
+        "--plot",
+        str(tmp_path / "r.png"),
+    ]
     assert main(argv) == 0
     if out.endswith(".json"):
         record = json.loads((tmp_path / out).read_text())
@@ -187,7 +266,9 @@ def test_register_recovers_a_known_similarity(tmp_path, out):
         history_error = record["history_alignment_rms"]
     assert str(transform["type"]) == "similarity"
     assert abs(float(transform["scale"]) - scale) < 1e-6
-    assert np.allclose(transform["rotation"], rotation, atol=1e-6) and np.allclose(transform["translation"], translation, atol=1e-6)
+    assert np.allclose(transform["rotation"], rotation, atol=1e-6) and np.allclose(
+        transform["translation"], translation, atol=1e-6
+    )
     assert np.allclose(record["moving_transformed"], fixed, atol=1e-6)
     assert bool(record["converged"]) and int(record["n_iter"]) >= 1 and float(record["final_alignment_rms"]) < 1e-6
     assert len(history_error) == int(record["n_iter"]) + 1
@@ -197,15 +278,33 @@ def test_register_recovers_a_known_similarity(tmp_path, out):
 
 @pytest.mark.parametrize(
     ("method", "transform", "kind"),
-    [("icp", "rigid", "rigid"), ("gpd", "rigid", "rigid"), ("gpd", "nonrigid", "nonrigid"), ("cpd", "affine", "affine")],
+    [
+        ("icp", "rigid", "rigid"),
+        ("gpd", "rigid", "rigid"),
+        ("gpd", "nonrigid", "nonrigid"),
+        ("cpd", "affine", "affine"),
+    ],
 )
 def test_register_methods_and_transforms(tmp_path, method, transform, kind):
     moving = _points(30, seed=1)
     fixed = moving @ _rotation(0.05).T + 0.01
     np.save(tmp_path / "m.npy", moving)
     np.save(tmp_path / "f.npy", fixed)
-    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--method", method, "--transform", transform,
-            "--tol", "1e-8", "--out", str(tmp_path / "r.json"), "--plot", str(tmp_path / "r.png")]
+    argv = [
+        "register",
+        str(tmp_path / "m.npy"),
+        str(tmp_path / "f.npy"),
+        "--method",
+        method,
+        "--transform",
+        transform,
+        "--tol",
+        "1e-8",
+        "--out",
+        str(tmp_path / "r.json"),
+        "--plot",
+        str(tmp_path / "r.png"),
+    ]
     assert main(argv) == 0
     record = json.loads((tmp_path / "r.json").read_text())
     assert record["transform"]["type"] == kind
@@ -217,7 +316,17 @@ def test_register_methods_and_transforms(tmp_path, method, transform, kind):
 
 def test_register_icp_refuses_affine(tmp_path, capsys):
     np.save(tmp_path / "m.npy", _points())
-    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "m.npy"), "--method", "icp", "--transform", "affine", "--out", str(tmp_path / "r.json")]
+    argv = [
+        "register",
+        str(tmp_path / "m.npy"),
+        str(tmp_path / "m.npy"),
+        "--method",
+        "icp",
+        "--transform",
+        "affine",
+        "--out",
+        str(tmp_path / "r.json"),
+    ]
     assert main(argv) == 2
     assert "ICP fits rigid or similarity transforms only" in _one_line_error(capsys, only=True)
 
@@ -225,7 +334,17 @@ def test_register_icp_refuses_affine(tmp_path, capsys):
 def test_register_reports_non_convergence_as_a_one_line_warning(tmp_path, capsys):
     np.save(tmp_path / "m.npy", _points(20))
     np.save(tmp_path / "f.npy", _points(20, seed=3))
-    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--max-iter", "1", "--tol", "1e-12", "--out", str(tmp_path / "r.json")]
+    argv = [
+        "register",
+        str(tmp_path / "m.npy"),
+        str(tmp_path / "f.npy"),
+        "--max-iter",
+        "1",
+        "--tol",
+        "1e-12",
+        "--out",
+        str(tmp_path / "r.json"),
+    ]
     assert main(argv) == 0
     record = json.loads((tmp_path / "r.json").read_text())
     assert record["converged"] is False and record["n_iter"] == 1
@@ -240,7 +359,17 @@ def test_match_recovers_a_permutation(tmp_path):
     moving = 0.5 * fixed[perm] @ _rotation(1.0).T + 3.0
     np.savetxt(tmp_path / "m.txt", moving)
     np.savetxt(tmp_path / "f.txt", fixed)
-    argv = ["match", str(tmp_path / "m.txt"), str(tmp_path / "f.txt"), "--method", "greedy", "--out", str(tmp_path / "m.json"), "--plot", str(tmp_path / "m.png")]
+    argv = [
+        "match",
+        str(tmp_path / "m.txt"),
+        str(tmp_path / "f.txt"),
+        "--method",
+        "greedy",
+        "--out",
+        str(tmp_path / "m.json"),
+        "--plot",
+        str(tmp_path / "m.png"),
+    ]
     assert main(argv) == 0
     record = json.loads((tmp_path / "m.json").read_text())
     assert record["correspondence"] == perm.tolist()
@@ -266,7 +395,9 @@ def _shapes_folder(folder, *, extra=()):
 def test_classify_cross_validates_with_fewer_folds_when_classes_are_small(tmp_path, capsys):
     folder = _shapes_folder(tmp_path / "shapes")
     out = tmp_path / "c.json"
-    assert main(["classify", str(folder), "--centrality", "degree", "--bins", "8", "--seed", "3", "--out", str(out)]) == 0
+    assert (
+        main(["classify", str(folder), "--centrality", "degree", "--bins", "8", "--seed", "3", "--out", str(out)]) == 0
+    )
     record = json.loads(out.read_text())
     assert record["classes"] == ["bar", "disk"] and record["class_counts"] == [3, 3]
     assert record["cross_validation"]["n_splits"] == 3 and "using 3 folds" in record["cross_validation"]["note"]
@@ -316,7 +447,9 @@ def test_bad_point_files_are_one_line_errors(tmp_path, capsys, command, content,
     assert not list(tmp_path.glob("[gcrm].json"))
 
 
-@pytest.mark.parametrize(("content", "message"), [(b"GIF89a not a png", "not a readable PNG image"), (b"", "empty"), (None, "no such file")])
+@pytest.mark.parametrize(
+    ("content", "message"), [(b"GIF89a not a png", "not a readable PNG image"), (b"", "empty"), (None, "no such file")]
+)
 def test_bad_images_are_one_line_errors(tmp_path, capsys, content, message):
     path = tmp_path / "bad.png"
     if content is not None:

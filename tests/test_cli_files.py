@@ -32,7 +32,12 @@ def test_reads_ply_with_intensity_and_mat_with_a_variable(tmp_path):
     plyfile.PlyData([plyfile.PlyElement.describe(vertex, "vertex")]).write(str(tmp_path / "c.ply"))
     assert main(["graph", str(tmp_path / "c.ply"), "--kind", "emst", "--out", str(tmp_path / "g.json")]) == 0
     assert json.loads((tmp_path / "g.json").read_text())["n_edges"] == 29
-    assert main(["graph", str(tmp_path / "c.ply"), "--columns", "x,y", "--kind", "emst", "--out", str(tmp_path / "h.json")]) == 0
+    assert (
+        main(
+            ["graph", str(tmp_path / "c.ply"), "--columns", "x,y", "--kind", "emst", "--out", str(tmp_path / "h.json")]
+        )
+        == 0
+    )
     assert np.allclose(json.loads((tmp_path / "h.json").read_text())["points"], cloud[:, :2])
     savemat(tmp_path / "s.mat", {"A": cloud[:, :2], "B": cloud})
     assert main(["centrality", str(tmp_path / "s.mat"), "--variable", "B", "--out", str(tmp_path / "c.csv")]) == 0
@@ -42,12 +47,16 @@ def test_reads_ply_with_intensity_and_mat_with_a_variable(tmp_path):
 def test_reads_a_semicolon_csv_with_an_index_column_written_by_pandas(tmp_path):
     pandas = pytest.importorskip("pandas")
     points = RNG.random((12, 2))
-    pandas.DataFrame({"x": points[:, 0], "y": points[:, 1], "intensity": 1.0}).to_csv(tmp_path / "p.csv", sep=";", decimal=",")
+    pandas.DataFrame({"x": points[:, 0], "y": points[:, 1], "intensity": 1.0}).to_csv(
+        tmp_path / "p.csv", sep=";", decimal=","
+    )
     assert main(["graph", str(tmp_path / "p.csv"), "--out", str(tmp_path / "g.json")]) == 0
     assert np.allclose(json.loads((tmp_path / "g.json").read_text())["points"], points)
 
 
-@pytest.mark.parametrize("out", ["aligned.ply", "aligned.csv", "aligned.txt", "aligned.npy", "aligned.mat", "aligned.pcd"])
+@pytest.mark.parametrize(
+    "out", ["aligned.ply", "aligned.csv", "aligned.txt", "aligned.npy", "aligned.mat", "aligned.pcd"]
+)
 def test_register_writes_the_aligned_points_and_a_sidecar(tmp_path, out):
     from centrality_vision.io import read_points
 
@@ -57,8 +66,19 @@ def test_register_writes_the_aligned_points_and_a_sidecar(tmp_path, out):
         fixed = np.column_stack([fixed[:, :2], 0.1 * fixed[:, 0] * fixed[:, 1]])
     np.save(tmp_path / "m.npy", moving)
     np.save(tmp_path / "f.npy", fixed)
-    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--transform", "affine", "--tol", "1e-10",
-            "--max-iter", "300", "--out", str(tmp_path / out)]
+    argv = [
+        "register",
+        str(tmp_path / "m.npy"),
+        str(tmp_path / "f.npy"),
+        "--transform",
+        "affine",
+        "--tol",
+        "1e-10",
+        "--max-iter",
+        "300",
+        "--out",
+        str(tmp_path / out),
+    ]
     assert main(argv) == 0
     aligned = read_points(tmp_path / out)
     side = json.loads((tmp_path / "aligned.json").read_text())
@@ -85,8 +105,23 @@ def test_true_moving_with_nan_rows_marks_outliers(tmp_path):
     np.savetxt(tmp_path / "m.txt", moving_all)
     np.save(tmp_path / "f.npy", fixed)
     np.savetxt(tmp_path / "t.csv", truth, delimiter=",", header="x,y", comments="")
-    argv = ["register", str(tmp_path / "m.txt"), str(tmp_path / "f.npy"), "--w", "0.2", "--tol", "1e-9", "--max-iter", "400",
-            "--true-moving", str(tmp_path / "t.csv"), "--out", str(tmp_path / "r.json"), "--plot", str(tmp_path / "r.png")]
+    argv = [
+        "register",
+        str(tmp_path / "m.txt"),
+        str(tmp_path / "f.npy"),
+        "--w",
+        "0.2",
+        "--tol",
+        "1e-9",
+        "--max-iter",
+        "400",
+        "--true-moving",
+        str(tmp_path / "t.csv"),
+        "--out",
+        str(tmp_path / "r.json"),
+        "--plot",
+        str(tmp_path / "r.png"),
+    ]
     assert main(argv) == 0
     record = json.loads((tmp_path / "r.json").read_text())
     rms = record["history"]["alignment_rms"]
@@ -106,7 +141,9 @@ def test_every_csv_output_is_read_by_pandas_with_default_arguments(tmp_path):
 
     yy, xx = np.mgrid[:20, :20]
     for k in range(2):
-        iio.imwrite(folder / f"disk-{k}.png", np.where((yy - 10) ** 2 + (xx - 10) ** 2 <= 30 + 10 * k, 0, 255).astype(np.uint8))
+        iio.imwrite(
+            folder / f"disk-{k}.png", np.where((yy - 10) ** 2 + (xx - 10) ** 2 <= 30 + 10 * k, 0, 255).astype(np.uint8)
+        )
         bar = np.full((20, 20), 255, np.uint8)
         bar[9 - k : 11 + k, 2:18] = 0
         iio.imwrite(folder / f"bar_{k}.png", bar)
@@ -116,7 +153,11 @@ def test_every_csv_output_is_read_by_pandas_with_default_arguments(tmp_path):
         "register.csv": ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--out"],
         "classify.csv": ["classify", str(folder), "--centrality", "degree", "--bins", "4", "--out"],
     }
-    expected = {"graph.csv": ["i", "j", "length"], "register.csv": ["x", "y"], "classify.csv": ["file", "label", "predicted", "fold"]}
+    expected = {
+        "graph.csv": ["i", "j", "length"],
+        "register.csv": ["x", "y"],
+        "classify.csv": ["file", "label", "predicted", "fold"],
+    }
     for name, argv in runs.items():
         assert main([*argv, str(tmp_path / name)]) == 0, name
         frame = pandas.read_csv(tmp_path / name)
@@ -134,14 +175,29 @@ def test_classify_classifiers_and_the_confusion_matrix_figure(tmp_path):
     folder.mkdir()
     yy, xx = np.mgrid[:24, :24]
     for k in range(4):
-        iio.imwrite(folder / f"disk-{k + 1}.png", np.where((yy - 12) ** 2 + (xx - 12) ** 2 <= (5 + k) ** 2, 0, 255).astype(np.uint8))
+        iio.imwrite(
+            folder / f"disk-{k + 1}.png",
+            np.where((yy - 12) ** 2 + (xx - 12) ** 2 <= (5 + k) ** 2, 0, 255).astype(np.uint8),
+        )
         bar = np.full((24, 24), 255, np.uint8)
         bar[11 - k // 2 : 13 + k // 2, 2:22] = 0
         iio.imwrite(folder / f"bar{k + 1}.png", bar)
     for classifier in ("nb", "svm", "forest"):
         out = tmp_path / f"{classifier}.json"
-        argv = ["classify", str(folder), "--centrality", "degree", "--bins", "6", "--folds", "2", "--classifier", classifier,
-                "--out", str(out)] + (["--plot", str(tmp_path / "nb.png")] if classifier == "nb" else [])
+        argv = [
+            "classify",
+            str(folder),
+            "--centrality",
+            "degree",
+            "--bins",
+            "6",
+            "--folds",
+            "2",
+            "--classifier",
+            classifier,
+            "--out",
+            str(out),
+        ] + (["--plot", str(tmp_path / "nb.png")] if classifier == "nb" else [])
         assert main(argv) == 0
         record = json.loads(out.read_text())
         assert record["classes"] == ["bar", "disk"] and np.sum(record["confusion"]) == 8
@@ -152,10 +208,25 @@ def test_classify_classifiers_and_the_confusion_matrix_figure(tmp_path):
 
 def test_no_progress_bar_text_when_stderr_is_not_a_terminal(tmp_path, capfd):
     np.save(tmp_path / "m.npy", RNG.random((2100, 2)))
-    assert main(["centrality", str(tmp_path / "m.npy"), "--measure", "closeness", "--out", str(tmp_path / "c.npy")]) == 0
+    assert (
+        main(["centrality", str(tmp_path / "m.npy"), "--measure", "closeness", "--out", str(tmp_path / "c.npy")]) == 0
+    )
     err = capfd.readouterr().err
     assert "\r" not in err and "it/s" not in err and "source/s" not in err
-    assert main(["centrality", str(tmp_path / "m.npy"), "--measure", "closeness", "--progress", "--out", str(tmp_path / "c.npy")]) == 0
+    assert (
+        main(
+            [
+                "centrality",
+                str(tmp_path / "m.npy"),
+                "--measure",
+                "closeness",
+                "--progress",
+                "--out",
+                str(tmp_path / "c.npy"),
+            ]
+        )
+        == 0
+    )
     assert "\r" in capfd.readouterr().err  # asked for: a bar
 
 
@@ -193,7 +264,11 @@ def test_the_library_does_not_switch_the_backend():
     import centrality_vision
 
     root = pathlib.Path(centrality_vision.__file__).parent
-    offenders = [str(path.relative_to(root)) for path in root.rglob("*.py")
-                 if "cli" not in path.parts and "matplotlib.use(\"Agg\")" in "".join(
-                     line for line in path.read_text().splitlines(keepends=True) if not line.lstrip().startswith(">>>"))]
+    offenders = [
+        str(path.relative_to(root))
+        for path in root.rglob("*.py")
+        if "cli" not in path.parts
+        and 'matplotlib.use("Agg")'
+        in "".join(line for line in path.read_text().splitlines(keepends=True) if not line.lstrip().startswith(">>>"))
+    ]
     assert [name for name in offenders if not name.startswith("experiments")] == []

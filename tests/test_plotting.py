@@ -7,14 +7,14 @@ import matplotlib
 
 matplotlib.use("Agg")
 
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import pytest  # noqa: E402
-from matplotlib.collections import LineCollection, PathCollection  # noqa: E402
-from scipy import sparse  # noqa: E402
-from scipy.spatial import Delaunay  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+from matplotlib.collections import LineCollection, PathCollection
+from scipy import sparse
+from scipy.spatial import Delaunay
 
-from centrality_vision.plotting import plot_centrality_image, plot_graph, save_figure  # noqa: E402
+from centrality_vision.plotting import plot_centrality_image, plot_graph, save_figure
 
 
 @pytest.fixture(autouse=True)
@@ -148,12 +148,27 @@ def test_plot_graph_graph_with_no_edges():
 @pytest.mark.parametrize(
     ("points", "graph", "values", "match"),
     [
-        (np.zeros((3, 4)), sparse.csr_array((3, 3)), None, r"`points` must have shape \(n_points, 2 or 3\); got shape \(3, 4\)"),
+        (
+            np.zeros((3, 4)),
+            sparse.csr_array((3, 3)),
+            None,
+            r"`points` must have shape \(n_points, 2 or 3\); got shape \(3, 4\)",
+        ),
         ([[0, 0], [np.nan, 1], [2, 2]], sparse.csr_array((3, 3)), None, r"`points` must be finite"),
-        (np.zeros((3, 2)), sparse.csr_array((4, 4)), None, r"`graph` must have shape .* = \(3, 3\) .*got shape \(4, 4\)"),
+        (
+            np.zeros((3, 2)),
+            sparse.csr_array((4, 4)),
+            None,
+            r"`graph` must have shape .* = \(3, 3\) .*got shape \(4, 4\)",
+        ),
         (np.zeros((3, 2)), sparse.csr_array((3, 4)), None, r"`graph` must be a square adjacency .*got shape \(3, 4\)"),
         (np.zeros((3, 2)), sparse.csr_array((3, 3)), [1.0, 2.0], r"`values` must have shape \(3,\).*got shape \(2,\)"),
-        (np.zeros((3, 2)), sparse.csr_array((3, 3)), [[1.0, 2.0, 3.0]], r"`values` must have shape \(3,\).*got shape \(1, 3\)"),
+        (
+            np.zeros((3, 2)),
+            sparse.csr_array((3, 3)),
+            [[1.0, 2.0, 3.0]],
+            r"`values` must have shape \(3,\).*got shape \(1, 3\)",
+        ),
         (np.zeros((3, 2)), sparse.csr_array((3, 3)), [1.0, np.inf, 3.0], r"`values` must be finite; got 1"),
     ],
 )
@@ -228,7 +243,12 @@ def test_centrality_image_on_given_axes_and_inputs_unchanged():
 @pytest.mark.parametrize(
     ("values", "nodes", "shape", "match"),
     [
-        ([1.0, 2.0], [0, 1, 2], (2, 2), r"`values` must have shape \(3,\), one value per row of `nodes`; got shape \(2,\)"),
+        (
+            [1.0, 2.0],
+            [0, 1, 2],
+            (2, 2),
+            r"`values` must have shape \(3,\), one value per row of `nodes`; got shape \(2,\)",
+        ),
         ([1.0, 2.0], [0, 4], (2, 2), r"`nodes` must be flat pixel indices in \[0, 3\] .*got 1 out of range, e.g. 4"),
         ([1.0, 2.0], [-1, 0], (2, 2), r"`nodes` must be flat pixel indices in \[0, 3\] .*e.g. -1"),
         ([1.0, 2.0], [1, 1], (2, 2), r"`nodes` must not repeat a pixel; got 1"),

@@ -217,7 +217,12 @@ def plot_graph(
         nodes = ax.scatter(*coords, s=node_size, c="C0", zorder=2, **({"depthshade": False} if three_d else {}))
     else:
         nodes = ax.scatter(
-            *coords, s=node_size, c=values, cmap=cmap, norm=color_norm, zorder=2,
+            *coords,
+            s=node_size,
+            c=values,
+            cmap=cmap,
+            norm=color_norm,
+            zorder=2,
             **({"depthshade": False} if three_d else {}),
         )
         if colorbar:
@@ -418,8 +423,16 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
 
 
 def plot_matching(
-    moving, fixed, correspondence, *, moving_graph=None, fixed_graph=None, ax=None, title=None,
-    max_lines: int = 60, max_edges: int | None = None,
+    moving,
+    fixed,
+    correspondence,
+    *,
+    moving_graph=None,
+    fixed_graph=None,
+    ax=None,
+    title=None,
+    max_lines: int = 60,
+    max_edges: int | None = None,
 ):
     """Two 2D point sets side by side and their matching (thesis fig. 6.4).
 
@@ -471,7 +484,9 @@ def plot_matching(
             f"of dtype {correspondence.dtype}."
         )
     if correspondence.size and (correspondence.min() < 0 or correspondence.max() >= fixed.shape[0]):
-        raise InputError(f"`correspondence` must index into `fixed` (0 .. {fixed.shape[0] - 1}); got out-of-range values.")
+        raise InputError(
+            f"`correspondence` must index into `fixed` (0 .. {fixed.shape[0] - 1}); got out-of-range values."
+        )
     max_lines = int(max_lines)
     max_edges = 3 * n if max_edges is None else int(max_edges)
     if ax is None:
@@ -480,10 +495,15 @@ def plot_matching(
     right = fixed + np.array([moving[:, 0].max() - fixed[:, 0].min() + 0.3 * max(span[0], 1e-12), 0.0])
     colours = plt.get_cmap("hsv")(np.linspace(0, 0.9, n)) if n else np.empty((0, 4))
     shown = np.unique(np.linspace(0, n - 1, min(max_lines, n)).round().astype(int)) if n and max_lines > 0 else []
-    ax.add_collection(LineCollection(
-        np.stack([moving[shown], right[correspondence[shown]]], axis=1) if len(shown) else np.empty((0, 2, 2)),
-        colors=colours[shown] if len(shown) else "0.5", linewidths=0.6, alpha=0.7, zorder=2,
-    ))
+    ax.add_collection(
+        LineCollection(
+            np.stack([moving[shown], right[correspondence[shown]]], axis=1) if len(shown) else np.empty((0, 2, 2)),
+            colors=colours[shown] if len(shown) else "0.5",
+            linewidths=0.6,
+            alpha=0.7,
+            zorder=2,
+        )
+    )
     for pts, graph, name in ((moving, moving_graph, "moving"), (right, fixed_graph, "fixed")):
         if graph is None:
             continue
@@ -491,13 +511,23 @@ def plot_matching(
         if coo.nnz > max_edges:
             ax.plot([], [], " ", label=f"{name} graph: {coo.nnz} edges, not drawn")
             continue
-        ax.add_collection(LineCollection(np.stack([pts[coo.row], pts[coo.col]], axis=1), colors="0.8", linewidths=0.4,
-                                         zorder=1))
+        ax.add_collection(
+            LineCollection(np.stack([pts[coo.row], pts[coo.col]], axis=1), colors="0.8", linewidths=0.4, zorder=1)
+        )
     fixed_colours = np.empty_like(colours)
     fixed_colours[correspondence] = colours
     ax.scatter(moving[:, 0], moving[:, 1], s=14, c=colours, edgecolors="k", linewidths=0.3, zorder=3, label="moving")
-    ax.scatter(right[:, 0], right[:, 1], s=14, c=fixed_colours, marker="s", edgecolors="k", linewidths=0.3, zorder=3,
-               label="fixed (matched point in the same colour)")
+    ax.scatter(
+        right[:, 0],
+        right[:, 1],
+        s=14,
+        c=fixed_colours,
+        marker="s",
+        edgecolors="k",
+        linewidths=0.3,
+        zorder=3,
+        label="fixed (matched point in the same colour)",
+    )
     ax.set_aspect("equal")
     ax.autoscale_view()
     ax.set_xticks([])
@@ -550,8 +580,16 @@ def plot_registration(fixed, moving, *, ax=None, title=None, fixed_label="fixed"
     size = 5 if three_d else 14
     extra = {"depthshade": False} if three_d else {}
     ax.scatter(*fixed.T, marker="*", s=size * 1.6, color="tab:red", label=fixed_label, **extra)
-    ax.scatter(*moving.T, marker="o", s=size, facecolors="none", edgecolors="tab:blue", linewidths=0.7,
-               label=moving_label, **extra)
+    ax.scatter(
+        *moving.T,
+        marker="o",
+        s=size,
+        facecolors="none",
+        edgecolors="tab:blue",
+        linewidths=0.7,
+        label=moving_label,
+        **extra,
+    )
     if three_d:
         _equal_3d(ax, np.vstack([fixed, moving]))
     else:
@@ -606,12 +644,18 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
     fixed = as_points(fixed, name="fixed", n_dims=(2, 3))
     dim = fixed.shape[1]
     if not isinstance(snapshots, dict) or not snapshots:
-        raise TypeError(f"`snapshots` must be a non-empty dict {{label: {{iteration: points}}}}; got {_describe(snapshots)}.")
+        raise TypeError(
+            f"`snapshots` must be a non-empty dict {{label: {{iteration: points}}}}; got {_describe(snapshots)}."
+        )
     frames = {}
     for label, record in snapshots.items():
         if not isinstance(record, dict) or not record:
-            raise InputError(f"`snapshots[{label!r}]` must be a non-empty dict {{iteration: points}}; got {_describe(record)}.")
-        frames[label] = {int(k): as_points(v, name=f"snapshots[{label!r}][{k}]", n_dims=(dim,)) for k, v in record.items()}
+            raise InputError(
+                f"`snapshots[{label!r}]` must be a non-empty dict {{iteration: points}}; got {_describe(record)}."
+            )
+        frames[label] = {
+            int(k): as_points(v, name=f"snapshots[{label!r}][{k}]", n_dims=(dim,)) for k, v in record.items()
+        }
     if iterations is None:
         inner = [set(record) - {max(record)} for record in frames.values()]
         rows = sorted(set.intersection(*inner)) or sorted(set.union(*inner))
@@ -658,8 +702,10 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
                 ax.text2D(-0.1, 0.5, row_name, transform=ax.transAxes, rotation=90, va="center", fontsize=8)
             elif c == 0:
                 ax.set_ylabel(row_name, fontsize=8)
-    handles = [Line2D([], [], marker="*", color="tab:red", ls="", label="fixed"),
-               Line2D([], [], marker="o", mfc="none", mec="tab:blue", ls="", label="moving")]
+    handles = [
+        Line2D([], [], marker="*", color="tab:red", ls="", label="fixed"),
+        Line2D([], [], marker="o", mfc="none", mec="tab:blue", ls="", label="moving"),
+    ]
     fig.legend(handles=handles, loc="upper right", ncol=2, fontsize=8, frameon=False)
     if title:
         fig.suptitle(title, x=0.02, ha="left", fontsize=10)
@@ -727,9 +773,18 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
         top = max(top, float(v.max(initial=0.0)))
         low = min(low, float(v[v > 0].min(initial=np.inf)))
         every = max(1, v.size // 8)
-        ax.plot(np.arange(v.size), v, label=str(label), lw=1.4, color=f"C{k % 10}",
-                ls=_LINE_STYLES[k % len(_LINE_STYLES)], marker=_MARKERS[k % len(_MARKERS)], ms=4,
-                markevery=(k % every, every), alpha=0.9)
+        ax.plot(
+            np.arange(v.size),
+            v,
+            label=str(label),
+            lw=1.4,
+            color=f"C{k % 10}",
+            ls=_LINE_STYLES[k % len(_LINE_STYLES)],
+            marker=_MARKERS[k % len(_MARKERS)],
+            ms=4,
+            markevery=(k % every, every),
+            alpha=0.9,
+        )
     ax.set_xlabel("iteration")
     if ylabel is None:
         ylabel = "per-point RMS error" if n_points is not None else "alignment error"

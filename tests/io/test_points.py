@@ -45,8 +45,10 @@ def test_pcd_binary_with_padding_and_an_rgb_field(tmp_path):
     """A PCL-style binary file built byte by byte from the format description."""
     records = np.zeros(3, dtype=[("x", "<f4"), ("y", "<f4"), ("z", "<f4"), ("rgb", "<u4"), ("_", "u1", (4,))])
     records["x"], records["y"], records["z"] = [1, 2, 3], [4, 5, 6], [7, 8, 9]
-    header = ("VERSION .7\nFIELDS x y z rgb _\nSIZE 4 4 4 4 1\nTYPE F F F U U\nCOUNT 1 1 1 1 4\n"
-              "WIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA binary\n")
+    header = (
+        "VERSION .7\nFIELDS x y z rgb _\nSIZE 4 4 4 4 1\nTYPE F F F U U\nCOUNT 1 1 1 1 4\n"
+        "WIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA binary\n"
+    )
     path = tmp_path / "pcl.pcd"
     path.write_bytes(header.encode() + records.tobytes())
     assert read_points(path).tolist() == [[1, 4, 7], [2, 5, 8], [3, 6, 9]]
@@ -56,7 +58,9 @@ def test_obj_written_by_meshio_and_an_obj_with_faces_and_normals(tmp_path):
     meshio = pytest.importorskip("meshio")
     meshio.write_points_cells(tmp_path / "cloud.obj", CLOUD, [])
     assert np.array_equal(read_points(tmp_path / "cloud.obj"), CLOUD)
-    (tmp_path / "mesh.obj").write_text("# a triangle\nv 0 0 0 1.0\nv 1 0 0\nv 0 1 0 0.5 0.5 0.5\nvn 0 0 1\nf 1//1 2//1 3//1\n")
+    (tmp_path / "mesh.obj").write_text(
+        "# a triangle\nv 0 0 0 1.0\nv 1 0 0\nv 0 1 0 0.5 0.5 0.5\nvn 0 0 1\nf 1//1 2//1 3//1\n"
+    )
     assert read_points(tmp_path / "mesh.obj").tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
 
 
@@ -178,10 +182,18 @@ def test_nan_rows_only_when_asked_and_only_whole_rows(tmp_path):
         ("p.csv", "0x10,1\n2,3\n", "'0x10' is not a number"),
         ("p.obj", "v 1 2\n", "line 1 is not a vertex"),
         ("p.pcd", "FIELDS x y z\nPOINTS 2\nDATA ascii\n1 2 3\n", "declares 2 points but the file holds 1"),
-        ("p.pcd", "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nPOINTS 1\nDATA binary_compressed\n", "compressed"),
+        (
+            "p.pcd",
+            "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nPOINTS 1\nDATA binary_compressed\n",
+            "compressed",
+        ),
         ("p.ply", "not a ply\n", "not a PLY file"),
-        ("p.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n",
-         "declares 3 vertices"),
+        (
+            "p.ply",
+            "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+            "end_header\n1 2 3\n",
+            "declares 3 vertices",
+        ),
         ("p.mat", "MATLAB nonsense", "not a readable .mat"),
     ],
 )
@@ -203,12 +215,12 @@ def test_npy_headers_are_checked_before_loading(tmp_path):
     with pytest.raises(InputError, match=r"2D array .* got shape \(4,\)"):
         read_points(tmp_path / "flat.npy")
     # a header claiming 10**12 rows over 48 bytes of data: refused, nothing allocated
-    data = (tmp_path / "huge.npy")
+    data = tmp_path / "huge.npy"
     np.save(data, np.zeros((3, 2)))
     raw = data.read_bytes().replace(b"(3, 2)", b"(1000000000000, 2)".ljust(6))
     header_len = raw.index(b"\n") + 1
     fixed = raw[:8] + (header_len - 10).to_bytes(2, "little") + raw[10:header_len]
-    data.write_bytes(fixed[: header_len] + raw[header_len:])
+    data.write_bytes(fixed[:header_len] + raw[header_len:])
     with pytest.raises(InputError, match=r"\(1000000000000, 2\).* holds 48 bytes"):
         read_points(data)
     np.save(tmp_path / "obj.npy", np.array([[1, None]], dtype=object), allow_pickle=True)
@@ -218,8 +230,10 @@ def test_npy_headers_are_checked_before_loading(tmp_path):
 
 def test_ply_binary_header_with_a_huge_count_is_refused_without_allocating(tmp_path):
     path = tmp_path / "huge.ply"
-    path.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\n"
-                     b"property float x\nproperty float y\nproperty float z\nend_header\n" + bytes(12))
+    path.write_bytes(
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\n"
+        b"property float x\nproperty float y\nproperty float z\nend_header\n" + bytes(12)
+    )
     with pytest.raises(InputError, match="declares 1000000000000 vertices but the file holds only 12 bytes"):
         read_points(path)
 
@@ -277,8 +291,11 @@ def test_nan_rows_round_trip_in_text_and_are_refused_by_3d_formats(tmp_path):
 
 @settings(max_examples=25, deadline=None)
 @given(
-    points=arrays(np.float64, st.tuples(st.integers(1, 8), st.sampled_from([2, 3])),
-                  elements=st.floats(-1e300, 1e300, allow_nan=False, allow_infinity=False)),
+    points=arrays(
+        np.float64,
+        st.tuples(st.integers(1, 8), st.sampled_from([2, 3])),
+        elements=st.floats(-1e300, 1e300, allow_nan=False, allow_infinity=False),
+    ),
     suffix=st.sampled_from([".csv", ".txt", ".xyz", ".npy", ".mat"]),
 )
 def test_round_trip_property(tmp_path_factory, points, suffix):

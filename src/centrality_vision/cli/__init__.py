@@ -21,7 +21,7 @@ from __future__ import annotations
 import sys
 
 from . import centrality, classify, demo, graph, match, register, reproduce
-from ._common import CENTRALITY_NAMES, GPD_GRAPHS, GRAPH_KINDS, Parser, quiet_progress, progress_on
+from ._common import CENTRALITY_NAMES, GPD_GRAPHS, GRAPH_KINDS, Parser, progress_on, quiet_progress
 
 __all__ = ["main", "build_parser", "CENTRALITY_NAMES", "GPD_GRAPHS", "GRAPH_KINDS"]
 
@@ -33,7 +33,9 @@ def build_parser() -> Parser:
     """The argument parser of ``centrality-vision`` with every subcommand."""
     from .. import __version__
 
-    parser = Parser(prog="centrality-vision", description="Graph centrality for computer vision (de Sousa, TU Wien, 2015).")
+    parser = Parser(
+        prog="centrality-vision", description="Graph centrality for computer vision (de Sousa, TU Wien, 2015)."
+    )
     parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     for command in COMMANDS:
@@ -84,8 +86,10 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except Exception:
         traceback.print_exc()
-        print(f"{prog}: internal error (a bug in centrality-vision; please report it with the traceback above)",
-              file=sys.stderr)
+        print(
+            f"{prog}: internal error (a bug in centrality-vision; please report it with the traceback above)",
+            file=sys.stderr,
+        )
         return 1
 
 

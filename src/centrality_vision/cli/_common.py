@@ -8,9 +8,27 @@ import sys
 from pathlib import Path
 
 __all__ = [
-    "GRAPH_KINDS", "GPD_GRAPHS", "CENTRALITY_NAMES", "FIGURE_SUFFIXES", "Parser", "subparser", "number", "out_file",
-    "add_out", "add_plot", "add_progress", "add_point_options", "progress_on", "quiet_progress", "say", "options",
-    "suffix", "pyplot", "data_graph", "edge_list", "transform_record",
+    "GRAPH_KINDS",
+    "GPD_GRAPHS",
+    "CENTRALITY_NAMES",
+    "FIGURE_SUFFIXES",
+    "Parser",
+    "subparser",
+    "number",
+    "out_file",
+    "add_out",
+    "add_plot",
+    "add_progress",
+    "add_point_options",
+    "progress_on",
+    "quiet_progress",
+    "say",
+    "options",
+    "suffix",
+    "pyplot",
+    "data_graph",
+    "edge_list",
+    "transform_record",
 ]
 
 # Spelled out here so that building the parser imports nothing heavy; tests check them
@@ -82,18 +100,23 @@ def out_file(*suffixes: str):
 
 def add_out(parser: argparse.ArgumentParser, *suffixes: str, what: str = "") -> None:
     kinds = ", ".join(suffixes)
-    parser.add_argument("--out", required=True, metavar="FILE", type=out_file(*suffixes),
-                        help=f"output file ({kinds}){what}")
+    parser.add_argument(
+        "--out", required=True, metavar="FILE", type=out_file(*suffixes), help=f"output file ({kinds}){what}"
+    )
 
 
 def add_plot(parser: argparse.ArgumentParser, what: str) -> None:
     kinds = ", ".join(FIGURE_SUFFIXES[:-1])
-    parser.add_argument("--plot", metavar="FILE.png", type=out_file(*FIGURE_SUFFIXES), help=f"also draw {what} ({kinds})")
+    parser.add_argument(
+        "--plot", metavar="FILE.png", type=out_file(*FIGURE_SUFFIXES), help=f"also draw {what} ({kinds})"
+    )
 
 
 def add_progress(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
-        "--progress", action=argparse.BooleanOptionalAction, default=None,
+        "--progress",
+        action=argparse.BooleanOptionalAction,
+        default=None,
         help="show progress bars on stderr (default: only when stderr is a terminal)",
     )
 
@@ -101,11 +124,14 @@ def add_progress(parser: argparse.ArgumentParser) -> None:
 def add_point_options(parser: argparse.ArgumentParser) -> None:
     """--columns and --variable, for commands that read point sets."""
     parser.add_argument(
-        "--columns", metavar="COLS",
+        "--columns",
+        metavar="COLS",
         help="coordinate columns of text, PLY and PCD files, by name or 0-based index, e.g. x,y,z or 1,2 "
         "(default: the columns named x, y[, z], else all columns but an index column)",
     )
-    parser.add_argument("--variable", metavar="NAME", help="the array to read from .mat files (default: the only 2D array)")
+    parser.add_argument(
+        "--variable", metavar="NAME", help="the array to read from .mat files (default: the only 2D array)"
+    )
 
 
 def progress_on(args: argparse.Namespace) -> bool:
@@ -147,7 +173,9 @@ def say(message: str) -> None:
 
 def options(args: argparse.Namespace) -> dict:
     """Every option of the run, for the "parameters" block of the outputs."""
-    return {key: value for key, value in vars(args).items() if key not in ("run", "progress") and not key.startswith("_")}
+    return {
+        key: value for key, value in vars(args).items() if key not in ("run", "progress") and not key.startswith("_")
+    }
 
 
 def pyplot():
@@ -216,7 +244,9 @@ def add_graph_options(parser: argparse.ArgumentParser, flag: str, *, help_text: 
         "--k", type=number(int, low=1), default=6, help="neighbours per point for the knn graph (default: %(default)s)"
     )
     parser.add_argument(
-        "--lam", type=number(float, low=0), default=0.5,
+        "--lam",
+        type=number(float, low=0),
+        default=0.5,
         help="weight of the degree entropy for the mstme graph; 0 gives the EMST (default: %(default)s)",
     )
 
@@ -238,13 +268,26 @@ def transform_record(transform) -> dict:
     from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, SimilarityTransform
 
     if isinstance(transform, NonRigidTransform):
-        return {"type": "nonrigid", "control_points": transform.control_points,
-                "coefficients": transform.coefficients, "beta": float(transform.beta)}
+        return {
+            "type": "nonrigid",
+            "control_points": transform.control_points,
+            "coefficients": transform.coefficients,
+            "beta": float(transform.beta),
+        }
     if isinstance(transform, AffineTransform):
-        return {"type": "affine", "linear": transform.linear, "translation": transform.translation,
-                "matrix": transform.matrix}
+        return {
+            "type": "affine",
+            "linear": transform.linear,
+            "translation": transform.translation,
+            "matrix": transform.matrix,
+        }
     if isinstance(transform, SimilarityTransform):
         kind = "rigid" if isinstance(transform, RigidTransform) else "similarity"
-        return {"type": kind, "rotation": transform.rotation, "translation": transform.translation,
-                "scale": float(transform.scale), "matrix": transform.matrix}
+        return {
+            "type": kind,
+            "rotation": transform.rotation,
+            "translation": transform.translation,
+            "scale": float(transform.scale),
+            "matrix": transform.matrix,
+        }
     raise TypeError(f"unknown transform type {type(transform).__name__}")  # pragma: no cover

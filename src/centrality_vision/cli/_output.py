@@ -113,8 +113,9 @@ def _write_table(path: Path, columns: Mapping[str, np.ndarray]) -> None:
         writer.writerows([cell(v, kind) for v, kind in zip(row, kinds)] for row in zip(*arrays))
 
 
-def write_output(path, record: Mapping, *, arrays: Mapping | None = None, table: Mapping | None = None,
-                 points=None) -> list[Path]:
+def write_output(
+    path, record: Mapping, *, arrays: Mapping | None = None, table: Mapping | None = None, points=None
+) -> list[Path]:
     """Write a command's result to ``path`` in the layout its suffix asks for; return the files written.
 
     ``record`` is the whole result (with its ``"parameters"``); ``arrays`` what goes into

@@ -6,8 +6,23 @@ import argparse
 import time
 from pathlib import Path
 
-from ._common import (CENTRALITY_NAMES, POINT_FILES, add_graph_options, add_out, add_plot, add_point_options,
-                      add_progress, data_graph, options, progress_on, pyplot, read_point_file, say, subparser, suffix)
+from ._common import (
+    CENTRALITY_NAMES,
+    POINT_FILES,
+    add_graph_options,
+    add_out,
+    add_plot,
+    add_point_options,
+    add_progress,
+    data_graph,
+    options,
+    progress_on,
+    pyplot,
+    read_point_file,
+    say,
+    subparser,
+    suffix,
+)
 from ._output import parameters_block, write_output
 
 NAME = "centrality"
@@ -17,7 +32,8 @@ _PROGRESS_FROM = 2000  # nodes; smaller graphs finish before a progress bar is u
 
 def add_parser(sub) -> argparse.ArgumentParser:
     parser = subparser(
-        sub, NAME,
+        sub,
+        NAME,
         summary="Centrality of every point of a point set, or of every foreground pixel of a binary image.",
         description=f"INPUT is a point set ({POINT_FILES}), joined by --graph into a data-graph,\n"
         "or an image (.png, .bmp, .gif, .tif, .jpg, ...), whose foreground pixels are joined to\n"
@@ -31,28 +47,54 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "centrality-vision centrality cow1.png --measure all --out cow1.json --plot cow1.png",
     )
     parser.add_argument("input", metavar="INPUT", help="point-set file or image")
-    parser.add_argument("--measure", choices=CENTRALITY_NAMES + ("all",), default="closeness",
-                        help="which centrality; 'all' computes every one (default: %(default)s)")
+    parser.add_argument(
+        "--measure",
+        choices=CENTRALITY_NAMES + ("all",),
+        default="closeness",
+        help="which centrality; 'all' computes every one (default: %(default)s)",
+    )
     add_point_options(parser)
     add_graph_options(parser, "--graph", help_text="data-graph for point sets")
     parser.add_argument(
-        "--connectivity", type=int, choices=(8, 4), default=8, help="pixel neighbourhood for images (default: %(default)s)"
+        "--connectivity",
+        type=int,
+        choices=(8, 4),
+        default=8,
+        help="pixel neighbourhood for images (default: %(default)s)",
     )
-    parser.add_argument("--foreground", choices=("auto", "dark", "light"), default="auto",
-                        help="which side of the threshold is the shape in images (default: %(default)s)")
-    parser.add_argument("--threshold", type=float, default=None,
-                        help="grey level between background and shape (default: half the image's range)")
-    parser.add_argument("--weights", action="store_true",
-                        help="path-based measures (betweenness, closeness, harmonic, eccentricity): shortest paths "
-                        "by Euclidean edge length instead of hop counts")
-    parser.add_argument("--strengths", action="store_true",
-                        help="degree-like measures (degree, eigenvector, pagerank, katz): sum the edge lengths "
-                        "instead of counting edges")
+    parser.add_argument(
+        "--foreground",
+        choices=("auto", "dark", "light"),
+        default="auto",
+        help="which side of the threshold is the shape in images (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--threshold",
+        type=float,
+        default=None,
+        help="grey level between background and shape (default: half the image's range)",
+    )
+    parser.add_argument(
+        "--weights",
+        action="store_true",
+        help="path-based measures (betweenness, closeness, harmonic, eccentricity): shortest paths "
+        "by Euclidean edge length instead of hop counts",
+    )
+    parser.add_argument(
+        "--strengths",
+        action="store_true",
+        help="degree-like measures (degree, eigenvector, pagerank, katz): sum the edge lengths "
+        "instead of counting edges",
+    )
     add_out(parser, ".json", ".csv", ".npy", ".npz")
     add_plot(parser, "the values (graph or image)")
-    parser.add_argument("--norm", choices=("auto", "linear", "log", "power"), default="auto",
-                        help="colour scale of the figure; auto: power (square root) for betweenness, whose "
-                        "values span orders of magnitude, linear for the others (default: %(default)s)")
+    parser.add_argument(
+        "--norm",
+        choices=("auto", "linear", "log", "power"),
+        default="auto",
+        help="colour scale of the figure; auto: power (square root) for betweenness, whose "
+        "values span orders of magnitude, linear for the others (default: %(default)s)",
+    )
     add_progress(parser)
     parser.set_defaults(run=run, _parser=parser)
     return parser
@@ -86,8 +128,9 @@ def run(args: argparse.Namespace) -> int:
     else:
         points = read_point_file(args.input, args)
         say(f"read {points.shape[0]} points in {points.shape[1]}D from {args.input}")
-        graph, extra = data_graph(points, args.graph, k=args.k, lam=args.lam, source=args.input,
-                                  progress=progress_on(args))
+        graph, extra = data_graph(
+            points, args.graph, k=args.k, lam=args.lam, source=args.input, progress=progress_on(args)
+        )
         coordinates = dict(zip("xyz", points.T))
         nodes = None
         info = {"input_kind": "points", **extra}
@@ -110,8 +153,16 @@ def run(args: argparse.Namespace) -> int:
     columns = {"node": node, **coordinates, **values}
     written = write_output(args.out, record, arrays=columns, table=columns)
     if args.plot:
-        _plot(args, names, values, graph=graph, coordinates=coordinates, is_image=is_image,
-              shape=info.get("image_shape"), nodes=nodes)
+        _plot(
+            args,
+            names,
+            values,
+            graph=graph,
+            coordinates=coordinates,
+            is_image=is_image,
+            shape=info.get("image_shape"),
+            nodes=nodes,
+        )
         written.append(Path(args.plot))
     say(f"wrote {', '.join(map(str, written))} in {time.perf_counter() - started:.1f} s")
     return 0
@@ -126,17 +177,31 @@ def _plot(args, names, values, *, graph, coordinates, is_image, shape, nodes) ->
     columns = min(3, len(names))
     rows = -(-len(names) // columns)
     three_d = not is_image and len(coordinates) == 3
-    fig, axes = plt.subplots(rows, columns, figsize=(4.5 * columns, 4 * rows), squeeze=False, layout="constrained",
-                             subplot_kw={"projection": "3d"} if three_d else None)
+    fig, axes = plt.subplots(
+        rows,
+        columns,
+        figsize=(4.5 * columns, 4 * rows),
+        squeeze=False,
+        layout="constrained",
+        subplot_kw={"projection": "3d"} if three_d else None,
+    )
     for ax, name in zip(axes.ravel(), names):
         norm = args.norm if args.norm != "auto" else ("power" if name == "betweenness" else "linear")
         if is_image:
             plot_centrality_image(values[name], nodes, tuple(shape), ax=ax, label=name, title=name, norm=norm)
         else:
             points = np.column_stack(list(coordinates.values()))
-            plot_graph(points, graph, values[name], ax=ax, label=name, title=name, node_size=18 if not three_d else 6,
-                       norm=norm)
-    for ax in axes.ravel()[len(names):]:
+            plot_graph(
+                points,
+                graph,
+                values[name],
+                ax=ax,
+                label=name,
+                title=name,
+                node_size=18 if not three_d else 6,
+                norm=norm,
+            )
+    for ax in axes.ravel()[len(names) :]:
         ax.set_visible(False)
     fig.suptitle(Path(args.input).name)
     save_figure(fig, args.plot)

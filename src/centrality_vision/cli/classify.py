@@ -7,7 +7,18 @@ import re
 import time
 from pathlib import Path
 
-from ._common import CENTRALITY_NAMES, add_out, add_plot, add_progress, number, options, progress_on, pyplot, say, subparser
+from ._common import (
+    CENTRALITY_NAMES,
+    add_out,
+    add_plot,
+    add_progress,
+    number,
+    options,
+    progress_on,
+    pyplot,
+    say,
+    subparser,
+)
 from ._output import parameters_block, write_output
 
 NAME = "classify"
@@ -16,7 +27,8 @@ CLASSIFIERS = ("nb", "svm", "forest")
 
 def add_parser(sub) -> argparse.ArgumentParser:
     parser = subparser(
-        sub, NAME,
+        sub,
+        NAME,
         summary="Cross-validated shape classification of a folder of silhouettes by centrality histograms.",
         description="Every image in IMAGES_DIR (.png, .bmp, .gif, .tif, .jpg, ...) is read as a binary\n"
         "silhouette; its label is the file name without extension, trailing digits and the\n"
@@ -34,16 +46,31 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     parser.add_argument("images_dir", metavar="IMAGES_DIR", help="folder of silhouette images")
     parser.add_argument("--labels", metavar="FILE.csv", help="CSV with columns file,label (instead of the file names)")
-    parser.add_argument("--centrality", choices=CENTRALITY_NAMES + ("all",), default="closeness",
-                        help="centrality whose histogram is the feature; 'all' concatenates four (default: %(default)s)")
+    parser.add_argument(
+        "--centrality",
+        choices=CENTRALITY_NAMES + ("all",),
+        default="closeness",
+        help="centrality whose histogram is the feature; 'all' concatenates four (default: %(default)s)",
+    )
     parser.add_argument("--bins", type=number(int, low=1), default=40, help="histogram bins (default: %(default)s)")
-    parser.add_argument("--classifier", choices=CLASSIFIERS, default="nb",
-                        help="nb: Gaussian naive Bayes, svm: RBF SVM, forest: random forest (default: %(default)s)")
-    parser.add_argument("--folds", type=number(int, low=2), default=5, help="cross-validation folds (default: %(default)s)")
-    parser.add_argument("--seed", type=int, default=0,
-                        help="seed of the fold shuffling and of the forest (default: %(default)s)")
-    parser.add_argument("--foreground", choices=("auto", "dark", "light"), default="auto",
-                        help="which side of the threshold is the shape (default: %(default)s)")
+    parser.add_argument(
+        "--classifier",
+        choices=CLASSIFIERS,
+        default="nb",
+        help="nb: Gaussian naive Bayes, svm: RBF SVM, forest: random forest (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--folds", type=number(int, low=2), default=5, help="cross-validation folds (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--seed", type=int, default=0, help="seed of the fold shuffling and of the forest (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--foreground",
+        choices=("auto", "dark", "light"),
+        default="auto",
+        help="which side of the threshold is the shape (default: %(default)s)",
+    )
     add_out(parser, ".json", ".csv", what="; .csv: one row per image (file, label, predicted, fold)")
     add_plot(parser, "the confusion matrix")
     add_progress(parser)
@@ -67,7 +94,9 @@ def _read_labels(path) -> dict:
     with path.open("r", encoding="utf-8-sig", newline="") as handle:
         reader = csv.DictReader(handle)
         if reader.fieldnames is None or not {"file", "label"} <= set(reader.fieldnames):
-            raise InputError(f"{path}: a labels file must be a CSV with columns 'file' and 'label'; got {reader.fieldnames}.")
+            raise InputError(
+                f"{path}: a labels file must be a CSV with columns 'file' and 'label'; got {reader.fieldnames}."
+            )
         return {row["file"]: row["label"] for row in reader}
 
 
@@ -110,7 +139,9 @@ def run(args: argparse.Namespace) -> int:
     classes, counts = np.unique(labels, return_counts=True)
     say(f"read {len(files)} images in {classes.size} classes from {folder}")
     if classes.size < 2:
-        raise InputError(f"{folder}: classification needs at least 2 classes; every image is labelled {str(classes[0])!r}.")
+        raise InputError(
+            f"{folder}: classification needs at least 2 classes; every image is labelled {str(classes[0])!r}."
+        )
     smallest = int(counts.min())
     if smallest < 2:
         lonely = [str(name) for name in classes[counts == 1]]
@@ -121,8 +152,10 @@ def run(args: argparse.Namespace) -> int:
     n_splits = min(args.folds, smallest)
     note = None
     if n_splits < args.folds:
-        note = (f"the smallest class ({str(classes[np.argmin(counts)])!r}) has {smallest} images, "
-                f"fewer than --folds {args.folds}: using {n_splits} folds")
+        note = (
+            f"the smallest class ({str(classes[np.argmin(counts)])!r}) has {smallest} images, "
+            f"fewer than --folds {args.folds}: using {n_splits} folds"
+        )
         say("note: " + note)
 
     from sklearn.metrics import confusion_matrix
@@ -144,14 +177,18 @@ def run(args: argparse.Namespace) -> int:
         predicted[test] = fitted.predict(features[test])  # each image predicted by the model that did not see it
         fold_of[test] = fold
     accuracy = float(np.mean(scores))
-    say(f"accuracy {accuracy:.3f} +- {float(np.std(scores)):.3f} over {n_splits} folds "
-        f"({time.perf_counter() - started:.1f} s)")
+    say(
+        f"accuracy {accuracy:.3f} +- {float(np.std(scores)):.3f} over {n_splits} folds "
+        f"({time.perf_counter() - started:.1f} s)"
+    )
     confusion = confusion_matrix(labels, predicted, labels=classes)
     histogram_params = {key: value for key, value in histogram.get_params().items() if key not in ("progress", "cache")}
     record = {
         "command": NAME,
-        "parameters": parameters_block({**options(args), "histogram": histogram_params,
-                                        "classifier_estimator": " ".join(repr(model).split())}, seed=args.seed),
+        "parameters": parameters_block(
+            {**options(args), "histogram": histogram_params, "classifier_estimator": " ".join(repr(model).split())},
+            seed=args.seed,
+        ),
         "cross_validation": {"splitter": "StratifiedKFold(shuffle=True)", "n_splits": n_splits, "note": note},
         "accuracy": accuracy,
         "accuracy_std": float(np.std(scores)),
@@ -160,11 +197,15 @@ def run(args: argparse.Namespace) -> int:
         "class_counts": counts,
         "confusion": confusion,
         "confusion_meaning": "confusion[i][j]: images of class i predicted as class j",
-        "images": [{"file": path.name, "label": str(truth), "predicted": str(guess), "fold": int(fold)}
-                   for path, truth, guess, fold in zip(files, labels, predicted, fold_of)],
+        "images": [
+            {"file": path.name, "label": str(truth), "predicted": str(guess), "fold": int(fold)}
+            for path, truth, guess, fold in zip(files, labels, predicted, fold_of)
+        ],
         "seconds": round(time.perf_counter() - started, 3),
     }
-    table = {key: np.array([image[key] for image in record["images"]]) for key in ("file", "label", "predicted", "fold")}
+    table = {
+        key: np.array([image[key] for image in record["images"]]) for key in ("file", "label", "predicted", "fold")
+    }
     if args.out.lower().endswith(".csv"):
         del record["images"]  # the table holds them
     written = write_output(args.out, record, table=table)
@@ -185,8 +226,14 @@ def _plot(args, labels, predicted, classes, accuracy, n_splits) -> None:
     size = max(4.5, 0.45 * classes.size + 2)
     fig, ax = plt.subplots(figsize=(size, size))
     ConfusionMatrixDisplay.from_predictions(
-        labels, predicted, labels=classes, ax=ax, cmap="Blues", colorbar=False,
-        xticks_rotation="vertical", include_values=classes.size <= 20,
+        labels,
+        predicted,
+        labels=classes,
+        ax=ax,
+        cmap="Blues",
+        colorbar=False,
+        xticks_rotation="vertical",
+        include_values=classes.size <= 20,
     )
     ax.set_title(f"{args.centrality} histograms, {args.classifier}: accuracy {accuracy:.2f} ({n_splits}-fold CV)")
     save_figure(fig, args.plot)

@@ -25,7 +25,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "per-point alignment error of CPD and of GPD with four centralities (fig. 5.3).",
     )
     parser.add_argument("--out", default="demo-output", help="output folder (default: %(default)s)")
-    parser.add_argument("--shape", default="cow1", help="Kimia-99 image for the pixel-graph figure (default: %(default)s)")
+    parser.add_argument(
+        "--shape", default="cow1", help="Kimia-99 image for the pixel-graph figure (default: %(default)s)"
+    )
     add_progress(parser)
     parser.set_defaults(run=run, _parser=parser)
     return parser
@@ -60,20 +62,41 @@ def run(args: argparse.Namespace) -> int:
     say(f"Delaunay graph of the CPD fish: {graph.shape[0]} nodes, {graph.nnz // 2} edges")
 
     fig, ax = plt.subplots(figsize=(5, 5), layout="constrained")
-    plot_graph(fish, graph, values["closeness"], ax=ax, label="closeness", title="Fish, Delaunay graph, closeness (thesis fig. 5.1)")
+    plot_graph(
+        fish,
+        graph,
+        values["closeness"],
+        ax=ax,
+        label="closeness",
+        title="Fish, Delaunay graph, closeness (thesis fig. 5.1)",
+    )
     save_figure(fig, out / "fish_delaunay_closeness.png")
 
     fig, axes = plt.subplots(2, 2, figsize=(8, 8.5), layout="constrained")
     for ax, name in zip(axes.ravel(), CENTRALITIES):
-        plot_graph(fish, graph, values[name], ax=ax, label=name, title=name, node_size=18,
-                   norm="power" if name == "betweenness" else "linear")
+        plot_graph(
+            fish,
+            graph,
+            values[name],
+            ax=ax,
+            label=name,
+            title=name,
+            node_size=18,
+            norm="power" if name == "betweenness" else "linear",
+        )
     save_figure(fig, out / "fish_delaunay_centralities.png")
 
     pixels, nodes = pixel_graph(image)
     shape_closeness = cen.closeness(pixels, progress=progress_on(args))
     fig, ax = plt.subplots(figsize=(5, 4.2), layout="constrained")
-    plot_centrality_image(shape_closeness, nodes, image.shape, ax=ax, label="closeness",
-                          title=f"{args.shape}: closeness (thesis fig. 4.2)")
+    plot_centrality_image(
+        shape_closeness,
+        nodes,
+        image.shape,
+        ax=ax,
+        label="closeness",
+        title=f"{args.shape}: closeness (thesis fig. 4.2)",
+    )
     save_figure(fig, out / f"{args.shape}_closeness.png")
 
     # registration: the fish under a similarity transform, CPD against GPD (thesis fig. 5.3)
@@ -89,16 +112,22 @@ def run(args: argparse.Namespace) -> int:
         rms = np.asarray(estimator.history_["error"]) / np.sqrt(moving.shape[0])  # per-point RMS
         runs["CPD" if name == "CPD" else f"GPD ({name})"] = {"estimator": estimator, "rms": rms}
     fig = plt.figure(figsize=(12, 4), layout="constrained")
-    panels = [("before", moving), ("CPD", runs["CPD"]["estimator"].moving_transformed_),
-              ("GPD (closeness)", runs["GPD (closeness)"]["estimator"].moving_transformed_)]
+    panels = [
+        ("before", moving),
+        ("CPD", runs["CPD"]["estimator"].moving_transformed_),
+        ("GPD (closeness)", runs["GPD (closeness)"]["estimator"].moving_transformed_),
+    ]
     for k, (title, points) in enumerate(panels, start=1):
         ax = fig.add_subplot(1, 3, k)
         done = "" if title == "before" else f", {runs[title]['estimator'].n_iter_} iterations"
         plot_registration(target, points, ax=ax, title=title + done, legend=k == 1)
     fig.suptitle("Fish under a rotation of 50 degrees and scale 1.5: registered by CPD and by GPD")
     save_figure(fig, out / "fish_registration.png")
-    ax = plot_alignment_errors({label: r["rms"][:40] for label, r in runs.items()}, ylabel="per-point RMS error",
-                               title="Fish under a similarity: alignment error (thesis fig. 5.3)")
+    ax = plot_alignment_errors(
+        {label: r["rms"][:40] for label, r in runs.items()},
+        ylabel="per-point RMS error",
+        title="Fish under a similarity: alignment error (thesis fig. 5.3)",
+    )
     save_figure(ax.figure, out / "fish_registration_errors.png")
     to_one_percent = {label: _first_below(r["rms"], 0.01) for label, r in runs.items()}
 
@@ -108,10 +137,14 @@ def run(args: argparse.Namespace) -> int:
         "version": __version__,
         "data": "CPD fish (fixed set, 91 points); Kimia-99 " + args.shape,
         "graph": {"kind": "delaunay", "n_nodes": graph.shape[0], "n_edges": graph.nnz // 2},
-        "centralities": {"weights": False, "defaults": "degree raw, betweenness unnormalised, closeness (n-1)/sum d, eigenvector max 1"},
+        "centralities": {
+            "weights": False,
+            "defaults": "degree raw, betweenness unnormalised, closeness (n-1)/sum d, eigenvector max 1",
+        },
         "pixel_graph": {"shape": args.shape, "connectivity": 8, "n_nodes": int(pixels.shape[0])},
         "registration": {
-            "moving": "CPD fish (moving set)", "transform": "rotation 50 deg, scale 1.5, translation (0.5, -0.3)",
+            "moving": "CPD fish (moving set)",
+            "transform": "rotation 50 deg, scale 1.5, translation (0.5, -0.3)",
             "estimator": "RigidCPD(scale=True, tol=1e-8), GPD over it on Delaunay graphs",
             "iterations_to_1_percent_error": to_one_percent,
             "final_rms": {label: float(r["rms"][-1]) for label, r in runs.items()},
@@ -124,7 +157,9 @@ def run(args: argparse.Namespace) -> int:
     print("fish: the five most central points by closeness")
     print(f"{'node':>5} {'x':>8} {'y':>8} " + " ".join(f"{n:>12}" for n in CENTRALITIES))
     for i in top:
-        print(f"{i:>5} {fish[i, 0]:>8.3f} {fish[i, 1]:>8.3f} " + " ".join(f"{values[n][i]:>12.4f}" for n in CENTRALITIES))
+        print(
+            f"{i:>5} {fish[i, 0]:>8.3f} {fish[i, 1]:>8.3f} " + " ".join(f"{values[n][i]:>12.4f}" for n in CENTRALITIES)
+        )
     print("fish under a similarity transform: iterations until the per-point error is 1% of its start")
     print("  " + ", ".join(f"{label} {n}" for label, n in to_one_percent.items()))
     print(f"wrote {len(list(out.iterdir()))} files to {out}/ in {record['seconds']:.1f} s")

@@ -6,8 +6,23 @@ import argparse
 import time
 from pathlib import Path
 
-from ._common import (POINT_FILES, add_graph_options, add_out, add_plot, add_point_options, add_progress, data_graph,
-                      edge_list, options, progress_on, pyplot, read_point_file, say, subparser, suffix)
+from ._common import (
+    POINT_FILES,
+    add_graph_options,
+    add_out,
+    add_plot,
+    add_point_options,
+    add_progress,
+    data_graph,
+    edge_list,
+    options,
+    progress_on,
+    pyplot,
+    read_point_file,
+    say,
+    subparser,
+    suffix,
+)
 from ._output import parameters_block, write_output
 
 NAME = "graph"
@@ -15,7 +30,8 @@ NAME = "graph"
 
 def add_parser(sub) -> argparse.ArgumentParser:
     parser = subparser(
-        sub, NAME,
+        sub,
+        NAME,
         summary="Build a data-graph (Delaunay, Gabriel, EMST, k-NN, ...) of a point set and write its edges.",
         description=f"POINTS is a point-set file ({POINT_FILES}). The edge list (i, j, length) is\n"
         "written with i < j, nodes numbered by row of POINTS from 0, lengths Euclidean.\n"
@@ -48,8 +64,12 @@ def run(args: argparse.Namespace) -> int:
     record = {"command": NAME, "parameters": parameters, **summary}
     if suffix(args.out) == ".json":
         record.update(edges=[[int(a), int(b), float(c)] for a, b, c in zip(i, j, length)], points=points)
-    arrays = {"edges": np.column_stack([i, j]), "lengths": length, "points": points,
-              **{key: np.asarray(value) for key, value in summary.items()}}
+    arrays = {
+        "edges": np.column_stack([i, j]),
+        "lengths": length,
+        "points": points,
+        **{key: np.asarray(value) for key, value in summary.items()},
+    }
     written = write_output(args.out, record, arrays=arrays, table={"i": i, "j": j, "length": length})
     if args.plot:
         from ..plotting import plot_graph, save_figure

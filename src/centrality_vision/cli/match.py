@@ -6,8 +6,18 @@ import argparse
 import time
 from pathlib import Path
 
-from ._common import (POINT_FILES, add_out, add_plot, add_point_options, options, pyplot,
-                      read_point_file, say, subparser, transform_record)
+from ._common import (
+    POINT_FILES,
+    add_out,
+    add_plot,
+    add_point_options,
+    options,
+    pyplot,
+    read_point_file,
+    say,
+    subparser,
+    transform_record,
+)
 from ._output import parameters_block, write_output
 
 NAME = "match"
@@ -15,7 +25,8 @@ NAME = "match"
 
 def add_parser(sub) -> argparse.ArgumentParser:
     parser = subparser(
-        sub, NAME,
+        sub,
+        NAME,
         summary="Match two point sets of the same size through their MWME graphs (thesis ch. 6).",
         description=f"MOVING and FIXED are point-set files ({POINT_FILES}) of the same size.\n"
         "Each set gets its minimum-weight maximum-entropy graph, whose nodes have distinct\n"
@@ -27,10 +38,18 @@ def add_parser(sub) -> argparse.ArgumentParser:
     parser.add_argument("moving", metavar="MOVING", help="point-set file")
     parser.add_argument("fixed", metavar="FIXED", help="point-set file of the same size")
     add_point_options(parser)
-    parser.add_argument("--method", choices=("local", "greedy", "exact"), default="local",
-                        help="MWME solver; exact only up to 20 points (default: %(default)s)")
-    parser.add_argument("--transform", choices=("similarity", "rigid"), default="similarity",
-                        help="transform fitted to the matched points (default: %(default)s)")
+    parser.add_argument(
+        "--method",
+        choices=("local", "greedy", "exact"),
+        default="local",
+        help="MWME solver; exact only up to 20 points (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--transform",
+        choices=("similarity", "rigid"),
+        default="similarity",
+        help="transform fitted to the matched points (default: %(default)s)",
+    )
     add_out(parser, ".json", ".npz")
     add_plot(parser, "the matching (2D sets)")
     parser.set_defaults(run=run, _parser=parser)
@@ -78,12 +97,10 @@ def run(args: argparse.Namespace) -> int:
         from ..plotting import plot_matching, save_figure
 
         pyplot()
-        ax = plot_matching(moving, fixed, correspondence,
-                           title=f"MWME matching ({args.method}), RMS residual {rms:.3g}")
+        ax = plot_matching(
+            moving, fixed, correspondence, title=f"MWME matching ({args.method}), RMS residual {rms:.3g}"
+        )
         save_figure(ax.figure, args.plot)
         written.append(Path(args.plot))
     say(f"wrote {', '.join(map(str, written))}")
     return 0
-
-
-

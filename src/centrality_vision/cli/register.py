@@ -6,8 +6,24 @@ import argparse
 import time
 from pathlib import Path
 
-from ._common import (CENTRALITY_NAMES, GPD_GRAPHS, POINT_FILES, add_out, add_plot, add_point_options, add_progress,
-                      number, options, progress_on, pyplot, read_point_file, say, subparser, suffix, transform_record)
+from ._common import (
+    CENTRALITY_NAMES,
+    GPD_GRAPHS,
+    POINT_FILES,
+    add_out,
+    add_plot,
+    add_point_options,
+    add_progress,
+    number,
+    options,
+    progress_on,
+    pyplot,
+    read_point_file,
+    say,
+    subparser,
+    suffix,
+    transform_record,
+)
 from ._output import parameters_block, write_output
 
 NAME = "register"
@@ -16,7 +32,8 @@ POINT_OUTPUTS = (".csv", ".txt", ".xyz", ".npy", ".mat", ".ply", ".pcd", ".obj")
 
 def add_parser(sub) -> argparse.ArgumentParser:
     parser = subparser(
-        sub, NAME,
+        sub,
+        NAME,
         summary="Align a moving point set onto a fixed one (CPD, GPD or ICP) and write the result.",
         description=f"MOVING and FIXED are point-set files ({POINT_FILES}) of the same dimension\n"
         "(2 or 3); they need not have the same number of points. cpd is Coherent Point Drift,\n"
@@ -38,27 +55,65 @@ def add_parser(sub) -> argparse.ArgumentParser:
     parser.add_argument(
         "--method", choices=("cpd", "gpd", "icp"), default="cpd", help="registration method (default: %(default)s)"
     )
-    parser.add_argument("--transform", choices=("rigid", "similarity", "affine", "nonrigid"), default="similarity",
-                        help="transform family; similarity = rigid + isotropic scale (default: %(default)s)")
-    parser.add_argument("--centrality", choices=CENTRALITY_NAMES, default="closeness",
-                        help="GPD only: centrality of the points (default: %(default)s)")
-    parser.add_argument("--graph", choices=GPD_GRAPHS, default="delaunay",
-                        help="GPD only: data-graph the centrality is computed on (default: %(default)s)")
-    parser.add_argument("--k", type=number(int, low=1), default=6,
-                        help="GPD only: neighbours for --graph knn (default: %(default)s)")
-    parser.add_argument("--kappa", type=number(float, low=0, low_open=True, high=1), default=0.5,
-                        help="GPD only: geometry-vs-centrality balance, 1 = plain CPD (default: %(default)s)")
-    parser.add_argument("--w", type=number(float, low=0, high=1, high_open=True), default=0.0,
-                        help="CPD/GPD: weight of the outlier component, in [0, 1) (default: %(default)s)")
-    parser.add_argument("--max-iter", type=number(int, low=1), default=150, help="most iterations (default: %(default)s)")
-    parser.add_argument("--tol", type=number(float, low=0, low_open=True), default=1e-5,
-                        help="stop when the objective changes by less than this, relatively (default: %(default)s)")
-    parser.add_argument("--beta", type=number(float, low=0, low_open=True), default=2.0,
-                        help="nonrigid: width of the Gaussian kernel (default: %(default)s)")
-    parser.add_argument("--lam", type=number(float, low=0, low_open=True), default=2.0,
-                        help="nonrigid: smoothness weight (default: %(default)s)")
-    parser.add_argument("--true-moving", metavar="FILE",
-                        help="true positions of the moving points (NaN rows allowed), to record the alignment error")
+    parser.add_argument(
+        "--transform",
+        choices=("rigid", "similarity", "affine", "nonrigid"),
+        default="similarity",
+        help="transform family; similarity = rigid + isotropic scale (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--centrality",
+        choices=CENTRALITY_NAMES,
+        default="closeness",
+        help="GPD only: centrality of the points (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--graph",
+        choices=GPD_GRAPHS,
+        default="delaunay",
+        help="GPD only: data-graph the centrality is computed on (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--k", type=number(int, low=1), default=6, help="GPD only: neighbours for --graph knn (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--kappa",
+        type=number(float, low=0, low_open=True, high=1),
+        default=0.5,
+        help="GPD only: geometry-vs-centrality balance, 1 = plain CPD (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--w",
+        type=number(float, low=0, high=1, high_open=True),
+        default=0.0,
+        help="CPD/GPD: weight of the outlier component, in [0, 1) (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--max-iter", type=number(int, low=1), default=150, help="most iterations (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--tol",
+        type=number(float, low=0, low_open=True),
+        default=1e-5,
+        help="stop when the objective changes by less than this, relatively (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--beta",
+        type=number(float, low=0, low_open=True),
+        default=2.0,
+        help="nonrigid: width of the Gaussian kernel (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--lam",
+        type=number(float, low=0, low_open=True),
+        default=2.0,
+        help="nonrigid: smoothness weight (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--true-moving",
+        metavar="FILE",
+        help="true positions of the moving points (NaN rows allowed), to record the alignment error",
+    )
     add_out(parser, ".json", ".npz", *POINT_OUTPUTS)
     add_plot(parser, "the fixed set and the moving set before and after, and the error curve with --true-moving")
     add_progress(parser)
@@ -143,8 +198,9 @@ def run(args: argparse.Namespace) -> int:
             f"got {moving.shape[1]} and {fixed.shape[1]} columns."
         )
     if suffix(args.out) in (".ply", ".pcd", ".obj") and moving.shape[1] != 3:
-        raise InputError(f"--out {args.out}: {suffix(args.out)} files hold 3D points; got 2D sets "
-                         "(write .csv, .txt, .npy or .mat).")
+        raise InputError(
+            f"--out {args.out}: {suffix(args.out)} files hold 3D points; got 2D sets (write .csv, .txt, .npy or .mat)."
+        )
     true_moving = None
     if args.true_moving is not None:
         true_moving = read_point_file(args.true_moving, args, nan_rows=True)
@@ -158,8 +214,10 @@ def run(args: argparse.Namespace) -> int:
     label = f"{args.method.upper()} ({args.transform})"
     if args.method == "gpd":
         label = f"GPD ({args.transform}, {args.centrality}, {args.graph})"
-    say(f"{label}: moving {args.moving} ({moving.shape[0]} points), fixed {args.fixed} ({fixed.shape[0]} points), "
-        f"{moving.shape[1]}D")
+    say(
+        f"{label}: moving {args.moving} ({moving.shape[0]} points), fixed {args.fixed} ({fixed.shape[0]} points), "
+        f"{moving.shape[1]}D"
+    )
     watch = _Watch(total=args.max_iter, label=label, show=progress_on(args), true_moving=true_moving)
     estimator = _estimator(args, watch)
     try:
@@ -170,8 +228,11 @@ def run(args: argparse.Namespace) -> int:
     status = "converged" if estimator.converged_ else "stopped at --max-iter without converging"
     say(f"{label}: {status} after {estimator.n_iter_} iterations in {seconds:.2f} s")
 
-    history = {key: (None if value is None or all(v is None for v in value) else np.asarray(value))
-               for key, value in estimator.history_.items() if key != "error"}
+    history = {
+        key: (None if value is None or all(v is None for v in value) else np.asarray(value))
+        for key, value in estimator.history_.items()
+        if key != "error"
+    }
     history["alignment_rms"] = np.asarray(watch.rms) if true_moving is not None else None
     sigma2 = getattr(estimator, "sigma2_", None)
     transform = transform_record(estimator.transform_)
@@ -200,8 +261,13 @@ def run(args: argparse.Namespace) -> int:
         record["moving_transformed"] = aligned
     arrays = {f"transform_{key}": value for key, value in transform.items()}
     arrays.update({f"history_{key}": value for key, value in history.items()})
-    arrays.update({key: value for key, value in record.items()
-                   if key not in ("transform", "history", "warnings", "parameters", "command")})
+    arrays.update(
+        {
+            key: value
+            for key, value in record.items()
+            if key not in ("transform", "history", "warnings", "parameters", "command")
+        }
+    )
     arrays["warnings"] = np.array(record["warnings"], dtype=str)
     written = write_output(args.out, record, arrays=arrays, points=aligned)
     if args.plot:
@@ -220,10 +286,22 @@ def _plot(args, fixed, before, after, rms, label) -> None:
     fig = plt.figure(figsize=(4.2 * n_panels, 4.2), layout="constrained")
     kw = {"projection": "3d"} if three_d else {}
     axes = [fig.add_subplot(1, n_panels, k + 1, **kw) for k in range(2)]
-    plot_registration(fixed, before, ax=axes[0], title="before", moving_label=f"moving ({Path(args.moving).name})",
-                      fixed_label=f"fixed ({Path(args.fixed).name})")
-    plot_registration(fixed, after, ax=axes[1], title="after", moving_label="moving, aligned",
-                      fixed_label=f"fixed ({Path(args.fixed).name})")
+    plot_registration(
+        fixed,
+        before,
+        ax=axes[0],
+        title="before",
+        moving_label=f"moving ({Path(args.moving).name})",
+        fixed_label=f"fixed ({Path(args.fixed).name})",
+    )
+    plot_registration(
+        fixed,
+        after,
+        ax=axes[1],
+        title="after",
+        moving_label="moving, aligned",
+        fixed_label=f"fixed ({Path(args.fixed).name})",
+    )
     if rms:
         ax = fig.add_subplot(1, n_panels, 3)
         plot_alignment_errors({label: rms}, ax=ax, title="alignment error")

@@ -18,7 +18,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         description="Re-run a thesis experiment; tables and figures are written under --out/<experiment>/. "
         "'all' runs every experiment and writes --out/report.md with every table and figure.",
     )
-    parser.add_argument("experiment", choices=[*EXPERIMENTS, "all"], help="which table or figure, or all of them with a report")
+    parser.add_argument(
+        "experiment", choices=[*EXPERIMENTS, "all"], help="which table or figure, or all of them with a report"
+    )
     parser.add_argument("--quick", action="store_true", help="a small version, for a first look or a test")
     parser.add_argument("--seed", type=int, default=0, help="seed of every random choice (default: %(default)s)")
     parser.add_argument("--out", default="results", help="output folder (default: %(default)s)")
@@ -50,5 +52,6 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(
             f"`--scheduler` applies to {', '.join(RUNNER_EXPERIMENTS)} (and all); got it for {args.experiment}."
         )
-    return run_experiment(args.experiment, Path(args.out) / args.experiment, quick=args.quick, seed=args.seed,
-                          scheduler=args.scheduler)
+    return run_experiment(
+        args.experiment, Path(args.out) / args.experiment, quick=args.quick, seed=args.seed, scheduler=args.scheduler
+    )

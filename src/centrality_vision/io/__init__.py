@@ -16,4 +16,12 @@ Every problem with a file is an :class:`~centrality_vision.exceptions.InputError
 from ._images import IMAGE_SUFFIXES, read_image, read_shape
 from ._points import POINT_SUFFIXES, WRITE_SUFFIXES, read_points, write_points
 
-__all__ = ["IMAGE_SUFFIXES", "POINT_SUFFIXES", "WRITE_SUFFIXES", "read_image", "read_points", "read_shape", "write_points"]
+__all__ = [
+    "IMAGE_SUFFIXES",
+    "POINT_SUFFIXES",
+    "WRITE_SUFFIXES",
+    "read_image",
+    "read_points",
+    "read_shape",
+    "write_points",
+]

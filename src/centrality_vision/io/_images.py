@@ -132,7 +132,8 @@ def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = N
     if foreground not in ("auto", "dark", "light"):
         raise InputError(f"`foreground` must be 'auto', 'dark' or 'light'; got {foreground!r}.")
     if threshold is not None and (
-        isinstance(threshold, bool) or not isinstance(threshold, (int, float, np.integer, np.floating))
+        isinstance(threshold, bool)
+        or not isinstance(threshold, (int, float, np.integer, np.floating))
         or not math.isfinite(threshold)
     ):
         raise InputError(f"`threshold` must be a finite number or None; got {_describe(threshold)}.")

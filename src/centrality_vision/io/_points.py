@@ -169,7 +169,9 @@ def _check_columns(columns):
     try:
         items = list(columns)
     except TypeError:
-        raise TypeError(f"`columns` must be a sequence of names or indices, or None; got {_describe(columns)}.") from None
+        raise TypeError(
+            f"`columns` must be a sequence of names or indices, or None; got {_describe(columns)}."
+        ) from None
     out = []
     for item in items:
         if isinstance(item, (int, np.integer)) and not isinstance(item, bool):
@@ -195,10 +197,14 @@ def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
         for item in columns:
             if isinstance(item, int):
                 if not 0 <= item < n_columns:
-                    raise InputError(f"{path}: `columns` index {item} is out of range; the file has {n_columns} columns{shown}.")
+                    raise InputError(
+                        f"{path}: `columns` index {item} is out of range; the file has {n_columns} columns{shown}."
+                    )
                 picked.append(item)
             elif lower is None:
-                raise InputError(f"{path}: `columns` names {item!r} but the file names no columns; use 0-based indices.")
+                raise InputError(
+                    f"{path}: `columns` names {item!r} but the file names no columns; use 0-based indices."
+                )
             elif item.lower() not in lower:
                 raise InputError(f"{path}: `columns` names {item!r}, which is not a column of the file{shown}.")
             else:
@@ -232,8 +238,11 @@ def _read_text(path: Path) -> _Table:
         raise InputError(f"{path}: not a text file of numbers (it is not UTF-8 text).") from None
     if "\x00" in text:
         raise InputError(f"{path}: not a text file of numbers (it holds NUL bytes).")
-    rows = [(number, line) for number, line in enumerate(text.splitlines(), start=1)
-            if line.strip() and not line.lstrip().startswith("#")]
+    rows = [
+        (number, line)
+        for number, line in enumerate(text.splitlines(), start=1)
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     if not rows:
         raise InputError(f"{path}: holds no points.")
     split, decimal_comma = _sniff([line for _, line in rows[:64]])
@@ -319,7 +328,7 @@ def _read_npy(path: Path) -> _Table:
         except (ValueError, OSError, EOFError, SyntaxError) as exc:
             raise InputError(f"{path}: not a readable .npy array ({_first_line(exc)}).") from None
         offset = handle.tell()
-    if dtype.hasobject or not (np.issubdtype(dtype, np.number) or dtype == bool):
+    if dtype.hasobject or not (np.issubdtype(dtype, np.number) or dtype.kind == "b"):
         raise InputError(f"{path}: must hold a numeric array; got dtype {dtype}.")
     if np.issubdtype(dtype, np.complexfloating):
         raise InputError(f"{path}: must hold real numbers; got dtype {dtype}.")
@@ -329,7 +338,8 @@ def _read_npy(path: Path) -> _Table:
     available = path.stat().st_size - offset
     if needed != available:
         raise InputError(
-            f"{path}: the header announces shape {shape} of {dtype} ({needed} bytes) but the file holds {available} bytes of data."
+            f"{path}: the header announces shape {shape} of {dtype} ({needed} bytes) "
+            f"but the file holds {available} bytes of data."
         )
     array = np.load(path, allow_pickle=False, mmap_mode="r")
     return _Table(np.array(array, dtype=np.float64))
@@ -344,20 +354,28 @@ def _read_mat(path: Path, variable: str | None) -> _Table:
     try:
         contents = loadmat(path)
     except NotImplementedError:
-        raise InputError(f"{path}: MATLAB v7.3 (HDF5) files are not supported; save with -v7 (or read it with h5py).") from None
+        raise InputError(
+            f"{path}: MATLAB v7.3 (HDF5) files are not supported; save with -v7 (or read it with h5py)."
+        ) from None
     except Exception as exc:  # scipy raises ValueError, TypeError, MatReadError, ...
         raise InputError(f"{path}: not a readable .mat file ({type(exc).__name__}: {_first_line(exc)}).") from None
     arrays = {
-        key: value for key, value in contents.items()
-        if not key.startswith("__") and isinstance(value, np.ndarray) and value.ndim == 2
-        and (np.issubdtype(value.dtype, np.number) or value.dtype == bool) and not np.iscomplexobj(value)
+        key: value
+        for key, value in contents.items()
+        if not key.startswith("__")
+        and isinstance(value, np.ndarray)
+        and value.ndim == 2
+        and (np.issubdtype(value.dtype, np.number) or value.dtype == bool)
+        and not np.iscomplexobj(value)
     }
     if variable is not None:
         if variable not in contents or variable.startswith("__"):
             names = ", ".join(sorted(key for key in contents if not key.startswith("__"))) or "none"
             raise InputError(f"{path}: no variable {variable!r} (variables: {names}).")
         if variable not in arrays:
-            raise InputError(f"{path}: variable {variable!r} must be a 2D real numeric array; got {_describe(contents[variable])}.")
+            raise InputError(
+                f"{path}: variable {variable!r} must be a 2D real numeric array; got {_describe(contents[variable])}."
+            )
         return _Table(arrays[variable].astype(np.float64))
     if len(arrays) != 1:
         names = ", ".join(sorted(arrays)) or "none"
@@ -371,8 +389,24 @@ def _read_mat(path: Path, variable: str | None) -> _Table:
 # ------------------------------------------------------------------------------- .ply
 
 
-_PLY_SIZES = {"char": 1, "uchar": 1, "int8": 1, "uint8": 1, "short": 2, "ushort": 2, "int16": 2, "uint16": 2,
-              "int": 4, "uint": 4, "int32": 4, "uint32": 4, "float": 4, "float32": 4, "double": 8, "float64": 8}
+_PLY_SIZES = {
+    "char": 1,
+    "uchar": 1,
+    "int8": 1,
+    "uint8": 1,
+    "short": 2,
+    "ushort": 2,
+    "int16": 2,
+    "uint16": 2,
+    "int": 4,
+    "uint": 4,
+    "int32": 4,
+    "uint32": 4,
+    "float": 4,
+    "float32": 4,
+    "double": 8,
+    "float64": 8,
+}
 
 
 def _ply_vertex_count(path: Path, data: bytes) -> int:
@@ -414,8 +448,11 @@ def _read_ply(path: Path) -> _Table:
     if points.shape[0] != count:
         raise InputError(f"{path}: the header declares {count} vertices but the file holds {points.shape[0]}.")
     names = ["x", "y", "z"][: points.shape[1]]
-    extra = [(key, np.asarray(value)) for key, value in mesh.point_data.items()
-             if np.asarray(value).ndim == 1 and np.issubdtype(np.asarray(value).dtype, np.number)]
+    extra = [
+        (key, np.asarray(value))
+        for key, value in mesh.point_data.items()
+        if np.asarray(value).ndim == 1 and np.issubdtype(np.asarray(value).dtype, np.number)
+    ]
     values = np.column_stack([points] + [value.astype(np.float64) for _, value in extra])
     return _Table(values, names + [key for key, _ in extra])
 
@@ -431,8 +468,18 @@ def _meshio():
 # ------------------------------------------------------------------------------- .pcd
 
 
-_PCD_TYPES = {("F", 4): "f4", ("F", 8): "f8", ("I", 1): "i1", ("I", 2): "i2", ("I", 4): "i4", ("I", 8): "i8",
-              ("U", 1): "u1", ("U", 2): "u2", ("U", 4): "u4", ("U", 8): "u8"}
+_PCD_TYPES = {
+    ("F", 4): "f4",
+    ("F", 8): "f8",
+    ("I", 1): "i1",
+    ("I", 2): "i2",
+    ("I", 4): "i4",
+    ("I", 8): "i8",
+    ("U", 1): "u1",
+    ("U", 2): "u2",
+    ("U", 4): "u4",
+    ("U", 8): "u8",
+}
 
 
 def _read_pcd(path: Path) -> _Table:
@@ -489,7 +536,12 @@ def _read_pcd(path: Path) -> _Table:
         return _Table(values, names)
     if mode == "binary":
         try:
-            dtype = np.dtype([(f"f{k}", "<" + _PCD_TYPES[(t.upper(), s)], (c,)) for k, (t, s, c) in enumerate(zip(types, sizes, counts))])
+            dtype = np.dtype(
+                [
+                    (f"f{k}", "<" + _PCD_TYPES[(t.upper(), s)], (c,))
+                    for k, (t, s, c) in enumerate(zip(types, sizes, counts))
+                ]
+            )
         except KeyError:
             raise InputError(f"{path}: unknown PCD TYPE/SIZE pair in {list(zip(types, sizes))}.") from None
         if n_points * dtype.itemsize > len(data) - offset:
@@ -498,7 +550,11 @@ def _read_pcd(path: Path) -> _Table:
                 f"but the file holds {len(data) - offset} bytes of data."
             )
         records = np.frombuffer(data, dtype=dtype, count=n_points, offset=offset)
-        values = np.column_stack([records[f"f{k}"].astype(np.float64) for k in range(n)]) if n_points else np.empty((0, len(names)))
+        values = (
+            np.column_stack([records[f"f{k}"].astype(np.float64) for k in range(n)])
+            if n_points
+            else np.empty((0, len(names)))
+        )
         return _Table(values, names)
     if mode == "binary_compressed":
         raise InputError(f"{path}: compressed PCD data are not supported; save it as DATA ascii or binary.")
@@ -580,12 +636,18 @@ def write_points(path, points, /) -> Path:
     arr = arr.astype(np.float64)
     partial = ~np.isfinite(arr).all(axis=1) & ~np.isnan(arr).all(axis=1)
     if partial.any():
-        raise InputError(f"`points` must be finite, or NaN in every coordinate of a row; row {int(np.argmax(partial))} is not.")
+        raise InputError(
+            f"`points` must be finite, or NaN in every coordinate of a row; row {int(np.argmax(partial))} is not."
+        )
     if suffix in _THREE_D_ONLY:
         if arr.shape[1] != 3:
-            raise InputError(f"{path}: {suffix} files hold 3D points; got {arr.shape[1]}D points (write .csv, .txt, .npy or .mat).")
+            raise InputError(
+                f"{path}: {suffix} files hold 3D points; got {arr.shape[1]}D points (write .csv, .txt, .npy or .mat)."
+            )
         if np.isnan(arr).any():
-            raise InputError(f"{path}: {suffix} files cannot mark missing points with NaN rows; write .csv, .txt, .npy or .mat.")
+            raise InputError(
+                f"{path}: {suffix} files cannot mark missing points with NaN rows; write .csv, .txt, .npy or .mat."
+            )
     if path.parent != Path("."):
         path.parent.mkdir(parents=True, exist_ok=True)
     names = ["x", "y", "z"][: arr.shape[1]] if arr.shape[1] <= 3 else [f"x{k}" for k in range(arr.shape[1])]
@@ -600,8 +662,10 @@ def write_points(path, points, /) -> Path:
     elif suffix == ".obj":
         path.write_text("".join(f"v {_fmt(x)} {_fmt(y)} {_fmt(z)}\n" for x, y, z in arr), encoding="utf-8")
     elif suffix == ".pcd":
-        header = (f"# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\n"
-                  f"COUNT 1 1 1\nWIDTH {arr.shape[0]}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {arr.shape[0]}\nDATA ascii\n")
+        header = (
+            f"# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z\nSIZE 8 8 8\nTYPE F F F\n"
+            f"COUNT 1 1 1\nWIDTH {arr.shape[0]}\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS {arr.shape[0]}\nDATA ascii\n"
+        )
         path.write_text(header + _rows(arr, " "), encoding="ascii")
     elif suffix == ".csv":
         path.write_text(",".join(names) + "\n" + _rows(arr, ","), encoding="utf-8")
