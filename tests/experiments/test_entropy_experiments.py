@@ -1,19 +1,54 @@
+"""The entropy-graph experiments (figs. 6.1, 6.3, 6.4, 7.1-7.5): units, claims computed from data, files."""
+
 import json
 
 import numpy as np
 
-from centrality_vision.experiments import fig_6_4, fig_7_4
+from centrality_vision.experiments import fig_6_1, fig_6_4, fig_7_1, fig_7_4
 
 
-def test_fig_6_4_quick(tmp_path, capsys):
-    assert fig_6_4.main(["--quick", "--out", str(tmp_path)]) == 0
-    record = json.loads((tmp_path / "fig-6.4.json").read_text())
-    acc = np.asarray(record["accuracy"])
-    assert acc.shape == (9, 3)
-    assert acc[:, 0].mean() >= 0.95  # noiseless similarity transforms
-    assert acc[:, 0].mean() >= acc[:, -1].mean()
-    assert (tmp_path / "fig-6.4.png").stat().st_size > 10_000
-    assert "mean" in capsys.readouterr().out
+def test_fig_6_1_worked_examples(tmp_path, capsys):
+    assert fig_6_1.main(["--out", str(tmp_path)]) == 0
+    record = json.loads((tmp_path / "fig-6.1.json").read_text())
+    assert all(record["claims"].values())
+    assert record["table_6_1"]["exact"]["cost"] == 10.0
+    assert record["table_6_1"]["greedy"]["cost"] >= 10.0
+    assert (tmp_path / "fig-6.1.png").stat().st_size > 10_000
+    out = capsys.readouterr().out
+    assert "optimum costs 10" in out and "[holds]" in out
+
+
+def test_fig_7_1(tmp_path):
+    assert fig_7_1.main(["--out", str(tmp_path)]) == 0
+    record = json.loads((tmp_path / "fig-7.1.json").read_text())
+    assert all(record["claims"].values())
+    assert "125 spanning trees" in fig_7_1.explain(record)
+
+
+def test_fig_6_4_unit_robust_against_global():
+    """One outline: both exact without noise; with noise the robust matching keeps up."""
+    accuracy = fig_6_4.match_image(13, 0, "local", [0.0, 0.05])
+    assert accuracy["mwme"][0] == 1.0 and accuracy["robust"][0] == 1.0
+    assert accuracy["robust"][1] >= accuracy["mwme"][1]
+
+
+def _fig_6_4_result(mwme, robust):
+    return {
+        "noise": [0.0, 0.1],
+        "accuracy": mwme,
+        "robust_accuracy": robust,
+        "data": "test",
+        "names": ["a", "b"],
+    }
+
+
+def test_fig_6_4_claims_follow_the_numbers():
+    good = _fig_6_4_result([[1.0, 0.4], [1.0, 0.2]], [[1.0, 0.9], [1.0, 1.0]])
+    assert all(fig_6_4.claims(good).values())
+    text = fig_6_4.explain(good)
+    assert "30.0%" in text and "95.0%" in text  # the noisy means, computed
+    bad = _fig_6_4_result([[0.5, 0.4], [1.0, 0.2]], [[1.0, 0.1], [0.9, 0.1]])
+    assert not any(fig_6_4.claims(bad).values())
 
 
 def test_fig_7_4_perturbation_and_share():
@@ -29,15 +64,46 @@ def test_fig_7_4_perturbation_and_share():
     assert 0.0 <= big < 1.0
 
 
-def test_fig_7_4_quick(tmp_path):
-    assert fig_7_4.main(["--quick", "--out", str(tmp_path)]) == 0
-    record = json.loads((tmp_path / "fig-7.4.json").read_text())
-    assert record["levels"] == [1, 5, 10]
-    for name in fig_7_4.DATASETS:
-        for graph in fig_7_4.GRAPHS:
-            shares = np.asarray(record["shares"][name][graph])
-            assert shares.shape == (3, 3) and np.all((shares >= 0) & (shares <= 1))
-            # more noise never keeps more edges, in the median
-            med = np.median(shares, axis=1)
-            assert med[0] >= med[-1]
-    assert {"fig-7.4.png", "fig-7.3-fish.png", "fig-7.5-cow1.png"} <= {p.name for p in tmp_path.iterdir()}
+def test_fig_7_4_unit():
+    shares = fig_7_4.stability_batch("fish", 0, 1, 0, 0, 3)
+    assert set(shares) == set(fig_7_4.GRAPHS)
+    assert all(0.0 <= v <= 1.0 for v in shares.values())
+
+
+def _fig_7_4_result(mstme_above: bool):
+    levels = [1, 5, 10]
+    hi, lo = [[0.9] * 2, [0.6] * 2, [0.3] * 2], [[0.5] * 2, [0.3] * 2, [0.1] * 2]
+    shares = {
+        name: {g: (hi if (g == "mstme") == mstme_above else lo) for g in fig_7_4.GRAPHS} for name in fig_7_4.DATASETS
+    }
+    return {
+        "levels": levels,
+        "shares": shares,
+        "mst_share": {name: 0.3 for name in fig_7_4.DATASETS},
+        "eps": {name: 1.0 for name in fig_7_4.DATASETS},
+        "n_copies": 2,
+        "n_batches": 2,
+        "seed": 0,
+    }
+
+
+def test_fig_7_4_claims_and_explanation_are_computed():
+    above, below = _fig_7_4_result(True), _fig_7_4_result(False)
+    assert all(fig_7_4.claims(above).values())
+    claims_below = fig_7_4.claims(below)
+    assert [v for k, v in claims_below.items() if "Delaunay" in k] == [False, False]
+    assert "keeps more edges than delaunay at 3 of 3" in fig_7_4.explain(above)
+    assert "keeps more edges than delaunay at 0 of 3" in fig_7_4.explain(below)
+    above["mst_share"]["fish"] = 0.1
+    assert not fig_7_4.claims(above)[
+        "the MSTME differs from the MST on at least a quarter of the fish's edges (here 10%)"
+    ]
+    assert "MSTME" in fig_7_4.format_table(above)
+
+
+def test_fig_7_4_figures(tmp_path):
+    fig_7_4.plot_mstme(tmp_path / "fig-7.2.png")
+    fig_7_4.plot_noise_levels("cow1", tmp_path / "fig-7.3.png", levels=(3,))
+    fig_7_4.plot_boxplots(_fig_7_4_result(True), tmp_path / "fig-7.4.png")
+    for name in ("fig-7.2.png", "fig-7.3.png", "fig-7.4.png"):
+        assert (tmp_path / name).stat().st_size > 10_000
