@@ -39,7 +39,6 @@ def test_foreground_and_threshold(tmp_path):
     iio.imwrite(tmp_path / "a.png", DARK_ON_WHITE)
     iio.imwrite(tmp_path / "b.png", 255 - DARK_ON_WHITE)
     assert np.array_equal(read_shape(tmp_path / "b.png"), SHAPE)  # white on black: auto finds it too
-    assert np.array_equal(read_shape(tmp_path / "a.png", foreground="light"), ~SHAPE)
     grey = DARK_ON_WHITE.copy()
     grey[0, 0] = 100
     iio.imwrite(tmp_path / "c.png", grey)
@@ -73,9 +72,23 @@ def test_uniform_image_and_bad_options(tmp_path):
     with pytest.raises(InputError, match="uniform"):
         read_shape(tmp_path / "u.png")
     iio.imwrite(tmp_path / "a.png", DARK_ON_WHITE)
-    with pytest.raises(InputError, match="no dark pixel at threshold 0"):
+    with pytest.raises(InputError, match="a.png: .*at least one foreground pixel"):
         read_shape(tmp_path / "a.png", threshold=0, foreground="dark")
     with pytest.raises(InputError, match="`foreground` must be"):
         read_shape(tmp_path / "a.png", foreground="black")
-    with pytest.raises(InputError, match="`threshold` must be a finite number"):
+    with pytest.raises(TypeError, match="`threshold` must be a finite real number"):
         read_shape(tmp_path / "a.png", threshold=float("nan"))
+
+
+def test_an_inverted_looking_shape_warns(tmp_path):
+    pixels = DARK_ON_WHITE.copy()
+    pixels[5, :5] = 10  # the dark shape reaches the border
+    iio.imwrite(tmp_path / "a.png", pixels)
+    with pytest.warns(UserWarning, match="looks inverted"):
+        mask = read_shape(tmp_path / "a.png", foreground="light")  # the white background taken as the shape
+    assert np.array_equal(mask, pixels > 128)
+
+
+def test_a_0_1_image_is_a_mask(tmp_path):
+    iio.imwrite(tmp_path / "m.png", SHAPE.astype(np.uint8))
+    assert np.array_equal(read_shape(tmp_path / "m.png"), SHAPE)

@@ -3,12 +3,11 @@
 from __future__ import annotations
 
 import io
-import math
 from pathlib import Path
 
 import numpy as np
 
-from .._validation import _describe
+from .._validation import as_binary_image
 from ..exceptions import InputError
 from ._points import _existing_file, _first_line
 
@@ -89,11 +88,15 @@ def read_image(path, /) -> np.ndarray:
 def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = None) -> np.ndarray:
     """Read an image file as a 2D boolean shape mask (True on the shape).
 
-    The grey image from :func:`read_image` is split at ``threshold``, by default half its
-    range (``(min + max) / 2``). ``foreground`` says which side is the shape:
-    ``"dark"`` (below the threshold, e.g. black silhouettes on white as in Kimia-99),
-    ``"light"`` (above it), or ``"auto"``: the side that covers less of the image
-    border, so both dark-on-white and white-on-black files work.
+    The grey image from :func:`read_image` goes to
+    :func:`centrality_vision._validation.as_binary_image`, the one rule of the package:
+    it is split at ``threshold``, by default half its range (``(min + max) / 2``), and
+    ``foreground`` says which side is the shape: ``"dark"`` (below the threshold, e.g.
+    black silhouettes on white as in Kimia-99), ``"light"`` (above it), or ``"auto"``:
+    the side that touches less of the image border, so both dark-on-white and
+    white-on-black files work. An image holding only 0 and 1 is a mask (1 = shape). A
+    shape that covers most of the border with an explicit ``foreground`` gives a
+    :class:`UserWarning` (it looks inverted).
 
     Parameters
     ----------
@@ -113,7 +116,10 @@ def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = N
     ------
     InputError
         Everything :func:`read_image` raises, a uniform image (no shape in it), a
-        threshold that leaves no shape, or a bad ``foreground``/``threshold``.
+        threshold that leaves no shape, or a bad ``foreground``; the message starts
+        with the path.
+    TypeError
+        A ``threshold`` that is not a finite real number.
 
     Examples
     --------
@@ -129,24 +135,8 @@ def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = N
            [0, 1, 1, 1, 0],
            [0, 0, 0, 0, 0]])
     """
-    if foreground not in ("auto", "dark", "light"):
-        raise InputError(f"`foreground` must be 'auto', 'dark' or 'light'; got {foreground!r}.")
-    if threshold is not None and (
-        isinstance(threshold, bool)
-        or not isinstance(threshold, (int, float, np.integer, np.floating))
-        or not math.isfinite(threshold)
-    ):
-        raise InputError(f"`threshold` must be a finite number or None; got {_describe(threshold)}.")
     pixels = read_image(path)
-    path = Path(path)
-    low, high = float(pixels.min()), float(pixels.max())
-    if low == high:
-        raise InputError(f"{path}: the image is uniform (every pixel is {low:g}): there is no shape in it.")
-    light = pixels > ((low + high) / 2 if threshold is None else float(threshold))
-    if foreground == "auto":
-        border = np.concatenate([light[0], light[-1], light[1:-1, 0], light[1:-1, -1]])
-        foreground = "dark" if border.mean() > 0.5 else "light"
-    mask = ~light if foreground == "dark" else light
-    if not mask.any():
-        raise InputError(f"{path}: no {foreground} pixel at threshold {threshold!r}: there is no shape in the image.")
-    return mask
+    try:
+        return as_binary_image(pixels, name="image", foreground=foreground, threshold=threshold, check_inverted=True)
+    except InputError as exc:
+        raise InputError(f"{Path(path)}: {exc}") from None
