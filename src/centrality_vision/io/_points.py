@@ -245,7 +245,7 @@ def _read_text(path: Path) -> _Table:
     ]
     if not rows:
         raise InputError(f"{path}: holds no points.")
-    split, decimal_comma = _sniff([line for _, line in rows[:64]])
+    split, decimal_comma, delimiter = _sniff([line for _, line in rows[:64]])
     first_number, first = rows[0]
     cells = split(first)
     numeric = [_is_number(cell, decimal_comma) for cell in cells]
@@ -262,6 +262,16 @@ def _read_text(path: Path) -> _Table:
             "(a header line must name every column)."
         )
     width = len(names) if names is not None else len(cells)
+    lines = np.array([number for number, _ in rows])
+    if not decimal_comma:  # the fast path; on any doubt the loop below finds and names the bad cell
+        try:
+            values = np.loadtxt(
+                [line for _, line in rows], delimiter=delimiter, dtype=np.float64, ndmin=2, comments=None, quotechar='"'
+            )
+        except ValueError:
+            values = None
+        if values is not None and values.shape == (len(rows), width):
+            return _Table(values, names, lines)
     values = np.empty((len(rows), width), dtype=np.float64)
     for k, (number, line) in enumerate(rows):
         cells = split(line)
@@ -275,7 +285,7 @@ def _read_text(path: Path) -> _Table:
                 raise InputError(
                     f"{path}: line {number}, column {j + 1}: {_clip(cell.strip())!r} is not a number."
                 ) from None
-    return _Table(values, names, np.array([number for number, _ in rows]))
+    return _Table(values, names, lines)
 
 
 def _sniff(sample: list[str]):
@@ -287,13 +297,13 @@ def _sniff(sample: list[str]):
     """
     delimiter = next((d for d in (";", "\t", ",") if all(d in line for line in sample)), " ")
     if delimiter == " ":
-        return (lambda line: line.split()), False
+        return (lambda line: line.split()), False, None
     decimal_comma = delimiter == ";" and any("," in line for line in sample)
 
     def split(line: str) -> list[str]:
         return next(csv.reader([line], delimiter=delimiter, skipinitialspace=True))
 
-    return split, decimal_comma
+    return split, decimal_comma, delimiter
 
 
 def _to_float(cell: str, decimal_comma: bool) -> float:
