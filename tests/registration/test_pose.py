@@ -1,0 +1,132 @@
+import math
+
+import numpy as np
+import pytest
+
+from centrality_vision.exceptions import InputError
+from centrality_vision.registration import RigidCPD, RigidTransform, SimilarityTransform
+from centrality_vision.registration._pose import global_pose_search, rotation_lattice
+
+
+def angle_degrees(r1, r2):
+    d = r1.T @ r2
+    cos = (np.trace(d) - 1) / 2 if d.shape[0] == 3 else np.trace(d) / 2
+    return math.degrees(math.acos(np.clip(cos, -1.0, 1.0)))
+
+
+@pytest.fixture(scope="module")
+def blob3d():
+    """An asymmetric 3D set: three anisotropic clusters of different sizes (no symmetry)."""
+    rng = np.random.default_rng(7)
+    parts = [
+        rng.normal(size=(60, 3)) * [0.6, 0.2, 0.1],
+        rng.normal(size=(30, 3)) * [0.1, 0.4, 0.1] + [0.8, 0.5, 0.0],
+        rng.normal(size=(15, 3)) * [0.1, 0.1, 0.3] + [-0.5, 0.0, 0.7],
+    ]
+    return np.vstack(parts)
+
+
+@pytest.mark.parametrize("degrees", [0, 90, 180])
+def test_recovers_2d_rotation_from_any_angle(fish, rot2, degrees):
+    r = rot2(degrees)
+    x = fish @ r.T + [3.0, -2.0]
+    pose = global_pose_search(fish, x, scale=False, w=0.0, random_state=0)
+    assert isinstance(pose, RigidTransform)
+    assert angle_degrees(pose.rotation, r) < 1.0
+    np.testing.assert_allclose(pose(fish), x, atol=0.05)
+
+
+@pytest.mark.parametrize("degrees", [0, 90, 180])
+def test_recovers_3d_rotation_from_any_angle(blob3d, rot3, degrees):
+    r = rot3(degrees, [1.0, 2.0, -0.5])
+    x = blob3d @ r.T + [10.0, 0.0, -5.0]
+    pose = global_pose_search(blob3d, x, scale=False, w=0.0, random_state=0)
+    assert angle_degrees(pose.rotation, r) < 1.0
+    # a plain CPD from the found pose lands exactly; from the identity it does not at 180
+    fitted = RigidCPD(scale=False, tol=1e-10).fit(pose(blob3d), x)
+    assert angle_degrees(fitted.transform_.rotation @ pose.rotation, r) < 1e-4
+
+
+def test_plain_cpd_fails_where_the_search_succeeds(fish, rot2):
+    r = rot2(150)
+    x = fish @ r.T
+    plain = RigidCPD(scale=False, tol=1e-8).fit(fish, x)
+    assert angle_degrees(plain.transform_.rotation, r) > 5.0  # the reason for the search
+    pose = global_pose_search(fish, x, scale=False, w=0.0, random_state=0)
+    assert angle_degrees(pose.rotation, r) < 1.0
+
+
+def test_similarity_scale_units_and_clutter(fish, rot2):
+    # pixel-like units, an offset of 1e4, scale 40, noise, a missing part and outliers
+    rng = np.random.default_rng(3)
+    r = rot2(-135)
+    x = 40.0 * fish @ r.T + 1e4
+    keep = np.argsort(x[:, 0])[15:]  # the 15 leftmost points are missing
+    x = x[keep] + rng.normal(scale=0.4, size=(keep.size, 2))
+    x = np.vstack([x, rng.uniform(x.min(0), x.max(0), size=(15, 2))])
+    x = x[rng.permutation(len(x))]
+    pose = global_pose_search(fish, x, scale=True, w=0.2, random_state=1)
+    assert isinstance(pose, SimilarityTransform)
+    assert angle_degrees(pose.rotation, r) < 3.0
+    assert pose.scale == pytest.approx(40.0, rel=0.05)
+    visible = pose(fish)[np.argsort((fish @ r.T)[:, 0])[15:]]
+    assert np.median(np.min(np.linalg.norm(visible[:, None] - x[None], axis=2), axis=1)) < 2.0  # 0.05 of the size
+
+
+def test_same_seed_same_pose_and_inputs_untouched(blob3d, rot3):
+    x = blob3d @ rot3(120, [0, 1, 1]).T
+    big_y, big_x = np.repeat(blob3d, 2, axis=0), np.repeat(x, 2, axis=0)  # above max_points: subsampled
+    before_y, before_x = big_y.copy(), big_x.copy()
+    a = global_pose_search(big_y, big_x, scale=False, w=0.1, random_state=5, max_points=60)
+    b = global_pose_search(big_y, big_x, scale=False, w=0.1, random_state=5, max_points=60)
+    g = global_pose_search(big_y, big_x, scale=False, w=0.1, random_state=np.random.default_rng(5), max_points=60)
+    np.testing.assert_array_equal(a.rotation, b.rotation)
+    np.testing.assert_array_equal(a.translation, b.translation)
+    np.testing.assert_array_equal(a.rotation, g.rotation)
+    np.testing.assert_array_equal(big_y, before_y)
+    np.testing.assert_array_equal(big_x, before_x)
+
+
+@pytest.mark.parametrize("n_dims, n", [(2, 16), (3, 72), (3, 500)])
+def test_rotation_lattice_is_proper_and_covers(n_dims, n):
+    lattice = rotation_lattice(n_dims, n)
+    assert lattice.shape == (n, n_dims, n_dims)
+    np.testing.assert_allclose(lattice[0], np.eye(n_dims), atol=1e-15)
+    np.testing.assert_allclose(lattice @ lattice.transpose(0, 2, 1), np.broadcast_to(np.eye(n_dims), lattice.shape), atol=1e-12)
+    np.testing.assert_allclose(np.linalg.det(lattice), 1.0, atol=1e-12)
+    # every rotation lies near one of the lattice: the covering radius shrinks as n grows
+    from centrality_vision.transforms import random_rotation
+
+    rng = np.random.default_rng(0)
+    worst = max(min(angle_degrees(q, r) for r in lattice) for q in (random_rotation(n_dims, rng) for _ in range(200)))
+    bound = 180.0 / n + 1e-9 if n_dims == 2 else {72: 50.0, 500: 25.0}[n]
+    assert worst <= bound
+
+
+@pytest.mark.parametrize(
+    "kwargs, error, match",
+    [
+        ({"moving": np.zeros((5, 4)), "fixed": np.zeros((5, 4))}, InputError, "moving"),
+        ({"fixed": np.zeros((5, 3))}, InputError, "fixed"),
+        ({"fixed": np.ones((5, 2))}, InputError, "distinct"),
+        ({"moving": [[0.0, 0.0], [1.0, 1.0]]}, InputError, "at least 3"),
+        ({"moving": [[0.0, np.nan], [1.0, 1.0], [2.0, 0.0]]}, InputError, "finite"),
+        ({"scale": 1}, TypeError, "scale"),
+        ({"w": 1.0}, InputError, "w"),
+        ({"random_state": -1}, TypeError, "seed"),
+        ({"n_rotations": 0}, InputError, "n_rotations"),
+        ({"n_hypotheses": 0}, InputError, "n_hypotheses"),
+        ({"max_points": 2}, InputError, "max_points"),
+    ],
+)
+def test_bad_inputs(fish, kwargs, error, match):
+    args = {"moving": fish, "fixed": fish + 1.0, "scale": False, "w": 0.0, **kwargs}
+    with pytest.raises(error, match=match):
+        global_pose_search(args.pop("moving"), args.pop("fixed"), **args)
+
+
+def test_rotation_lattice_bad_inputs():
+    with pytest.raises(InputError, match="n_dims"):
+        rotation_lattice(4, 10)
+    with pytest.raises(InputError, match="n_rotations"):
+        rotation_lattice(3, 0)
