@@ -133,6 +133,12 @@ def test_mwme_is_invariant_to_similarity_transforms():
 FIG_7_1 = np.array([[0, 0], [1, 0], [0, 1], [-1, 0], [0, -1]], dtype=float)
 
 
+def _root(parent, i):
+    while parent[i] != i:
+        i = parent[i]
+    return i
+
+
 def _brute_force_mstme(points, lam):
     n = len(points)
     dist = np.linalg.norm(points[:, None] - points[None], axis=2)
@@ -140,8 +146,13 @@ def _brute_force_mstme(points, lam):
     best = np.inf
     for edges in itertools.combinations(pairs, n - 1):
         rows, cols = zip(*edges)
-        tree = sparse.coo_array((np.ones(n - 1), (rows, cols)), shape=(n, n))
-        if connected_components(tree, directed=False)[0] != 1:
+        parent = list(range(n))  # n - 1 edges without a cycle span the n nodes
+        cycle = False
+        for a, b in edges:
+            ra, rb = _root(parent, a), _root(parent, b)
+            cycle = cycle or ra == rb
+            parent[ra] = rb
+        if cycle:
             continue
         deg = np.bincount(np.array(edges).ravel(), minlength=n)
         _, counts = np.unique(deg, return_counts=True)
