@@ -58,10 +58,12 @@ def test_input_not_modified():
     [
         (np.zeros((4, 4), dtype=bool), {}, "at least one foreground pixel"),
         (np.zeros((0, 5)), {}, "must not be empty"),
-        (np.ones((2, 2, 2)), {}, "must be a 2D array"),
-        (np.array([[0, 2], [1, 1]]), {}, "must be binary"),
+        (np.ones((2, 2, 2, 2)), {}, "must be a 2D array"),
+        (np.full((2, 2, 2), 2.0), {}, "must be binary"),
         (np.array([[np.nan, 1.0]]), {}, "finite"),
-        (np.ones((3, 3), bool), {"connectivity": 6}, "`connectivity` must be 4 or 8"),
+        (np.ones((3, 3), bool), {"connectivity": 6}, "`connectivity` must be 8 or 4 for a 2D image"),
+        (np.ones((3, 3, 3), bool), {"connectivity": 8}, "`connectivity` must be 26 or 18 or 6"),
+        (np.ones((3, 3)), {"spacing": (1.0, 0.0)}, "`spacing` must be 2 positive"),
     ],
 )
 def test_bad_images(image, kwargs, match):
@@ -104,3 +106,23 @@ def test_salt_noise_bad_rate(rate):
 def test_salt_noise_bad_seed():
     with pytest.raises(TypeError, match="`seed`"):
         salt_noise(np.ones((3, 3), bool), 0.1, seed="abc")
+
+
+@pytest.mark.parametrize("connectivity", [6, 18, 26])
+def test_3d_pixel_graph_with_spacing(connectivity):
+    volume = np.ones((3, 4, 5), dtype=bool)
+    volume[1, 1:3, 1:4] = False
+    spacing = (2.5, 1.0, 0.5)
+    graph, nodes = pixel_graph(volume, connectivity=connectivity, spacing=spacing)
+    coords = pixel_coordinates(nodes, volume.shape) * np.array(spacing)
+    rows, cols = graph.nonzero()
+    offsets = np.abs(pixel_coordinates(nodes, volume.shape)[rows] - pixel_coordinates(nodes, volume.shape)[cols])
+    assert offsets.max() == 1 and offsets.sum(axis=1).max() == {6: 1, 18: 2, 26: 3}[connectivity]
+    # Every pair of foreground voxels within the neighbourhood is joined, by its length.
+    np.testing.assert_allclose(graph.data, np.linalg.norm(coords[rows] - coords[cols], axis=1))
+    expected = sum(
+        1 for i in range(len(nodes)) for j in range(len(nodes))
+        if i != j and np.abs(pixel_coordinates(nodes[[i, j]], volume.shape)[0] - pixel_coordinates(nodes[[i, j]], volume.shape)[1]).max() == 1
+        and np.abs(pixel_coordinates(nodes[[i, j]], volume.shape)[0] - pixel_coordinates(nodes[[i, j]], volume.shape)[1]).sum() <= {6: 1, 18: 2, 26: 3}[connectivity]
+    )
+    assert graph.nnz == expected

@@ -152,3 +152,16 @@ def test_knn_bad_k(k, error):
 def test_to_networkx_bad_points():
     with pytest.raises(ValueError, match="`points` must have one row per node"):
         to_networkx(complete_graph(_random_points(0, 4, 2)), _random_points(0, 5, 2))
+
+
+@pytest.mark.parametrize("scale", [1e300, 1e-300, 1e155])
+def test_builders_are_scale_invariant_at_extreme_coordinates(scale):
+    """Squared distances overflow (or underflow) here; the graphs must not change."""
+    from centrality_vision.graphs import complete_graph, delaunay_graph, emst_graph, gabriel_graph, knn_graph
+
+    points = np.random.default_rng(3).random((40, 2))
+    for build in (lambda p: knn_graph(p, k=3), delaunay_graph, gabriel_graph, emst_graph, complete_graph):
+        reference = build(points)
+        scaled = build(points * scale)
+        assert (scaled != 0).nnz == (reference != 0).nnz
+        np.testing.assert_allclose(scaled.toarray() / scale, reference.toarray(), rtol=1e-12)

@@ -1,72 +1,110 @@
-"""Public centrality functions (SPEC section 2, thesis 2.3).
+"""Public centrality functions (thesis 2.3).
 
 Conventions shared by every function here:
 
-- ``graph`` is a symmetric adjacency (any scipy sparse format, or a dense array) whose
-  stored values are edge lengths; zero means no edge and the diagonal is ignored.
-- ``weights=False`` (the default, as in the thesis) counts hops; ``weights=True`` uses
-  the stored lengths as distances (for :func:`degree` and :func:`eigenvector`, as
-  connection strengths).
+- ``graph`` is a scipy sparse adjacency (any format), a dense array, or a networkx or
+  igraph graph. Stored values are edge *lengths*: a dense array's zeros are non-edges,
+  a sparse matrix's explicitly stored zeros are edges of length 0 (as in
+  :mod:`scipy.sparse.csgraph`), a networkx/igraph edge's ``"weight"`` attribute is its
+  length (1 where missing). The diagonal is ignored.
+- ``weights`` has one meaning everywhere: ``weights=True`` measures shortest paths by
+  the stored lengths, ``weights=False`` (the default, as in the thesis) counts hops. It
+  exists on the path centralities only. Degree, eigenvector, PageRank and Katz use the
+  stored values as connection *strengths* with ``strengths=True`` (their old
+  ``weights=True`` still works, with a :class:`DeprecationWarning`).
+- Directed graphs (an asymmetric matrix, a ``networkx.DiGraph``, a directed igraph
+  graph) are accepted by the path centralities, PageRank and Katz, with networkx's
+  conventions: closeness and harmonic use distances *to* the node, eccentricity distances
+  *from* it, betweenness sums over ordered pairs.
 - Disconnected graphs: a node only reaches the nodes of its own component. Distances
   to the other nodes are infinite, so their ``1/d`` terms are 0 and they lie on no
   shortest path; each function states what else it does about it.
-- The result is a float64 array of shape ``(n_nodes,)`` aligned with the rows of ``graph``.
+- The result is a float64 array of shape ``(n_nodes,)`` in node order (the rows of a
+  matrix, ``list(G.nodes)`` of a networkx graph, the vertex ids of an igraph graph), or
+  with ``as_dict=True`` a dict ``{node: value}`` keyed by the node labels.
 """
 
 from __future__ import annotations
 
+import math
+import warnings
 
 import numpy as np
 from scipy import sparse
 
-from .._validation import as_graph, check_choice
 from .._parallel import run_chunks
-from . import _kernels
+from .._validation import GraphInput, as_any_graph, check_choice, check_float
+from ..exceptions import InputError
+from . import _kernels, _sampling
 
 __all__ = [
     "CENTRALITIES",
     "degree",
     "betweenness",
+    "edge_betweenness",
     "closeness",
     "harmonic",
-    "eigenvector",
     "eccentricity",
     "compute",
     "degree_entropy",
 ]
 
-CENTRALITIES = ("degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity")
-
-def _csr(graph, *, reorder: bool = False):
-    """Validated CSR parts ``(n, indptr, indices, data, perm)`` for the compiled kernels.
-
-    With ``reorder=True`` the nodes are renumbered by reverse Cuthill-McKee, which puts
-    neighbours close in memory (1.7x faster Brandes on a randomly numbered Delaunay graph);
-    row ``i`` of the result is node ``perm[i]`` of ``graph``. Otherwise ``perm`` is None.
-    """
-    adjacency = as_graph(graph, name="graph")
-    perm = None
-    if reorder and adjacency.shape[0] > 256:
-        from scipy.sparse.csgraph import reverse_cuthill_mckee
-
-        perm = reverse_cuthill_mckee(adjacency, symmetric_mode=True).astype(np.int64)
-        adjacency = adjacency[perm][:, perm]
-        adjacency.sort_indices()
-    return (
-        adjacency.shape[0],
-        adjacency.indptr.astype(np.int64, copy=False),
-        adjacency.indices.astype(np.int32, copy=False),
-        adjacency.data.astype(np.float64, copy=False),
-        perm,
-    )
+CENTRALITIES = (
+    "degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity", "pagerank", "katz",
+)
 
 
-def _unpermute(values: np.ndarray, perm) -> np.ndarray:
-    if perm is None:
-        return values
-    out = np.empty_like(values)
-    out[perm] = values
-    return out
+# --- shared helpers --------------------------------------------------------------------
+
+
+class _Prepared:
+    """A validated graph as the compiled kernels take it (CSR parts, optionally renumbered)."""
+
+    def __init__(self, graph_input: GraphInput, *, reorder: bool):
+        adjacency = graph_input.adjacency
+        self.labels = graph_input.labels
+        self.directed = graph_input.directed
+        self.n = adjacency.shape[0]
+        self.perm = None
+        if reorder and self.n > 256:
+            # Reverse Cuthill-McKee puts neighbours close in memory (1.7x faster Brandes on
+            # a randomly numbered Delaunay graph); row i is node perm[i] of the input.
+            from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+            pattern = adjacency if not self.directed else (adjacency + adjacency.T).tocsr()
+            self.perm = reverse_cuthill_mckee(sparse.csr_matrix(pattern), symmetric_mode=True).astype(np.int64)
+            adjacency = adjacency[self.perm][:, self.perm]
+            adjacency.sort_indices()
+        self.adjacency = adjacency
+        self.indptr = adjacency.indptr.astype(np.int64, copy=False)
+        self.indices = adjacency.indices.astype(np.int32, copy=False)
+        self.data = adjacency.data.astype(np.float64, copy=False)
+        self._classes = False
+
+    def transposed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """CSR parts of the reversed graph (the same arrays when undirected)."""
+        if not self.directed:
+            return self.indptr, self.indices, self.data
+        t = sparse.csr_array(self.adjacency.T)
+        t.sort_indices()
+        return t.indptr.astype(np.int64), t.indices.astype(np.int32), t.data.astype(np.float64)
+
+    def classes(self, data=None):
+        """``(kind, lengths)`` for the FIFO-queue search when the graph has few distinct
+        positive edge lengths (pixel graphs: 1 and sqrt 2), else None."""
+        data = self.data if data is None else data
+        return _kernels.length_classes(data)
+
+    def unpermute(self, values: np.ndarray) -> np.ndarray:
+        if self.perm is None:
+            return values
+        out = np.empty_like(values)
+        out[self.perm] = values
+        return out
+
+
+def _prepare(graph, *, reorder: bool = True, allow_directed: bool = True) -> _Prepared:
+    return _Prepared(as_any_graph(graph, name="graph", allow_directed=allow_directed), reorder=reorder)
 
 
 def _check_flag(value, name: str) -> bool:
@@ -75,53 +113,116 @@ def _check_flag(value, name: str) -> bool:
     return bool(value)
 
 
-def _distance_stats(graph, weights: bool, progress: bool, desc: str):
-    """Per node: sum of distances, sum of inverse distances, eccentricity, nodes reached."""
-    n, indptr, indices, data, perm = _csr(graph, reorder=True)
-    weights = _check_flag(weights, "weights")
-    progress = _check_flag(progress, "progress")
+def _finish(values: np.ndarray, labels, as_dict: bool):
+    if not _check_flag(as_dict, "as_dict"):
+        return values
+    keys = range(values.shape[0]) if labels is None else labels
+    return {key: float(v) for key, v in zip(keys, values)}
+
+
+def _strengths_option(strengths, weights, function: str) -> bool:
+    """``strengths``, honouring the deprecated ``weights`` alias of degree-like measures."""
+    if weights is not None:
+        weights = _check_flag(weights, "weights")
+        if weights:
+            warnings.warn(
+                f"{function}(weights=True) is deprecated: `weights` means edge lengths as distances in "
+                f"this package; use {function}(strengths=True) for the stored values as strengths.",
+                DeprecationWarning,
+                stacklevel=3,
+            )
+            return True
+    return _check_flag(strengths, "strengths")
+
+
+def _hop_stats(indptr, indices, progress: bool, desc: str):
+    """Per node, over the sources that reach it by arcs: sum of hop distances, sum of
+    inverse distances, largest distance, count (itself included). Bit-parallel search
+    from groups of 64 nearby sources; every node collects its own sums."""
+    members, group_ptr = _kernels.compact_groups(indptr, indices, 64)
+
+    def task(lo, hi):
+        return _kernels.multi_source_stats(indptr, indices, members, group_ptr, lo, hi)
+
+    parts = [r for _, _, r in run_chunks(task, group_ptr.size - 1, progress=progress, desc=desc, weight=64, total=indptr.size - 1)]
+    total, inverse, largest, reached = (np.array(p) for p in parts[0])
+    for t, h, e, r in parts[1:]:
+        total += t
+        inverse += h
+        reached += r
+        np.maximum(largest, e, out=largest)
+    return total, inverse, largest, reached
+
+
+def _length_stats(indptr, indices, data, progress: bool, desc: str):
+    """Per source, by edge length: sum of distances, of inverse distances, largest, reached.
+
+    Graphs with few distinct lengths (pixel graphs) use the exact FIFO-queue search,
+    the others Dijkstra with a heap.
+    """
+    n = indptr.size - 1
+    classes = _kernels.length_classes(data)
+
+    def task(lo, hi):
+        sources = np.arange(lo, hi, dtype=np.int64)
+        if classes is not None:
+            return _kernels.class_stats(indptr, indices, classes[0], classes[1], sources)
+        return _kernels.dijkstra_stats(indptr, indices, data, sources)
+
+    parts = [r for _, _, r in run_chunks(task, n, progress=progress, desc=desc)]
+    return [np.concatenate(p) for p in zip(*parts)]
+
+
+def _distance_stats(prep: _Prepared, weights: bool, progress: bool, desc: str, inward: bool):
+    """Per node: sum of distances, sum of inverse distances, eccentricity, nodes reached.
+
+    ``inward``: distances to the node (closeness, harmonic); else from it (eccentricity).
+    The two coincide on undirected graphs.
+    """
     if weights:
-        # One Dijkstra per source; by symmetry a source's sums are its own.
-        def task(lo, hi):
-            return _kernels.dijkstra_stats(indptr, indices, data, np.arange(lo, hi, dtype=np.int64))
-
-        parts = [r for _, _, r in run_chunks(task, n, progress=progress, desc=desc)]
-        stats = [np.concatenate(p) for p in zip(*parts)]
+        # Per-source searches give distances from the source: reverse the arcs for inward.
+        indptr, indices, data = prep.transposed() if inward else (prep.indptr, prep.indices, prep.data)
+        stats = _length_stats(indptr, indices, data, progress, desc)
     else:
-        # Hop distances: bit-parallel search from groups of 64 nearby sources; every node
-        # collects its own sums, so the parts of the groups add up.
-        members, group_ptr = _kernels.compact_groups(indptr, indices, 64)
-
-        def task(lo, hi):
-            return _kernels.multi_source_stats(indptr, indices, members, group_ptr, lo, hi)
-
-        parts = [r for _, _, r in run_chunks(task, group_ptr.size - 1, progress=progress, desc=desc, weight=64, total=n)]
-        total, inverse, largest, reached = (np.array(p) for p in parts[0])
-        for t, h, e, r in parts[1:]:
-            total += t
-            inverse += h
-            reached += r
-            np.maximum(largest, e, out=largest)
-        stats = [total, inverse, largest, reached]
-    return (n, *(_unpermute(v, perm) for v in stats))
+        # The bit-parallel search collects, at each node, distances to it.
+        indptr, indices, _ = (prep.indptr, prep.indices, prep.data) if inward else prep.transposed()
+        stats = _hop_stats(indptr, indices, progress, desc)
+    return [prep.unpermute(v) for v in stats]
 
 
-def degree(graph, /, *, weights: bool = False, normalized: bool = False) -> np.ndarray:
+def _check_epsilon(epsilon, delta):
+    epsilon = check_float(epsilon, name="epsilon", low=0.0, high=1.0)
+    if epsilon == 0.0:
+        raise InputError("`epsilon` must be in (0, 1] (None for exact values); got 0.0.")
+    delta = check_float(delta, name="delta", low=0.0, high=1.0)
+    if delta == 0.0 or delta == 1.0:
+        raise InputError(f"`delta` must be in (0, 1); got {delta!r}.")
+    return epsilon, delta
+
+
+# --- degree ---------------------------------------------------------------------------
+
+
+def degree(graph, /, *, strengths: bool = False, normalized: bool = False, as_dict: bool = False, weights=None):
     r"""Degree centrality: the number of neighbours of each node (thesis eq. 2.8).
 
     Parameters
     ----------
-    graph : sparse array or matrix of shape (n, n)
-        Symmetric adjacency; stored values are edge lengths.
-    weights : bool, default=False
+    graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
+        Adjacency; stored values are edge lengths. Directed graphs count out-arcs.
+    strengths : bool, default=False
         If True, sum the stored edge values instead of counting edges (the node strength).
     normalized : bool, default=False
         If True, divide by the largest value, :math:`d(x) / \max_y d(y)` (thesis eq. 2.9),
         so that the most connected node has 1. A graph without edges gives zeros.
+    as_dict : bool, default=False
+        Return ``{node: value}`` keyed by the node labels.
+    weights : bool, optional
+        Deprecated alias of ``strengths``.
 
     Returns
     -------
-    ndarray of shape (n,)
+    ndarray of shape (n,), or dict
 
     Examples
     --------
@@ -132,53 +233,96 @@ def degree(graph, /, *, weights: bool = False, normalized: bool = False) -> np.n
     >>> degree(path, normalized=True)
     array([0.5, 1. , 0.5])
     """
-    adjacency = as_graph(graph, name="graph")
-    weights = _check_flag(weights, "weights")
+    info = as_any_graph(graph, name="graph", allow_directed=True)
+    strengths = _strengths_option(strengths, weights, "degree")
     normalized = _check_flag(normalized, "normalized")
-    if weights:
+    adjacency = info.adjacency
+    if strengths:
         values = np.asarray(adjacency.sum(axis=1), dtype=np.float64).ravel()
     else:
         values = np.diff(adjacency.indptr).astype(np.float64)
     if normalized:
         top = values.max()
         values = values / top if top > 0 else np.zeros_like(values)
-    return values
+    return _finish(values, info.labels, as_dict)
 
 
-def betweenness(graph, /, *, weights: bool = False, normalized: bool = False, progress: bool = False) -> np.ndarray:
+# --- betweenness ------------------------------------------------------------------------
+
+
+def betweenness(
+    graph,
+    /,
+    *,
+    weights: bool = False,
+    normalized: bool = False,
+    epsilon: float | None = None,
+    delta: float = 0.1,
+    seed=None,
+    progress: bool = False,
+    as_dict: bool = False,
+    return_info: bool = False,
+):
     r"""Betweenness centrality (Freeman; Brandes' algorithm; thesis eq. 2.10).
 
     .. math:: b(x) = \sum_{\{s, t\},\ s \ne x \ne t} \frac{\sigma_x(s, t)}{\sigma(s, t)}
 
-    over unordered pairs of nodes, where :math:`\sigma(s, t)` is the number of shortest
-    paths between ``s`` and ``t`` and :math:`\sigma_x(s, t)` the number of those passing
-    through ``x``. Pairs in different components contribute nothing.
+    over unordered pairs of nodes (ordered pairs on directed graphs), where
+    :math:`\sigma(s, t)` is the number of shortest paths between ``s`` and ``t`` and
+    :math:`\sigma_x(s, t)` the number of those passing through ``x``. Pairs that do not
+    reach each other contribute nothing.
 
     Exact where other libraries are not: path counts that overflow float64 (long thin
     shapes) are recomputed in log space for that source, and with ``weights=True``
-    path lengths that are equal up to rounding (``1 + sqrt 2`` versus ``sqrt 2 + 1``)
-    tie, with a relative tolerance of ``1e-10``.
+    path lengths that are equal tie: on graphs with few distinct edge lengths (pixel
+    graphs: 1 and sqrt 2) distances are kept as integer counts of each length, so
+    ``1 + sqrt 2`` and ``sqrt 2 + 1`` are the same number; on other graphs two lengths
+    tie within a relative ``1e-10``. With zero-length edges, the shortest-path DAG is
+    the one the search settles (networkx's choice).
 
     Parameters
     ----------
-    graph : sparse array or matrix of shape (n, n)
-        Symmetric adjacency; stored values are edge lengths.
+    graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
+        Adjacency; stored values are edge lengths.
     weights : bool, default=False
         Shortest paths by hops (False, the thesis' choice) or by stored edge length.
     normalized : bool, default=False
         If True, divide by the number of pairs not containing the node,
-        :math:`(n-1)(n-2)/2`, so values lie in [0, 1] (networkx's normalisation).
+        :math:`(n-1)(n-2)/2` (:math:`(n-1)(n-2)` directed), so values lie in [0, 1]
+        (networkx's normalisation).
+    epsilon : float in (0, 1], optional
+        Approximate instead: with probability at least ``1 - delta`` every node's
+        *normalised* value is within ``epsilon`` of the exact one (for ``normalized=False``
+        the same bound times :math:`(n-1)(n-2)/2`). Shortest paths between random pairs
+        are drawn uniformly (balanced bidirectional search), as in Riondato and
+        Kornaropoulos [2]_; sampling stops at the first checkpoint where an empirical
+        Bernstein bound (Maurer and Pontil), union-bounded over nodes and checkpoints,
+        holds for every node, and at the latest after the Riondato-Kornaropoulos size
+        :math:`\frac{c}{\epsilon^2}(\lfloor \log_2(VD - 2) \rfloor + 1 + \ln\frac{2}{\delta})`
+        with :math:`c = 0.5` and the vertex-diameter bound ``VD`` of one search per
+        component (``delta`` is split between the two rules). Hop counts only.
+    delta : float in (0, 1), default=0.1
+        Failure probability of the approximation.
+    seed : int, numpy.random.Generator or None
+        Seed of the sampling; the result does not depend on the thread count.
     progress : bool, default=False
         Show a progress bar on stderr.
+    as_dict : bool, default=False
+        Return ``{node: value}`` keyed by the node labels.
+    return_info : bool, default=False
+        Also return a dict: ``"samples"`` (paths drawn; 0 when exact), ``"searches"``,
+        ``"bound"`` (the guaranteed error of the normalised values, 0 when exact).
 
     Returns
     -------
-    ndarray of shape (n,)
+    ndarray of shape (n,), or dict; with ``return_info`` a tuple ``(values, info)``
 
     References
     ----------
     .. [1] U. Brandes, "A faster algorithm for betweenness centrality", J. Math.
        Sociology 25(2), 163-177, 2001.
+    .. [2] M. Riondato and E. M. Kornaropoulos, "Fast approximation of betweenness
+       centrality through sampling", Data Min. Knowl. Disc. 30, 438-475, 2016.
 
     Examples
     --------
@@ -187,50 +331,182 @@ def betweenness(graph, /, *, weights: bool = False, normalized: bool = False, pr
     >>> betweenness(path)
     array([0., 1., 0.])
     """
-    n, indptr, indices, data, perm = _csr(graph, reorder=True)
+    prep = _prepare(graph)
     weights = _check_flag(weights, "weights")
     normalized = _check_flag(normalized, "normalized")
     progress = _check_flag(progress, "progress")
-    def task(lo, hi):
-        return _kernels.brandes(
-            indptr, indices, data, np.arange(lo, hi, dtype=np.int64), weights, _kernels.TIE_RTOL, False
-        )[0]
+    n = prep.n
+    pairs = (n - 1) * (n - 2) / (1 if prep.directed else 2)
+    if epsilon is not None:
+        if weights:
+            raise InputError("`epsilon` (approximation) is available for hop counts only; got weights=True.")
+        from ._approx import sample_betweenness
 
-    values = np.zeros(n)
-    for _, _, part in run_chunks(task, n, progress=progress, desc="betweenness"):
-        values += part
-    values = 0.5 * _unpermute(values, perm)  # every unordered pair was counted from both ends
-    if normalized:
-        values = values / ((n - 1) * (n - 2) / 2) if n > 2 else np.zeros(n)
-    return values
+        epsilon, delta = _check_epsilon(epsilon, delta)
+        values, info = sample_betweenness(prep, epsilon, delta, seed, progress)
+        values = prep.unpermute(values)  # normalised
+        if not normalized:
+            values = values * pairs
+    else:
+        classes = prep.classes() if weights else None
+
+        def task(lo, hi):
+            sources = np.arange(lo, hi, dtype=np.int64)
+            if classes is not None:
+                return _kernels.class_brandes(
+                    prep.indptr, prep.indices, classes[0], classes[1], sources, _kernels.TIE_RTOL, False, False
+                )[0]
+            return _kernels.brandes(prep.indptr, prep.indices, prep.data, sources, weights, _kernels.TIE_RTOL, False)[0]
+
+        values = np.zeros(n)
+        for _, _, part in run_chunks(task, n, progress=progress, desc="betweenness"):
+            values += part
+        values = prep.unpermute(values)
+        if not prep.directed:
+            values *= 0.5  # every unordered pair was counted from both ends
+        if normalized:
+            values = values / pairs if n > 2 else np.zeros(n)
+        info = {"samples": 0, "searches": n, "bound": 0.0}
+    out = _finish(values, prep.labels, as_dict)
+    return (out, info) if _check_flag(return_info, "return_info") else out
 
 
-def closeness(graph, /, *, weights: bool = False, normalized: bool = True, progress: bool = False) -> np.ndarray:
-    r"""Closeness centrality: the inverse mean distance to the other nodes.
+def edge_betweenness(graph, /, *, weights: bool = False, normalized: bool = False, progress: bool = False, as_dict: bool = False):
+    r"""Edge betweenness: for each edge, the share of shortest paths through it, summed over pairs.
 
-    .. math:: C(x) = \frac{n - 1}{\sum_{y \ne x} d(x, y)}
+    .. math:: b(e) = \sum_{\{s, t\}} \frac{\sigma_e(s, t)}{\sigma(s, t)}
 
-    This is the form the thesis' Table 2.1 prints; for the sum of inverse distances
-    (its eq. 2.11) see :func:`harmonic`.
+    over unordered pairs (ordered on directed graphs), as networkx's
+    ``edge_betweenness_centrality``. Path counts are kept as logarithms (exact for any
+    graph length); ties as in :func:`betweenness`.
 
     Parameters
     ----------
-    graph : sparse array or matrix of shape (n, n)
-        Symmetric adjacency; stored values are edge lengths.
+    graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
     weights : bool, default=False
-        Distances in hops (False) or by stored edge length.
-    normalized : bool, default=True
-        If True, the formula above. In a disconnected graph a node reaching ``r - 1``
-        others gets :math:`\frac{r-1}{n-1} \cdot \frac{r-1}{\sum d}` (Wasserman and
-        Faust's correction, networkx's default), which is the formula above when the
-        graph is connected. If False, :math:`1 / \sum_y d(x, y)` over the reached nodes.
-        An isolated node gets 0 either way.
+        Shortest paths by hops or by stored edge length.
+    normalized : bool, default=False
+        If True, divide by :math:`n(n-1)/2` (:math:`n(n-1)` directed), as networkx.
     progress : bool, default=False
         Show a progress bar on stderr.
+    as_dict : bool, default=False
+        Return ``{(u, v): value}`` keyed by node labels (each undirected edge once, ``u``
+        before ``v`` in node order).
 
     Returns
     -------
-    ndarray of shape (n,)
+    scipy.sparse.csr_array of shape (n, n), or dict
+        The value of edge ``u -- v`` at ``[u, v]`` (and ``[v, u]`` when undirected).
+
+    Examples
+    --------
+    >>> from scipy import sparse
+    >>> path = sparse.csr_array([[0, 1, 0], [1, 0, 1], [0, 1, 0]])
+    >>> edge_betweenness(path).toarray()
+    array([[0., 2., 0.],
+           [2., 0., 2.],
+           [0., 2., 0.]])
+    """
+    prep = _prepare(graph)
+    weights = _check_flag(weights, "weights")
+    normalized = _check_flag(normalized, "normalized")
+    progress = _check_flag(progress, "progress")
+    n = prep.n
+    data = prep.data if weights else np.ones_like(prep.data)
+
+    def task(lo, hi):
+        return _kernels.brandes_edges(prep.indptr, prep.indices, data, np.arange(lo, hi, dtype=np.int64), _kernels.TIE_RTOL)
+
+    arcs = np.zeros(prep.indices.size)
+    for _, _, part in run_chunks(task, n, progress=progress, desc="edge betweenness"):
+        arcs += part
+    if not prep.directed:
+        # Both arcs of an edge get the mean (each unordered pair was counted from both
+        # ends); the structure, zeros included, is the graph's, so the twin arcs align.
+        twin = sparse.csr_array(sparse.csr_array((arcs, prep.indices, prep.indptr), shape=(n, n)).T)
+        twin.sort_indices()
+        arcs = 0.5 * (arcs + twin.data)
+    if normalized and n > 1:
+        arcs = arcs / (n * (n - 1) / (1 if prep.directed else 2))
+    # Back to the input's node numbering, keeping every edge (zeros too).
+    coo = sparse.csr_array((arcs, prep.indices, prep.indptr), shape=(n, n)).tocoo()
+    rows, cols = coo.row, coo.col
+    if prep.perm is not None:
+        rows, cols = prep.perm[rows], prep.perm[cols]
+    result = sparse.csr_array((coo.data, (rows, cols)), shape=(n, n))
+    result.sort_indices()
+    if not _check_flag(as_dict, "as_dict"):
+        return result
+    labels = list(range(n)) if prep.labels is None else prep.labels
+    coo = result.tocoo()
+    keep = np.ones(coo.nnz, dtype=bool) if prep.directed else coo.row < coo.col
+    return {(labels[u], labels[v]): float(x) for u, v, x in zip(coo.row[keep], coo.col[keep], coo.data[keep])}
+
+
+# --- distance-based ---------------------------------------------------------------------
+
+
+def closeness(
+    graph,
+    /,
+    *,
+    weights: bool = False,
+    normalized: bool = True,
+    epsilon: float | None = None,
+    delta: float = 0.1,
+    seed=None,
+    progress: bool = False,
+    as_dict: bool = False,
+    return_info: bool = False,
+):
+    r"""Closeness centrality: the inverse mean distance to the other nodes.
+
+    .. math:: C(x) = \frac{n - 1}{\sum_{y \ne x} d(y, x)}
+
+    This is the form the thesis' Table 2.1 prints; for the sum of inverse distances
+    (its eq. 2.11) see :func:`harmonic`. On directed graphs the distances are those
+    *to* ``x`` (networkx's convention).
+
+    Parameters
+    ----------
+    graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
+        Adjacency; stored values are edge lengths.
+    weights : bool, default=False
+        Distances in hops (False) or by stored edge length (exact FIFO-queue search on
+        graphs with few distinct lengths, such as pixel graphs).
+    normalized : bool, default=True
+        If True, the formula above. In a disconnected graph a node reached from ``r - 1``
+        others gets :math:`\frac{r-1}{n-1} \cdot \frac{r-1}{\sum d}` (Wasserman and
+        Faust's correction, networkx's default), which is the formula above when the
+        graph is connected. If False, :math:`1 / \sum_y d(y, x)` over the reaching nodes.
+        An isolated node gets 0 either way.
+    epsilon : float in (0, 1], optional
+        Approximate by source sampling (Eppstein and Wang [1]_): ``k`` sources drawn
+        without replacement, :math:`k = \lceil \ln(2n/\delta) / (2\epsilon^2) \rceil` (exact
+        values when ``k >= n``). With probability at least ``1 - delta``, every node's
+        estimated sum of distances, divided by ``n``, is within ``epsilon * D`` of the
+        exact one, ``D`` the largest eccentricity (Hoeffding's bound); on a connected
+        graph that is the mean distance ``1 / closeness`` within about ``epsilon * D``.
+        Hop counts on undirected graphs only.
+    delta : float in (0, 1), default=0.1
+        Failure probability of the approximation.
+    seed : int, numpy.random.Generator or None
+        Seed of the source sampling.
+    progress : bool, default=False
+        Show a progress bar on stderr.
+    as_dict : bool, default=False
+        Return ``{node: value}`` keyed by the node labels.
+    return_info : bool, default=False
+        Also return ``{"searches": sources searched, "samples": sampled sources}``.
+
+    Returns
+    -------
+    ndarray of shape (n,), or dict; with ``return_info`` a tuple ``(values, info)``
+
+    References
+    ----------
+    .. [1] D. Eppstein and J. Wang, "Fast approximation of centrality", J. Graph
+       Algorithms Appl. 8(1), 39-45, 2004.
 
     Examples
     --------
@@ -240,7 +516,7 @@ def closeness(graph, /, *, weights: bool = False, normalized: bool = True, progr
     array([0.66666667, 1.        , 0.66666667])
     """
     normalized = _check_flag(normalized, "normalized")
-    n, total, _, _, reached = _distance_stats(graph, weights, progress, "closeness")
+    n, total, _, _, reached, info = _inward_sums(graph, weights, epsilon, delta, seed, progress, "closeness")
     values = np.zeros(n)
     ok = total > 0
     if normalized:
@@ -248,31 +524,78 @@ def closeness(graph, /, *, weights: bool = False, normalized: bool = True, progr
         values[ok] = (r / total[ok]) * (r / (n - 1))
     else:
         values[ok] = 1.0 / total[ok]
-    return values
+    out = _finish(values, info.pop("labels"), as_dict)
+    return (out, info) if _check_flag(return_info, "return_info") else out
 
 
-def harmonic(graph, /, *, weights: bool = False, normalized: bool = False, progress: bool = False) -> np.ndarray:
+def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc):
+    """(n, sum of distances, sum of inverse distances, largest, reached, info) to each node."""
+    prep = _prepare(graph)
+    weights = _check_flag(weights, "weights")
+    progress = _check_flag(progress, "progress")
+    if epsilon is not None:
+        if weights or prep.directed:
+            raise InputError("`epsilon` (approximation) is available for hop counts on undirected graphs only.")
+        from ._approx import sample_sources
+
+        epsilon, delta = _check_epsilon(epsilon, delta)
+        total, inverse, largest, reached, info = sample_sources(prep, epsilon, delta, seed, progress, desc)
+        stats = [prep.unpermute(v) for v in (total, inverse, largest, reached)]
+    else:
+        stats = _distance_stats(prep, weights, progress, desc, inward=True)
+        info = {"searches": prep.n, "samples": 0}
+    info["labels"] = prep.labels
+    return (prep.n, *stats, info)
+
+
+def harmonic(
+    graph,
+    /,
+    *,
+    weights: bool = False,
+    normalized: bool = False,
+    epsilon: float | None = None,
+    delta: float = 0.1,
+    seed=None,
+    progress: bool = False,
+    as_dict: bool = False,
+    return_info: bool = False,
+):
     r"""Harmonic centrality: the sum of inverse distances (thesis eq. 2.11).
 
-    .. math:: H(x) = \sum_{y \ne x} \frac{1}{d(x, y)}
+    .. math:: H(x) = \sum_{y \ne x} \frac{1}{d(y, x)}
 
     with :math:`1/\infty = 0` for unreachable nodes, so it is well defined on
-    disconnected graphs.
+    disconnected graphs; nodes at distance 0 (zero-length edges) add nothing, as in
+    networkx. On directed graphs the distances are those *to* ``x``.
 
     Parameters
     ----------
-    graph : sparse array or matrix of shape (n, n)
-        Symmetric adjacency; stored values are edge lengths.
+    graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
+        Adjacency; stored values are edge lengths.
     weights : bool, default=False
         Distances in hops (False) or by stored edge length.
     normalized : bool, default=False
         If True, divide by ``n - 1`` (values in [0, 1] for hop distances).
+    epsilon : float in (0, 1], optional
+        Approximate by source sampling (Eppstein and Wang), as for :func:`closeness`:
+        with probability at least ``1 - delta`` every node's value divided by ``n - 1``
+        is within ``epsilon`` of the exact one (Hoeffding's bound; the terms
+        :math:`1/d` lie in [0, 1] for hop counts). Hop counts on undirected graphs only.
+    delta : float in (0, 1), default=0.1
+        Failure probability of the approximation.
+    seed : int, numpy.random.Generator or None
+        Seed of the source sampling.
     progress : bool, default=False
         Show a progress bar on stderr.
+    as_dict : bool, default=False
+        Return ``{node: value}`` keyed by the node labels.
+    return_info : bool, default=False
+        Also return ``{"searches": sources searched, "samples": sampled sources}``.
 
     Returns
     -------
-    ndarray of shape (n,)
+    ndarray of shape (n,), or dict; with ``return_info`` a tuple ``(values, info)``
 
     Examples
     --------
@@ -282,35 +605,63 @@ def harmonic(graph, /, *, weights: bool = False, normalized: bool = False, progr
     array([1.5, 2. , 1.5])
     """
     normalized = _check_flag(normalized, "normalized")
-    n, _, inverse, _, _ = _distance_stats(graph, weights, progress, "harmonic")
-    if normalized:
-        return inverse / (n - 1) if n > 1 else np.zeros(n)
-    return inverse
+    n, _, inverse, _, _, info = _inward_sums(graph, weights, epsilon, delta, seed, progress, "harmonic")
+    values = (inverse / (n - 1) if n > 1 else np.zeros(n)) if normalized else inverse
+    out = _finish(values, info.pop("labels"), as_dict)
+    return (out, info) if _check_flag(return_info, "return_info") else out
 
 
-def eccentricity(graph, /, *, weights: bool = False, normalized: bool = False, progress: bool = False) -> np.ndarray:
+def eccentricity(
+    graph,
+    /,
+    *,
+    weights: bool = False,
+    normalized: bool = False,
+    method: str = "auto",
+    progress: bool = False,
+    as_dict: bool = False,
+    return_info: bool = False,
+):
     r"""Eccentricity: the largest distance from a node (thesis eq. 2.6).
 
     .. math:: e(x) = \max_y d(x, y)
 
     The nodes of smallest eccentricity form the graph centre. In a disconnected graph
-    the maximum runs over the node's own component (strictly it would be infinite,
+    the maximum runs over the nodes the node reaches (strictly it would be infinite,
     which carries no information); an isolated node gets 0.
 
     Parameters
     ----------
-    graph : sparse array or matrix of shape (n, n)
-        Symmetric adjacency; stored values are edge lengths.
+    graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
+        Adjacency; stored values are edge lengths.
     weights : bool, default=False
         Distances in hops (False) or by stored edge length.
     normalized : bool, default=False
         If True, divide by the largest eccentricity (the diameter), so values lie in [0, 1].
+    method : {'auto', 'bounds', 'all'}, default='auto'
+        ``'bounds'``: Takes and Kosters' exact bounding method [1]_ (undirected graphs):
+        each search from a node ``v`` bounds every other node's eccentricity by
+        :math:`\max(d(v, w), e(v) - d(v, w)) \le e(w) \le e(v) + d(v, w)`, and searches
+        continue, alternately from the node of largest upper and of smallest lower bound,
+        until every node's bounds meet. ``'all'``: one search per node (bit-parallel,
+        64 sources at a time, for hop counts). ``'auto'``: ``'all'`` for hop counts and
+        directed graphs (on pixel and Delaunay graphs the bounds need more than ``n / 64``
+        searches), ``'bounds'`` with ``weights=True`` on undirected graphs.
     progress : bool, default=False
         Show a progress bar on stderr.
+    as_dict : bool, default=False
+        Return ``{node: value}`` keyed by the node labels.
+    return_info : bool, default=False
+        Also return ``{"searches": number of single-source searches (or 64-source groups)}``.
 
     Returns
     -------
-    ndarray of shape (n,)
+    ndarray of shape (n,), or dict; with ``return_info`` a tuple ``(values, info)``
+
+    References
+    ----------
+    .. [1] F. W. Takes and W. A. Kosters, "Computing the eccentricity distribution of
+       large graphs", Algorithms 6(1), 100-118, 2013.
 
     Examples
     --------
@@ -318,100 +669,78 @@ def eccentricity(graph, /, *, weights: bool = False, normalized: bool = False, p
     >>> path = sparse.csr_array([[0, 1, 0], [1, 0, 1], [0, 1, 0]])
     >>> eccentricity(path)
     array([2., 1., 2.])
+    >>> eccentricity(path, method="bounds", return_info=True)[1]["searches"] <= 3
+    True
     """
     normalized = _check_flag(normalized, "normalized")
-    _, _, _, largest, _ = _distance_stats(graph, weights, progress, "eccentricity")
+    check_choice(method, ("auto", "bounds", "all"), name="method")
+    prep = _prepare(graph)
+    weights = _check_flag(weights, "weights")
+    progress = _check_flag(progress, "progress")
+    if method == "auto":
+        method = "bounds" if weights and not prep.directed else "all"
+    if method == "bounds":
+        if prep.directed:
+            raise InputError("`method='bounds'` needs an undirected graph; got a directed one (use 'all').")
+        largest, searches = _eccentricity_bounds(prep, weights)
+        largest = prep.unpermute(largest)
+    else:
+        largest = _distance_stats(prep, weights, progress, "eccentricity", inward=False)[2]
+        searches = prep.n if weights else int(math.ceil(prep.n / 64))
     if normalized:
         top = largest.max()
-        return largest / top if top > 0 else np.zeros_like(largest)
-    return largest
+        largest = largest / top if top > 0 else np.zeros_like(largest)
+    out = _finish(largest, prep.labels, as_dict)
+    return (out, {"searches": searches}) if _check_flag(return_info, "return_info") else out
 
 
-def _perron(adjacency: sparse.csr_array) -> tuple[float, np.ndarray]:
-    """Largest eigenvalue and its non-negative unit eigenvector, for one connected component."""
-    n = adjacency.shape[0]
-    if n == 1:
-        return 0.0, np.ones(1)
-    if n <= 256:
-        vals, vecs = np.linalg.eigh(adjacency.toarray())
-        lam, vec = vals[-1], vecs[:, -1]
-    else:
-        from scipy.sparse.linalg import eigsh
-
-        vals, vecs = eigsh(adjacency, k=1, which="LA", v0=np.ones(n), tol=0)
-        lam, vec = vals[0], vecs[:, 0]
-    vec = np.abs(vec)  # the Perron vector of a connected graph is positive
-    return float(lam), vec / np.linalg.norm(vec)
-
-
-def eigenvector(graph, /, *, weights: bool = False, normalized: bool = True) -> np.ndarray:
-    r"""Eigenvector centrality: the leading eigenvector of the adjacency (thesis eq. 2.12).
-
-    The non-negative eigenvector :math:`x` of :math:`A x = \lambda_{max} x`, computed with
-    LAPACK or ARPACK (power iteration, as in networkx and rustworkx, fails to converge
-    on Delaunay and pixel graphs whose spectral gap is small).
-
-    Disconnected graphs: the eigenvalue problem is solved per component. Only the
-    components whose largest eigenvalue equals the graph's (to 1e-9 relative) get
-    non-zero values; the others get 0. When several components tie, each gets its unit
-    Perron vector weighted by its sum, which is the limit power iteration from the
-    all-ones vector reaches (networkx's result).
-
-    Parameters
-    ----------
-    graph : sparse array or matrix of shape (n, n)
-        Symmetric adjacency; stored values are edge lengths.
-    weights : bool, default=False
-        Use the stored values as connection strengths (False: every edge counts 1).
-        Note that for data-graphs the stored values are lengths, so longer edges then
-        weigh more; pass ``1 / graph`` for affinities.
-    normalized : bool, default=True
-        If True, scale so that the maximum is 1 (the thesis' Table 2.1). If False, scale
-        to unit Euclidean norm (networkx's convention).
-
-    Returns
-    -------
-    ndarray of shape (n,)
-
-    Examples
-    --------
-    >>> from scipy import sparse
-    >>> path = sparse.csr_array([[0, 1, 0], [1, 0, 1], [0, 1, 0]])
-    >>> eigenvector(path)
-    array([0.70710678, 1.        , 0.70710678])
-    """
-    from scipy.sparse.csgraph import connected_components
-
-    adjacency = as_graph(graph, name="graph")
-    weights = _check_flag(weights, "weights")
-    normalized = _check_flag(normalized, "normalized")
-    if not weights:
-        adjacency.data[:] = 1.0  # as_graph returned our own copy
-    n = adjacency.shape[0]
-    n_comp, labels = connected_components(adjacency, directed=False)
-    if n_comp == 1:
-        members = [np.arange(n)]
-        results = [_perron(adjacency)]
-    else:
-        order = np.argsort(labels, kind="stable")
-        members = np.split(order, np.cumsum(np.bincount(labels, minlength=n_comp))[:-1])
-        results = [_perron(adjacency[idx][:, idx]) for idx in members]
-    lam_max = max(lam for lam, _ in results)
-    values = np.zeros(n)
-    for idx, (lam, vec) in zip(members, results):
-        if lam >= lam_max - 1e-9 * max(1.0, abs(lam_max)):
-            values[idx] = vec * vec.sum()
-    scale = values.max() if normalized else np.linalg.norm(values)
-    return values / scale
+def _eccentricity_bounds(prep: _Prepared, weights: bool) -> tuple[np.ndarray, int]:
+    """Takes-Kosters bounding: exact eccentricities and the number of searches used."""
+    n = prep.n
+    classes = prep.classes() if weights else None
+    kind, lengths = classes if classes is not None else (np.empty(0, dtype=np.int8), np.empty(0))
+    lower = np.zeros(n)
+    upper = np.full(n, np.inf)
+    open_ = np.ones(n, dtype=bool)
+    ecc = np.zeros(n)
+    degree = np.diff(prep.indptr)
+    searches = 0
+    pick_upper = True
+    rtol = 1e-9 if weights else 0.0
+    while open_.any():
+        candidates = np.flatnonzero(open_)
+        if pick_upper:
+            key = np.lexsort((-degree[candidates], -upper[candidates]))
+        else:
+            key = np.lexsort((-degree[candidates], lower[candidates]))
+        v = candidates[key[0]]
+        pick_upper = not pick_upper
+        d = _kernels.distances_from(prep.indptr, prep.indices, prep.data, kind, lengths, v, weights)
+        searches += 1
+        reach = np.isfinite(d)
+        e = d[reach].max()
+        ecc[v] = e
+        open_[v] = False
+        dr = d[reach]
+        lower[reach] = np.maximum(lower[reach], np.maximum(dr, e - dr))
+        upper[reach] = np.minimum(upper[reach], e + dr)
+        finite = np.isfinite(upper)
+        done = open_ & finite & (upper - lower <= rtol * np.where(finite, upper, 0.0))
+        ecc[done] = upper[done] if not weights else lower[done]
+        open_ &= ~done
+    return ecc, searches
 
 
-def compute(graph, /, name: str, **options) -> np.ndarray:
+# --- dispatch and entropy -----------------------------------------------------------------
+
+
+def compute(graph, /, name: str, **options):
     """Compute the centrality called ``name``; ``options`` go to that function.
 
     Parameters
     ----------
-    graph : sparse array or matrix of shape (n, n)
-    name : {'degree', 'betweenness', 'closeness', 'harmonic', 'eigenvector', 'eccentricity'}
+    graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
+    name : {'degree', 'betweenness', 'closeness', 'harmonic', 'eigenvector', 'eccentricity', 'pagerank', 'katz'}
     **options
         Keyword arguments of the chosen function (``weights``, ``normalized``, ...).
 
@@ -421,8 +750,10 @@ def compute(graph, /, name: str, **options) -> np.ndarray:
     >>> compute(sparse.csr_array([[0, 1], [1, 0]]), "degree")
     array([1., 1.])
     """
+    from . import _spectral
+
     check_choice(name, CENTRALITIES, name="name")
-    function = globals()[name]
+    function = globals().get(name) or getattr(_spectral, name)
     try:
         return function(graph, **options)
     except TypeError as exc:
@@ -454,4 +785,4 @@ def degree_entropy(graph, /) -> float:
     """
     from ..graphs._entropy import entropy_of_degrees
 
-    return entropy_of_degrees(np.diff(as_graph(graph, name="graph").indptr))
+    return entropy_of_degrees(np.diff(as_any_graph(graph, name="graph").adjacency.indptr))

@@ -143,7 +143,8 @@ def dijkstra_stats(indptr, indices, data, sources):
         for q in range(1, count):
             d = dist[order[q]]
             t += d
-            h += 1.0 / d
+            if d > 0.0:  # a node at distance 0 (zero-length edges) adds nothing, as in networkx
+                h += 1.0 / d
         largest[i] = dist[order[count - 1]]
         for q in range(count):
             dist[order[q]] = np.inf
@@ -377,7 +378,7 @@ def _brandes_source_bfs_log(indptr, indices, s, hops, order, lsigma, delta, bc):
 
 @njit(cache=True, nogil=True)
 def _brandes_source_dijkstra(
-    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, use_log, rtol
+    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, use_log, rtol, rank
 ):
     # Forward pass: Dijkstra, counting shortest paths with ties up to rtol.
     dist[s] = 0.0
@@ -419,8 +420,11 @@ def _brandes_source_dijkstra(
                     sigma[w] += sv
     ok = not overflow
     if ok:
+        # The shortest-path DAG is the one the forward pass counted: arcs v -> w with
+        # d(v) + len = d(w) and w settled after v (this also orders zero-length edges).
         for q in range(count):
             delta[order[q]] = 0.0
+            rank[order[q]] = q
         for q in range(count - 1, 0, -1):
             v = order[q]
             dv = dist[v]
@@ -428,7 +432,7 @@ def _brandes_source_dijkstra(
             for j in range(indptr[v], indptr[v + 1]):
                 w = indices[j]
                 dw = dist[w]
-                if dw > dv and abs(dv + data[j] - dw) <= rtol * dw:
+                if dw < np.inf and rank[w] > q and abs(dv + data[j] - dw) <= rtol * dw:
                     if use_log:
                         acc += np.exp(sigma[v] - sigma[w]) * (1.0 + delta[w])
                     else:
@@ -455,6 +459,7 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
     sigma = np.empty(n)
     delta = np.zeros(n)
     hops = np.full(n, -1, dtype=np.int64)
+    rank = np.empty(n, dtype=np.int64)
     dist, done, heap_d, heap_v = _dijkstra_workspace(n, indices.shape[0] if weighted else 0)
     for i in range(sources.shape[0]):
         s = sources[i]
@@ -462,12 +467,12 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
         if weighted:
             if not force_log:
                 ok = _brandes_source_dijkstra(
-                    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, False, rtol
+                    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, False, rtol, rank
                 )
             if not ok:
                 n_log += 1
                 _brandes_source_dijkstra(
-                    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, True, rtol
+                    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, True, rtol, rank
                 )
         else:
             if not force_log:
@@ -478,3 +483,318 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
     return bc, n_log
 
 
+
+
+# --- few distinct edge lengths: Dijkstra with one FIFO queue per length ---------------------
+#
+# On pixel graphs every edge is 1 or sqrt 2 long (nD: a few more with ``spacing``). With K
+# distinct lengths, Dijkstra needs no heap: the nodes reached over edges of length L_k are
+# appended to queue k in settling order, so each queue is sorted, and the next node to settle
+# is the smallest of the K queue heads (O(m + nK) per source instead of O(m log n)). A
+# distance is kept as its integer counts of each length, and its value is recomputed from
+# them, so it carries no accumulated rounding: two lengths a + b sqrt 2 tie exactly when
+# their counts agree, and differ by far more than ``TIE_RTOL`` otherwise.
+
+
+def length_classes(data, max_classes=8, rtol=1e-9):
+    """``(kind, lengths)`` when the arc lengths take at most ``max_classes`` distinct values
+    (up to ``rtol``), all positive; ``kind[j]`` is the class of arc ``j``. Else None."""
+    if data.size == 0 or data.min() <= 0:
+        return None
+    values = np.unique(data)
+    starts = [0]
+    for i in range(1, values.size):
+        if values[i] > values[starts[-1]] * (1.0 + rtol):
+            starts.append(i)
+            if len(starts) > max_classes:
+                return None
+    lengths = values[starts]
+    kind = (np.searchsorted(lengths * (1.0 + rtol), data)).astype(np.int8)
+    return kind, lengths.astype(np.float64)
+
+
+@njit(cache=True, nogil=True)
+def _class_workspace(n, kind, n_classes):
+    counts = np.zeros((n, n_classes), dtype=np.int32)
+    dist = np.full(n, np.inf)
+    done = np.zeros(n, dtype=np.bool_)
+    qstart = np.zeros(n_classes + 1, dtype=np.int64)
+    for j in range(kind.shape[0]):
+        qstart[kind[j] + 1] += 1
+    for k in range(n_classes):
+        qstart[k + 1] += qstart[k]
+    qnode = np.empty(qstart[n_classes], dtype=np.int64)
+    return counts, dist, done, qstart, qnode
+
+
+@njit(cache=True, nogil=True)
+def _class_search(
+    indptr, indices, kind, lengths, s, counts, dist, done, order, qstart, qnode, qhead, qtail, cand,
+    sigma, count_paths, use_log, rtol,
+):
+    """Dijkstra from ``s`` with one FIFO queue per length class; returns the count settled.
+
+    Fills ``dist`` (must be inf), ``done``, ``counts`` and ``order``; with ``count_paths``
+    also the shortest-path counts ``sigma`` (as logarithms with ``use_log``) and returns
+    a negative count when plain counts pass the overflow threshold.
+    """
+    n_classes = lengths.shape[0]
+    for k in range(n_classes):
+        qhead[k] = qstart[k]
+        qtail[k] = qstart[k]
+        counts[s, k] = 0
+    dist[s] = 0.0
+    sv = 0.0
+    if count_paths:
+        sigma[s] = 0.0 if use_log else 1.0
+    v = s
+    count = 0
+    overflow = False
+    while v >= 0:
+        done[v] = True
+        order[count] = v
+        count += 1
+        if count_paths:
+            sv = sigma[v]
+            if not use_log and sv > _OVERFLOW:
+                overflow = True
+        # The K candidate distances, each recomputed from integer counts (no drift).
+        for c in range(n_classes):
+            nd = 0.0
+            for k in range(n_classes):
+                nd += (counts[v, k] + (1 if k == c else 0)) * lengths[k]
+            cand[c] = nd
+        for j in range(indptr[v], indptr[v + 1]):
+            w = indices[j]
+            if done[w]:
+                continue
+            c = kind[j]
+            nd = cand[c]
+            dw = dist[w]
+            if nd < dw - rtol * dw or dw == np.inf:
+                dist[w] = nd
+                for k in range(n_classes):
+                    counts[w, k] = counts[v, k]
+                counts[w, c] += 1
+                if count_paths:
+                    sigma[w] = sv
+                qnode[qtail[c]] = w
+                qtail[c] += 1
+            elif count_paths and nd <= dw + rtol * dw:
+                if use_log:
+                    a = sigma[w]
+                    if a >= sv:
+                        sigma[w] = a + np.log1p(np.exp(sv - a))
+                    else:
+                        sigma[w] = sv + np.log1p(np.exp(a - sv))
+                else:
+                    sigma[w] += sv
+        # Next: the unsettled queue head of smallest (current) distance. Each queue is
+        # sorted by the distance at push time, and a head's current distance is at most
+        # that, so the smallest head is the smallest unsettled tentative distance.
+        v = -1
+        bd = np.inf
+        for k in range(n_classes):
+            h = qhead[k]
+            while h < qtail[k] and done[qnode[h]]:
+                h += 1
+            qhead[k] = h
+            if h < qtail[k] and dist[qnode[h]] < bd:
+                bd = dist[qnode[h]]
+                v = k
+        if v >= 0:
+            h = qhead[v]
+            qhead[v] = h + 1
+            v = qnode[h]
+    if overflow:
+        return -count
+    return count
+
+
+@njit(cache=True, nogil=True)
+def class_stats(indptr, indices, kind, lengths, sources):
+    """As :func:`dijkstra_stats`, by the FIFO-queue search of few-length graphs."""
+    n = indptr.shape[0] - 1
+    k = sources.shape[0]
+    total = np.zeros(k)
+    inverse = np.zeros(k)
+    largest = np.zeros(k)
+    reached = np.zeros(k, dtype=np.int64)
+    order = np.empty(n, dtype=np.int64)
+    counts, dist, done, qstart, qnode = _class_workspace(n, kind, lengths.shape[0])
+    qhead = np.empty(lengths.shape[0], dtype=np.int64)
+    qtail = np.empty(lengths.shape[0], dtype=np.int64)
+    cand = np.empty(lengths.shape[0])
+    sigma = np.empty(0)
+    for i in range(k):
+        count = _class_search(
+            indptr, indices, kind, lengths, sources[i], counts, dist, done, order, qstart, qnode,
+            qhead, qtail, cand, sigma, False, False, 0.0,
+        )
+        t = 0.0
+        h = 0.0
+        for q in range(1, count):
+            d = dist[order[q]]
+            t += d
+            h += 1.0 / d
+        largest[i] = dist[order[count - 1]]
+        for q in range(count):
+            dist[order[q]] = np.inf
+            done[order[q]] = False
+        total[i] = t
+        inverse[i] = h
+        reached[i] = count
+    return total, inverse, largest, reached
+
+
+@njit(cache=True, nogil=True)
+def class_brandes(indptr, indices, kind, lengths, sources, rtol, force_log, edge_values):
+    """As :func:`brandes` with edge lengths, by the FIFO-queue search of few-length graphs.
+
+    With ``edge_values`` also returns the per-arc dependencies (edge betweenness parts).
+    """
+    n = indptr.shape[0] - 1
+    bc = np.zeros(n)
+    eb = np.zeros(indices.shape[0] if edge_values else 0)
+    n_log = 0
+    order = np.empty(n, dtype=np.int64)
+    sigma = np.empty(n)
+    delta = np.zeros(n)
+    counts, dist, done, qstart, qnode = _class_workspace(n, kind, lengths.shape[0])
+    qhead = np.empty(lengths.shape[0], dtype=np.int64)
+    qtail = np.empty(lengths.shape[0], dtype=np.int64)
+    cand = np.empty(lengths.shape[0])
+    for i in range(sources.shape[0]):
+        s = sources[i]
+        use_log = force_log
+        while True:
+            count = _class_search(
+                indptr, indices, kind, lengths, s, counts, dist, done, order, qstart, qnode,
+                qhead, qtail, cand, sigma, True, use_log, rtol,
+            )
+            if count > 0:
+                break
+            for q in range(-count):  # overflow: run this source again in log space
+                dist[order[q]] = np.inf
+                done[order[q]] = False
+            use_log = True
+        if use_log:
+            n_log += 1
+        _accumulate(indptr, indices, lengths, kind, order, count, dist, sigma, delta, bc, eb, use_log, rtol, edge_values)
+        for q in range(count):
+            dist[order[q]] = np.inf
+            done[order[q]] = False
+    return bc, n_log, eb
+
+
+@njit(cache=True, nogil=True)
+def _accumulate(indptr, indices, lengths, kind, order, count, dist, sigma, delta, bc, eb, use_log, rtol, edge_values):
+    """Brandes' backward pass over a few-length search (successor: d(v) + len = d(w))."""
+    for q in range(count):
+        delta[order[q]] = 0.0
+    for q in range(count - 1, -1, -1):
+        v = order[q]
+        dv = dist[v]
+        acc = 0.0
+        for j in range(indptr[v], indptr[v + 1]):
+            w = indices[j]
+            dw = dist[w]
+            if dw > dv and dw < np.inf and abs(dv + lengths[kind[j]] - dw) <= rtol * dw:
+                if use_log:
+                    part = np.exp(sigma[v] - sigma[w]) * (1.0 + delta[w])
+                else:
+                    part = sigma[v] * ((1.0 + delta[w]) / sigma[w])
+                acc += part
+                if edge_values:
+                    eb[j] += part
+        if q > 0:
+            delta[v] = acc
+            bc[v] += acc
+
+
+@njit(cache=True, nogil=True)
+def distances_from(indptr, indices, data, kind, lengths, s, weighted):
+    """Distances from ``s`` to every node (inf where unreachable): hops, or lengths by the
+    FIFO-queue search when ``kind`` is not empty, else by Dijkstra with a heap."""
+    n = indptr.shape[0] - 1
+    out = np.full(n, np.inf)
+    order = np.empty(n, dtype=np.int64)
+    if not weighted:
+        hops = np.full(n, -1, dtype=np.int64)
+        count = _bfs(indptr, indices, s, hops, order)
+        for q in range(count):
+            out[order[q]] = hops[order[q]]
+        return out
+    if kind.shape[0] > 0:
+        counts, dist, done, qstart, qnode = _class_workspace(n, kind, lengths.shape[0])
+        qhead = np.empty(lengths.shape[0], dtype=np.int64)
+        qtail = np.empty(lengths.shape[0], dtype=np.int64)
+        cand = np.empty(lengths.shape[0])
+        _class_search(indptr, indices, kind, lengths, s, counts, dist, done, order, qstart, qnode,
+                      qhead, qtail, cand, np.empty(0), False, False, 0.0)
+        return dist
+    dist, done, heap_d, heap_v = _dijkstra_workspace(n, indices.shape[0])
+    _dijkstra(indptr, indices, data, s, dist, done, order, heap_d, heap_v)
+    return dist
+
+
+@njit(cache=True, nogil=True)
+def brandes_edges(indptr, indices, data, sources, rtol):
+    """Per-arc dependencies summed over ``sources`` (edge betweenness over ordered pairs).
+
+    Path counts are kept as logarithms, so they cannot overflow. For hop counts pass
+    ``data`` of ones.
+    """
+    n = indptr.shape[0] - 1
+    eb = np.zeros(indices.shape[0])
+    order = np.empty(n, dtype=np.int64)
+    lsigma = np.empty(n)
+    delta = np.zeros(n)
+    rank = np.empty(n, dtype=np.int64)
+    dist, done, heap_d, heap_v = _dijkstra_workspace(n, indices.shape[0])
+    for i in range(sources.shape[0]):
+        s = sources[i]
+        count = 0
+        dist[s] = 0.0
+        lsigma[s] = 0.0
+        size = _heap_push(heap_d, heap_v, 0, 0.0, s)
+        while size > 0:
+            d, v, size = _heap_pop(heap_d, heap_v, size)
+            if done[v]:
+                continue
+            done[v] = True
+            order[count] = v
+            count += 1
+            sv = lsigma[v]
+            for j in range(indptr[v], indptr[v + 1]):
+                w = indices[j]
+                if done[w]:
+                    continue
+                nd = d + data[j]
+                dw = dist[w]
+                if dw == np.inf or nd < dw - rtol * dw:
+                    dist[w] = nd
+                    lsigma[w] = sv
+                    size = _heap_push(heap_d, heap_v, size, nd, w)
+                elif nd <= dw + rtol * dw:
+                    a = lsigma[w]
+                    lsigma[w] = max(a, sv) + np.log1p(np.exp(-abs(a - sv)))
+        for q in range(count):
+            delta[order[q]] = 0.0
+            rank[order[q]] = q
+        for q in range(count - 1, -1, -1):
+            v = order[q]
+            dv = dist[v]
+            acc = 0.0
+            for j in range(indptr[v], indptr[v + 1]):
+                w = indices[j]
+                dw = dist[w]
+                if dw < np.inf and rank[w] > q and abs(dv + data[j] - dw) <= rtol * dw:
+                    part = np.exp(lsigma[v] - lsigma[w]) * (1.0 + delta[w])
+                    eb[j] += part
+                    acc += part
+            delta[v] = acc
+        for q in range(count):
+            dist[order[q]] = np.inf
+            done[order[q]] = False
+    return eb

@@ -26,7 +26,7 @@ def edges_to_graph(n_nodes: int, rows, cols, points=None, *, lengths=None) -> sp
     key = np.unique(lo[keep] * n_nodes + hi[keep])
     lo, hi = key // n_nodes, key % n_nodes
     if lengths is None:
-        lengths = np.linalg.norm(points[lo] - points[hi], axis=1)
+        lengths = _lengths(points, lo, hi)
     else:
         lengths = np.broadcast_to(np.asarray(lengths, dtype=np.float64), lo.shape)
     graph = sparse.csr_array(
@@ -38,6 +38,25 @@ def edges_to_graph(n_nodes: int, rows, cols, points=None, *, lengths=None) -> sp
     graph.indices = graph.indices.astype(np.int32, copy=False)
     graph.indptr = graph.indptr.astype(np.int32, copy=False)
     return graph
+
+
+def _unit_scale(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """``points / scale`` with ``scale`` the largest absolute coordinate (1 for all-zero input).
+
+    Squared distances of raw coordinates overflow near 1e155 and underflow near 1e-155;
+    the graphs here are invariant to scale, so they are built from the scaled points and
+    their lengths are scaled back.
+    """
+    scale = float(np.max(np.abs(points), initial=0.0))
+    if scale == 0.0 or not np.isfinite(1.0 / scale):
+        scale = 1.0
+    return points / scale, scale
+
+
+def _lengths(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Euclidean lengths of the edges ``lo[e] -- hi[e]`` without overflow or underflow."""
+    unit, scale = _unit_scale(points)
+    return np.linalg.norm(unit[lo] - unit[hi], axis=1) * scale
 
 
 def _triangulable_points(points) -> np.ndarray:
@@ -74,7 +93,7 @@ def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
 
 
 def _delaunay_edges(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    indptr, indices = _triangulation(points).vertex_neighbor_vertices
+    indptr, indices = _triangulation(_unit_scale(points)[0]).vertex_neighbor_vertices
     rows = np.repeat(np.arange(points.shape[0]), np.diff(indptr))
     upper = rows < indices
     return rows[upper], indices[upper].astype(np.int64)
@@ -112,6 +131,7 @@ def delaunay_graph(points, /) -> sparse.csr_array:
 
 def _gabriel_mask(points: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     """True for the edges whose closed diametral ball holds no other point."""
+    points, _ = _unit_scale(points)
     midpoints = 0.5 * (points[rows] + points[cols])
     radius2 = 0.25 * np.sum((points[rows] - points[cols]) ** 2, axis=1)
     k = min(3, points.shape[0])
@@ -214,7 +234,8 @@ def knn_graph(points, /, *, k: int) -> sparse.csr_array:
     points = as_points(points, name="points", n_dims=ANY_DIMS, min_points=2, allow_duplicates=False)
     n = points.shape[0]
     k = check_int(k, name="k", low=1, high=n - 1)
-    _, idx = cKDTree(points).query(points, k=k + 1)
+    unit, _ = _unit_scale(points)
+    _, idx = cKDTree(unit).query(unit, k=k + 1)
     rows = np.repeat(np.arange(n), k + 1)
     cols = idx.ravel()
     return edges_to_graph(n, rows, cols, points)
@@ -240,7 +261,8 @@ def complete_graph(points, /) -> sparse.csr_array:
            [4., 5., 0.]])
     """
     points = as_points(points, name="points", n_dims=ANY_DIMS, min_points=2, allow_duplicates=False)
-    graph = sparse.csr_array(squareform(pdist(points)))
+    unit, scale = _unit_scale(points)
+    graph = sparse.csr_array(squareform(pdist(unit) * scale))
     graph.sort_indices()
     graph.indices = graph.indices.astype(np.int32, copy=False)
     graph.indptr = graph.indptr.astype(np.int32, copy=False)

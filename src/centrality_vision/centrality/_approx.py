@@ -1,0 +1,141 @@
+"""Sampling approximations with stated guarantees (hop distances).
+
+- Betweenness: Riondato-Kornaropoulos path sampling, stopped early by an empirical
+  Bernstein bound checked at geometric checkpoints.
+- Closeness and harmonic: Eppstein-Wang source sampling with Hoeffding's bound.
+
+The guarantees are stated on the public functions (:func:`.betweenness`,
+:func:`.closeness`, :func:`.harmonic`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .._parallel import run_chunks
+from .._seeding import as_generator
+from . import _kernels, _sampling
+
+__all__ = ["sample_betweenness", "sample_sources"]
+
+RK_CONSTANT = 0.5  # the universal constant c of the VC-dimension sample bound
+_GROWTH = 1.5  # checkpoint sizes grow geometrically by this factor
+
+
+def _largest_eccentricity_bound(prep) -> int:
+    """Max over components of 2 * (eccentricity of one node of it): at least the diameter."""
+    n = prep.n
+    dist = np.full(n, -1, dtype=np.int64)
+    order = np.empty(n, dtype=np.int64)
+    best = 0
+    seen = np.zeros(n, dtype=bool)
+    for root in range(n):
+        if seen[root]:
+            continue
+        count = _sampling.single_source_distances(prep.indptr, prep.indices, root, dist, order)
+        members = order[:count]
+        seen[members] = True
+        best = max(best, 2 * int(dist[members].max()))
+        dist[members] = -1
+    return best
+
+
+def rk_sample_size(vertex_diameter: int, epsilon: float, delta: float) -> int:
+    """Riondato-Kornaropoulos: samples for an ``epsilon`` error with probability ``1 - delta``."""
+    vc = math.floor(math.log2(vertex_diameter - 2)) + 1 if vertex_diameter > 3 else 1
+    return int(math.ceil(RK_CONSTANT / epsilon**2 * (vc + math.log(1.0 / delta))))
+
+
+def _bernstein(hits: np.ndarray, k: int, log_term: float) -> float:
+    """Largest two-sided empirical Bernstein radius (Maurer and Pontil 2009, thm. 4) of the
+    node frequencies after ``k`` samples; ``log_term`` is ln(4 / per-node failure probability)."""
+    p = hits / k
+    variance = float(np.max(p * (1.0 - p))) * k / (k - 1)  # the sample variance of a 0/1 variable
+    return math.sqrt(2.0 * variance * log_term / k) + 7.0 * log_term / (3.0 * (k - 1))
+
+
+def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool):
+    """Normalised betweenness estimates (node order of ``prep``) and an info dict."""
+    n = prep.n
+    if n < 3:
+        return np.zeros(n), {"samples": 0, "searches": 0, "bound": 0.0}
+    # E[hits / k] = b / (n (n - 1)) over ordered pairs; normalised b is that times n / (n - 2).
+    target = epsilon * (n - 2) / n
+    if prep.directed:
+        vertex_diameter = n
+    else:
+        vertex_diameter = _largest_eccentricity_bound(prep) + 1
+    cap = rk_sample_size(vertex_diameter, target, delta / 2)
+    checkpoints = []
+    k = min(cap, 256)
+    while k < cap:
+        checkpoints.append(k)
+        k = int(math.ceil(k * _GROWTH))
+    checkpoints.append(cap)
+    log_term = math.log(4.0 * n * len(checkpoints) / (delta / 2))
+    rng = as_generator(seed)
+    s = rng.integers(0, n, size=cap)
+    t = (s + 1 + rng.integers(0, n - 1, size=cap)) % n
+    pairs = np.stack([s, t], axis=1).astype(np.int64)
+    stream = int(rng.integers(0, 2**63 - 1))
+    t_indptr, t_indices, _ = prep.transposed()
+    hits = np.zeros(n, dtype=np.int64)
+    done = 0
+    bound = math.inf
+    visited = 0
+    for k in checkpoints:
+
+        def task(lo, hi, first=done):
+            return _sampling.sample_paths(
+                prep.indptr, prep.indices, t_indptr, t_indices, pairs, stream, first + lo, first + hi
+            )
+
+        for _, _, (part, work) in run_chunks(task, k - done, progress=progress, desc="betweenness samples"):
+            hits += part
+            visited += work
+        done = k
+        bound = _bernstein(hits, k, log_term) if k > 1 else math.inf
+        if bound <= target:
+            break
+    if done == cap:
+        bound = min(bound, target)
+    return hits / done * n / (n - 2), {
+        "samples": done,
+        "searches": done,
+        "bound": bound * n / (n - 2),
+        "visited": visited,
+    }
+
+
+def sample_sources(prep, epsilon: float, delta: float, seed, progress: bool, desc: str):
+    """Eppstein-Wang: distance sums to every node from ``k`` sampled sources, scaled to n.
+
+    Returns sums of distances and of inverse distances (estimates), the largest sampled
+    distance, the exact number of nodes reaching each node, and an info dict.
+    """
+    from scipy.sparse.csgraph import connected_components
+
+    n = prep.n
+    k = int(math.ceil(math.log(2.0 * n / delta) / (2.0 * (epsilon * (n - 1) / n) ** 2))) if n > 1 else n
+    if k >= n:  # sampling would not save anything: exact values
+        from ._api import _hop_stats
+
+        return (*_hop_stats(prep.indptr, prep.indices, progress, desc), {"searches": n, "samples": n})
+    rng = as_generator(seed)
+    sources = np.sort(rng.choice(n, size=k, replace=False)).astype(np.int64)  # RCM order: nearby
+    group_ptr = np.arange(0, k + 64, 64, dtype=np.int64)
+    group_ptr[-1] = k
+    group_ptr = np.unique(group_ptr)
+
+    def task(lo, hi):
+        return _kernels.multi_source_stats(prep.indptr, prep.indices, sources, group_ptr, lo, hi)
+
+    parts = [r for _, _, r in run_chunks(task, group_ptr.size - 1, progress=progress, desc=desc, weight=64, total=k)]
+    total = sum(p[0] for p in parts) * (n / k)
+    inverse = sum(p[1] for p in parts) * (n / k)
+    largest = np.max([p[2] for p in parts], axis=0)
+    _, labels = connected_components(prep.adjacency, directed=False)
+    reached = np.bincount(labels)[labels].astype(np.int64)
+    return total, inverse, largest, reached, {"searches": k, "samples": k}
