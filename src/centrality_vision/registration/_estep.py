@@ -275,7 +275,13 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
     side = h
     origin = np.minimum(sources.min(axis=0), targets.min(axis=0))
     extent = np.maximum(sources.max(axis=0), targets.max(axis=0)) - origin
-    dims = np.floor(extent / side).astype(np.int64) + 1
+    dims_f = np.floor(extent / side) + 1
+    if float(np.prod(dims_f)) > 2.0**62:
+        raise MemoryError(
+            f"The fast Gauss transform's grid of boxes of side h = {h:.3g} would have {float(np.prod(dims_f)):.3g} "
+            "cells, too many to index; use method='truncated' or 'dense'."
+        )
+    dims = dims_f.astype(np.int64)
     keys = K.grid_keys(sources, origin, side, dims)
     box_keys, box_of = np.unique(keys, return_inverse=True)
     size = box_keys.size * weights.shape[1] * p**n_dims * 8
@@ -376,12 +382,14 @@ def _fgt_cost(moving_t, fixed, sigma2, eps):
         lo = points.min(axis=0)
         dims = np.floor((points.max(axis=0) - lo) / h).astype(np.int64) + 1
         if float(np.prod(dims.astype(float))) > 2.0**62:
-            return points.shape[0], float(np.prod(dims.astype(float)))
+            return math.inf, math.inf  # box keys would overflow: the transform refuses such a grid
         keys = K.grid_keys(points, lo, h, dims)
         return np.unique(keys).size, float(np.prod(dims.astype(float)))
 
     def transform_cost(src, tgt, n_rhs):
         n_src_boxes, bbox = boxes(src)
+        if not math.isfinite(bbox) or not math.isfinite(boxes(tgt)[1]):
+            return math.inf
         if n_src_boxes * n_rhs * p**n_dims * 8 > _FGT_MAX_BYTES / 4:
             return math.inf  # the coefficients alone would take too much memory
         n_tgt_boxes, _ = boxes(tgt)
