@@ -65,6 +65,16 @@ def test_robust_resampled_partial_outline_with_outliers(seed):
     np.testing.assert_allclose(transform.rotation, _rotation(-angle), atol=0.06)
 
 
+def test_cpd_refinement_on_a_whole_noisy_resampled_outline():
+    """CPD from the consensus pose (for whole sets: CPD's mixture pulls towards missing parts)."""
+    rng = np.random.default_rng(7)
+    truth = _outline(STEP * (np.arange(N) + 0.4))
+    moving = _similar(truth + rng.normal(0, 0.1 * STEP, truth.shape), rng)
+    result = match(moving, FIXED, refine="cpd")
+    err = np.linalg.norm(FIXED[result.correspondence] - truth, axis=1)
+    assert np.all(result.correspondence >= 0) and np.all(err <= STEP * 1.3)
+
+
 def test_robust_beats_shape_context_when_a_part_is_missing():
     rng = np.random.default_rng(5)
     truth = _outline(STEP * (np.arange(40) + 0.5))  # a third missing, resampled

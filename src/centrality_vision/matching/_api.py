@@ -57,6 +57,8 @@ def match(
     refine : {"icp", "cpd"}, default="icp"
         ``"robust"``: the refinement after consensus: trimmed nearest-neighbour similarity
         fits alone, or followed by similarity CPD with outlier weight ``outlier_weight``.
+        CPD suits whole sets: its mixture, centred on the moving points, is pulled towards
+        fixed points that have no partner, so a part missing from ``moving`` skews the pose.
     outlier_weight : float in [0, 1), default=0.3
         The CPD outlier weight for ``refine="cpd"``.
     mwme_method : {"local", "greedy", "exact"}, default="local"
