@@ -1,11 +1,17 @@
-"""Maximum-entropy data-graphs (thesis ch. 6 and 7, SPEC sections 4 and 5).
+"""Maximum-entropy data-graphs (thesis ch. 6 and 7).
 
 - :func:`nhdd_graph`: the graphs with the most distinct degrees (n - 1 of them), built by
   Algorithm 6.1.
 - :func:`mwme_graph`: the minimum-weight labelling of the connected NHDD graph onto a
   point set (the MWME problem, eq. 6.2).
+- :func:`mwme_degrees`: the exact MWME degrees of many small sets at once (local signatures).
 - :func:`mstme_graph`: the spanning tree minimising weight minus lambda times the entropy
   of its degree distribution (MSTME, eq. 7.1).
+
+Conventions the code relies on: the entropy (eq. 6.1) is in bits over the degrees of all
+n nodes, degree 0 included; every solver sees the distances of the points divided by a
+power of two (exact), so results do not depend on the scale of the input and no kernel
+ever receives a non-finite weight.
 """
 
 from __future__ import annotations
