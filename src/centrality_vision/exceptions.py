@@ -1,6 +1,6 @@
 """Exceptions and warnings raised by centrality-vision."""
 
-__all__ = ["CentralityVisionError", "InputError", "ConvergenceWarning"]
+__all__ = ["CentralityVisionError", "InputError", "ConvergenceWarning", "CollapseWarning"]
 
 
 class CentralityVisionError(Exception):
@@ -16,3 +16,8 @@ class InputError(CentralityVisionError, ValueError):
 
 class ConvergenceWarning(UserWarning):
     """An iterative method stopped at ``max_iter`` before meeting ``tol``."""
+
+
+class CollapseWarning(ConvergenceWarning):
+    """A registration ended degenerate: the moving set shrank to a blob, or sigma2 reached
+    zero while too few points were matched. The estimator's ``converged_`` is then False."""

@@ -23,6 +23,8 @@ __all__ = [
     "least_squares_similarity",
     "proper_rotation",
     "random_rotation",
+    "centred",
+    "power_of_two_scale",
 ]
 
 
@@ -93,7 +95,7 @@ class SimilarityTransform:
         points = as_points(points, name="points", n_dims=(self.rotation.shape[0],))
         return self.scale * points @ self.rotation.T + self.translation
 
-    def inverse(self) -> "SimilarityTransform":
+    def inverse(self) -> SimilarityTransform:
         rotation = self.rotation.T
         return SimilarityTransform(rotation, -(rotation @ self.translation) / self.scale, 1.0 / self.scale)
 
@@ -119,7 +121,7 @@ class RigidTransform(SimilarityTransform):
             raise InputError(f"`scale` of a RigidTransform must be 1; got {self.scale!r}.")
         super().__post_init__()
 
-    def inverse(self) -> "RigidTransform":
+    def inverse(self) -> RigidTransform:
         rotation = self.rotation.T
         return RigidTransform(rotation, -(rotation @ self.translation))
 
@@ -172,29 +174,38 @@ class AffineTransform:
         points = as_points(points, name="points", n_dims=(self.linear.shape[0],))
         return points @ self.linear.T + self.translation
 
-    def inverse(self) -> "AffineTransform":
+    def inverse(self) -> AffineTransform:
         """The inverse map; raises ``InputError`` when ``linear`` is singular."""
         if np.linalg.cond(self.linear) > 1e14:
-            raise InputError(f"This affine transform is not invertible: `linear` is singular (cond {np.linalg.cond(self.linear):.3g}).")
+            raise InputError(
+                "This affine transform is not invertible: `linear` is singular "
+                f"(cond {np.linalg.cond(self.linear):.3g})."
+            )
         inv = np.linalg.inv(self.linear)
         return AffineTransform(inv, -(inv @ self.translation))
 
 
 @dataclass(frozen=True)
 class NonRigidTransform:
-    """CPD's motion-coherent displacement field ``z -> z + sum_m W[m] exp(-|z - y_m|^2 / (2 beta^2))``.
+    """CPD's motion-coherent displacement field after an optional affine pre-map.
 
-    The field is defined everywhere, so it can be applied to points other than the control
-    points ``y_m`` (the moving set it was fitted on). It has no closed-form inverse.
+    ``z -> u + sum_m W[m] exp(-|u - c_m|^2 / (2 beta^2))`` with ``u = linear @ z + translation``
+    (``u = z`` when both are None). The field is defined everywhere, so it can be applied to
+    points other than the ones it was fitted on. It has no closed-form inverse.
 
     Attributes
     ----------
     control_points : ndarray of shape (M, D)
-        The moving points ``y_m`` the kernel is centred on.
+        The kernel centres ``c_m``, in the frame of ``u`` (the fitted moving points after the
+        pre-map).
     coefficients : ndarray of shape (M, D)
         ``W`` of the CPD paper.
     beta : float
         Width of the Gaussian kernel.
+    linear : ndarray of shape (D, D), optional
+        Linear part of the pre-map (identity when None).
+    translation : ndarray of shape (D,), optional
+        Translation of the pre-map (zero when None).
 
     Examples
     --------
@@ -203,39 +214,63 @@ class NonRigidTransform:
     >>> t(np.array([[0.0, 0.0], [10.0, 0.0]])).round(6)
     array([[ 1.,  0.],
            [10.,  0.]])
+    >>> shifted = NonRigidTransform(np.zeros((1, 2)), np.array([[1.0, 0.0]]), beta=1.0, translation=[5.0, 0.0])
+    >>> shifted(np.array([[-5.0, 0.0]])).round(6)
+    array([[1., 0.]])
     """
 
     control_points: np.ndarray
     coefficients: np.ndarray
     beta: float
+    linear: np.ndarray | None = None
+    translation: np.ndarray | None = None
 
     def __post_init__(self):
         control = _frozen(self.control_points)
         coefficients = _frozen(self.coefficients)
         if control.ndim != 2 or coefficients.shape != control.shape:
             raise InputError(
-                f"`control_points` and `coefficients` must both be (M, D); got {control.shape} and {coefficients.shape}."
+                "`control_points` and `coefficients` must both be (M, D); "
+                f"got {control.shape} and {coefficients.shape}."
             )
+        if not (np.all(np.isfinite(control)) and np.all(np.isfinite(coefficients))):
+            raise InputError("`control_points` and `coefficients` must be finite; got NaN or inf.")
         if not np.isfinite(self.beta) or self.beta <= 0:
             raise InputError(f"`beta` must be a finite number > 0; got {self.beta!r}.")
+        dim = control.shape[1]
+        for name, value, shape in (("linear", self.linear, (dim, dim)), ("translation", self.translation, (dim,))):
+            if value is None:
+                continue
+            value = _frozen(np.reshape(value, -1) if name == "translation" else value)
+            if value.shape != shape or not np.all(np.isfinite(value)):
+                raise InputError(f"`{name}` must be a finite array of shape {shape}; got shape {value.shape}.")
+            object.__setattr__(self, name, value)
         object.__setattr__(self, "control_points", control)
         object.__setattr__(self, "coefficients", coefficients)
         object.__setattr__(self, "beta", float(self.beta))
 
-    def displacement(self, points) -> np.ndarray:
-        """The displacement ``T(z) - z`` at each row of ``points``, in blocks of rows."""
-        points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
-        out = np.empty_like(points)
+    def _pre(self, points: np.ndarray) -> np.ndarray:
+        out = points if self.linear is None else points @ self.linear.T
+        return out if self.translation is None else out + self.translation
+
+    def _field(self, u: np.ndarray) -> np.ndarray:
+        out = np.empty_like(u)
         step = max(1, 2**22 // max(1, self.control_points.shape[0]))
-        for lo in range(0, points.shape[0], step):
-            block = points[lo : lo + step]
+        for lo in range(0, u.shape[0], step):
+            block = u[lo : lo + step]
             d2 = np.sum((block[:, None, :] - self.control_points[None, :, :]) ** 2, axis=2)
             out[lo : lo + step] = np.exp(-d2 / (2.0 * self.beta**2)) @ self.coefficients
         return out
 
+    def displacement(self, points) -> np.ndarray:
+        """The displacement ``T(z) - z`` at each row of ``points``, in blocks of rows."""
+        points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
+        return self(points) - points
+
     def __call__(self, points) -> np.ndarray:
         points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
-        return points + self.displacement(points)
+        u = self._pre(points)
+        return u + self._field(u)
 
 
 def random_rotation(n_dims: int, seed=None) -> np.ndarray:
@@ -291,6 +326,7 @@ def proper_rotation(cross: np.ndarray) -> tuple[np.ndarray, float]:
 
     SVD ``cross = U S V^T``; the sign of the last singular vector is flipped when
     ``det(U V^T) < 0`` (Umeyama's correction), so det R = +1 even for reflected data.
+    A non-finite ``cross`` raises :class:`InputError` (LAPACK's SVD can loop on inf).
 
     Examples
     --------
@@ -299,18 +335,74 @@ def proper_rotation(cross: np.ndarray) -> tuple[np.ndarray, float]:
     (array([[1., 0.],
            [0., 1.]]), 3.0)
     """
+    cross = np.asarray(cross, dtype=float)
+    if not np.all(np.isfinite(cross)):
+        raise InputError(
+            "`cross` (the cross-covariance of two point sets) must be finite; got NaN or inf "
+            "(coordinates too large for their products to fit in float64?)."
+        )
     u, sv, vt = np.linalg.svd(cross)
     c = np.ones(cross.shape[0])
     c[-1] = 1.0 if np.linalg.det(u @ vt) >= 0 else -1.0
     return (u * c) @ vt, float(np.sum(sv * c))
 
 
-def least_squares_similarity(source: np.ndarray, target: np.ndarray, *, scale: bool) -> tuple[np.ndarray, np.ndarray, float]:
+def power_of_two_scale(points: np.ndarray) -> float:
+    """A power of two within a factor 2 of the largest absolute coordinate (1 for all zeros).
+
+    Dividing by it is exact in floating point and brings every coordinate into [-2, 2], so
+    that products and sums of squares stay finite (even for coordinates near 1e308).
+
+    Examples
+    --------
+    >>> power_of_two_scale(np.array([[3.0, -5.0]])), power_of_two_scale(np.zeros((2, 2)))
+    (4.0, 1.0)
+    """
+    peak = float(np.max(np.abs(points))) if points.size else 0.0
+    if peak == 0.0:
+        return 1.0
+    return float(np.ldexp(1.0, int(np.frexp(peak)[1]) - 1))
+
+
+def centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(mean, points - mean)`` with the mean corrected by a second pass.
+
+    The correction keeps the centred coordinates accurate when the points sit far from the
+    origin (e.g. a shape of size 1 at offset 1e8); the points are pre-divided by a power of
+    two so that the sum cannot overflow.
+
+    Examples
+    --------
+    >>> mean, c = centred(np.array([[1e8, 0.0], [1e8 + 2.0, 2.0]]))
+    >>> mean.tolist(), c.tolist()
+    ([100000001.0, 1.0], [[-1.0, -1.0], [1.0, 1.0]])
+    """
+    unit = power_of_two_scale(points)
+    scaled = points / unit
+    mean = scaled.mean(axis=0)
+    mean = mean + (scaled - mean).mean(axis=0)
+    return mean * unit, (scaled - mean) * unit
+
+
+def least_squares_similarity(
+    source: np.ndarray, target: np.ndarray, *, scale: bool
+) -> tuple[np.ndarray, np.ndarray, float]:
     """``(rotation, translation, s)`` minimising ``sum |s R x_i + t - y_i|^2`` for paired rows
-    (``s = 1`` without ``scale``, or when the sets are degenerate); no input checks."""
-    mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
-    xs, xt = source - mu_s, target - mu_t
+    (``s = 1`` without ``scale``, or when the sets are degenerate); inputs must be finite.
+
+    Each centred set is divided by a power of two above its largest coordinate before the
+    cross-covariance is formed, so coordinates up to the float64 limit give finite products
+    (no inf reaches the SVD)."""
+    mu_s, xs = centred(source)
+    mu_t, xt = centred(target)
+    a, b = power_of_two_scale(xs), power_of_two_scale(xt)
+    xs, xt = xs / a, xt / b
     rotation, trace = proper_rotation(xt.T @ xs)
     var = float(np.sum(xs * xs))
-    s = trace / var if scale and var > 0 and trace > 0 else 1.0
-    return rotation, mu_t - s * rotation @ mu_s, s
+    s = (trace / var) * (b / a) if scale and var > 0 and trace > 0 else 1.0
+    if not np.isfinite(s) or s <= 0:
+        raise InputError(f"The least-squares scale between `source` and `target` is not representable (got {s!r}).")
+    translation = mu_t - s * rotation @ mu_s
+    if not np.all(np.isfinite(translation)):
+        raise InputError("The least-squares translation between `source` and `target` overflows float64.")
+    return rotation, translation, s

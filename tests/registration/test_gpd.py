@@ -44,7 +44,8 @@ def test_kappa_one_is_cpd(fish_pair):
 def test_posterior_is_equation_5_10(fish_pair):
     """P_g(m|x) = h(m) exp(psi) / (sum_k h(k) exp(psi_k) + c), from the normalised centralities."""
     y, x = fish_pair.moving, fish_pair.fixed
-    gpd = GPD(RigidCPD(w=0.2, max_iter=3, tol=0), centrality="closeness", bins=8).fit(y, x)
+    # in the caller's units (c depends on the units of sigma2)
+    gpd = GPD(RigidCPD(w=0.2, max_iter=3, tol=0, normalize=False), centrality="closeness", bins=8).fit(y, x)
     vy, vx = gpd.moving_centrality_, gpd.fixed_centrality_
     assert vy.min() == 0 and vy.max() == 1 and vx.min() == 0 and vx.max() == 1
     counts, edges = np.histogram(vy, bins=8, range=(0, 1))
@@ -93,7 +94,9 @@ def test_precomputed_graphs_and_centralities(fish_pair):
     y, x = fish_pair.moving, fish_pair.fixed
     base = RigidCPD(max_iter=5, tol=0)
     built = GPD(base, centrality="degree").fit(y, x)
-    given_graph = GPD(base, centrality="degree").fit(y, x, moving_graph=delaunay_graph(y), fixed_graph=delaunay_graph(x))
+    given_graph = GPD(base, centrality="degree").fit(
+        y, x, moving_graph=delaunay_graph(y), fixed_graph=delaunay_graph(x)
+    )
     _same_run(built, given_graph)
     raw = np.asarray((delaunay_graph(y) > 0).sum(axis=1))  # degrees
     given_values = GPD(base).fit(
@@ -120,7 +123,7 @@ def test_base_estimator_is_left_unfitted(fish_pair):
 def test_bad_gpd_input(fish_pair):
     y, x = fish_pair.moving, fish_pair.fixed
     with pytest.raises(ValueError, match="centrality"):
-        GPD(centrality="pagerank").fit(y, x)
+        GPD(centrality="nonsense").fit(y, x)
     with pytest.raises(ValueError, match="graph"):
         GPD(graph="voronoi").fit(y, x)
     with pytest.raises(TypeError, match="base_cpd"):

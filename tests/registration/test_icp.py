@@ -9,7 +9,8 @@ def test_icp_recovers_a_small_rigid_motion(fish, rot2):
     icp = ICP(tol=1e-12).fit(fish, x, true_moving=x)
     assert icp.converged_ and isinstance(icp.transform_, RigidTransform)
     np.testing.assert_allclose(icp.moving_transformed_, x, atol=1e-10)
-    np.testing.assert_array_equal(icp.correspondence_, np.arange(len(fish)))
+    np.testing.assert_array_equal(icp.fixed_to_moving_, np.arange(len(fish)))
+    np.testing.assert_array_equal(icp.moving_to_fixed_, np.arange(len(fish)))
     assert icp.history_["error"][-1] < 1e-9 < icp.history_["error"][0]
 
 
@@ -35,3 +36,95 @@ def test_icp_bad_input(fish):
         ICP().fit(fish, np.zeros((4, 3)))
     with pytest.raises(ValueError, match="not fitted"):
         ICP().transform(fish)
+
+
+# ------------------------------------------------------------------ robust ICP (issue 10)
+import pathlib  # noqa: E402
+
+from centrality_vision.exceptions import ConvergenceWarning  # noqa: E402
+from centrality_vision.registration import estimate_normals  # noqa: E402
+
+BUNNY = pathlib.Path(__file__).resolve().parents[3] / "shared" / "data" / "bunny" / "bunny.txt"
+
+
+@pytest.fixture(scope="module")
+def bunny():
+    if not BUNNY.exists():
+        pytest.skip("the bunny is in ../shared/data (not shipped)")
+    points = np.loadtxt(BUNNY)
+    return points[np.random.default_rng(0).choice(len(points), 1500, replace=False)]
+
+
+def _rotation_error_degrees(r1, r2):
+    c = (np.trace(r1.T @ r2) - 1) / 2 if r1.shape[0] == 3 else np.trace(r1.T @ r2) / 2
+    return float(np.degrees(np.arccos(np.clip(c, -1, 1))))
+
+
+def test_trimming_ignores_outliers_and_missing_parts(fish, rot2):
+    rng = np.random.default_rng(4)
+    r = rot2(6)
+    x = fish @ r.T + [0.05, 0.0]
+    keep = np.argsort(x[:, 0])[15:]  # the 15 leftmost points of the target are missing
+    fixed = np.vstack([x[keep], rng.uniform(-3, 3, (10, 2)) + [6, 0]])  # clutter far to the right
+    plain = ICP(tol=1e-12).fit(fish, fixed)
+    trimmed = ICP(tol=1e-12, trim=0.2).fit(fish, fixed)
+    assert _rotation_error_degrees(trimmed.transform_.rotation, r) < 1e-5
+    assert _rotation_error_degrees(plain.transform_.rotation, r) > 0.05
+    assert trimmed.history_["n_pairs"][-1] == len(fish) - int(0.2 * len(fish))
+    assert np.count_nonzero(trimmed.moving_to_fixed_ < 0) == int(0.2 * len(fish))
+
+
+def test_max_distance_drops_far_pairs(fish, rot2):
+    x = fish @ rot2(5).T
+    far = np.vstack([x, x[:20] + [30.0, 0.0]])
+    icp = ICP(tol=1e-12, max_distance=1.0).fit(np.vstack([fish, fish[:20] + [-30.0, 0.0]]), far)
+    np.testing.assert_allclose(icp.transform_.rotation, rot2(5), atol=1e-8)
+    assert icp.history_["n_pairs"][-1] == len(fish)
+    with pytest.warns(ConvergenceWarning, match="pairs within max_distance"):
+        ICP(max_distance=1e-9).fit(fish, fish + 1.0)
+
+
+def test_normals_by_local_pca_on_a_sphere():
+    rng = np.random.default_rng(5)
+    p = rng.normal(size=(2000, 3))
+    p /= np.linalg.norm(p, axis=1, keepdims=True)
+    n = estimate_normals(p, k=12)
+    assert np.median(np.abs(np.einsum("ij,ij->i", n, p))) > 0.99  # radial
+
+
+def test_point_to_plane_on_the_bunny_converges_in_fewer_iterations(bunny, rot3):
+    r = rot3(10, [1, 1, 0])
+    x = bunny @ r.T + [0.02, -0.01, 0.03]
+    p2p = ICP(tol=1e-10, max_iter=300).fit(bunny, x)
+    p2l = ICP(tol=1e-10, max_iter=300, metric="point_to_plane").fit(bunny, x)
+    for icp in (p2p, p2l):
+        assert _rotation_error_degrees(icp.transform_.rotation, r) < 0.05
+    assert p2l.n_iter_ < p2p.n_iter_
+
+
+def test_point_to_plane_on_a_partial_bunny_with_trimming(bunny, rot3):
+    rng = np.random.default_rng(6)
+    r = rot3(8, [0, 1, 1])
+    x = bunny @ r.T + 0.01
+    fixed = x[x[:, 0] > np.quantile(x[:, 0], 0.2)]  # 20% missing
+    fixed = fixed + rng.normal(0, 0.002, fixed.shape)
+    icp = ICP(tol=1e-10, max_iter=200, metric="point_to_plane", trim=0.25).fit(bunny, fixed)
+    assert _rotation_error_degrees(icp.transform_.rotation, r) < 0.5
+
+
+def test_icp_init_and_bad_options(fish, rot2):
+    x = fish @ rot2(120).T
+    from centrality_vision.registration import RigidTransform as RT
+
+    icp = ICP(tol=1e-12, init=RT(rot2(115), [0.0, 0.0])).fit(fish, x)
+    np.testing.assert_allclose(icp.moving_transformed_, x, atol=1e-9)
+    with pytest.raises(ValueError, match="trim"):
+        ICP(trim=1.0).fit(fish, fish)
+    with pytest.raises(ValueError, match="max_distance"):
+        ICP(max_distance=0.0).fit(fish, fish)
+    with pytest.raises(ValueError, match="metric"):
+        ICP(metric="plane").fit(fish, fish)
+    with pytest.raises(ValueError, match="scale=True"):
+        ICP(scale=True, metric="point_to_plane").fit(fish, fish)
+    with pytest.raises(TypeError, match="init"):
+        ICP(init="global").fit(fish, fish)

@@ -3,14 +3,18 @@
 Every estimator takes ``fit(moving, fixed)``: the moving set Y (M x D) is transformed onto
 the fixed set X (N x D). CPD's variants share one EM loop and one E-step computed in log
 space; GPD (the thesis' Graph-based Point Drift) is any CPD with a centrality prior fed into
-that same E-step (SPEC section 3).
+that same E-step (thesis eq. 5.10: the posterior of each pair is multiplied by a histogram
+weight of the moving point's centrality and a Gaussian in the centrality difference).
+The estimators are scikit-learn estimators (``clone``, ``get_params``/``set_params``);
+by default CPD and GPD run on both sets centred and scaled to unit RMS radius, so their
+parameters are unit-free and the results equivariant under translation and scaling.
 """
 
 from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, SimilarityTransform, random_rotation
 from ._cpd import AffineCPD, IterationInfo, NonRigidCPD, RigidCPD, Snapshots, alignment_error, initial_sigma2
 from ._estep import CentralityPrior, Posteriors
 from ._gpd import GPD, GRAPHS, centrality_prior, normalize_centrality
-from ._icp import ICP
+from ._icp import ICP, estimate_normals
 
 __all__ = [
     "RigidCPD",
@@ -18,6 +22,7 @@ __all__ = [
     "NonRigidCPD",
     "GPD",
     "ICP",
+    "estimate_normals",
     "GRAPHS",
     "IterationInfo",
     "Snapshots",

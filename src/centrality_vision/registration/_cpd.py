@@ -1,28 +1,67 @@
-"""Coherent Point Drift: rigid/similarity, affine and non-rigid, on one shared EM loop."""
+"""Coherent Point Drift: rigid/similarity, affine and non-rigid, on one shared EM loop.
+
+Conventions every variant shares:
+
+* ``fit(moving, fixed)``: the moving set Y (M x D) is transformed onto the fixed set X
+  (N x D); points are rows, a transform maps ``y -> L y + t`` as ``Y @ L.T + t``.
+* The E-step is CPD's (Myronenko and Song 2010): a Gaussian mixture with one component of
+  variance sigma2 per transformed moving point and a uniform outlier component of weight
+  ``w``, ``P(m | x_n) = exp(-|x_n - T(y_m)|^2 / 2 sigma2) / (sum_k exp(...) + c)`` with
+  ``c = (2 pi sigma2)^(D/2) w / (1 - w) M / N``, computed in log space.
+* ``normalize=True`` (the default): inside ``fit`` each set is centred on its own mean and
+  both are divided by one common factor, the RMS distance of all M + N points to their
+  set's mean, so the EM runs on sets of unit RMS radius whatever the caller's units and
+  offset. ``beta``, ``lam``, ``sigma2`` (the initial variance) and ``w`` are read in that
+  frame, which makes their defaults unit-free; every fitted transform, point set, variance
+  and history entry is mapped back to the caller's units. Because the sets start with their
+  means on top of each other, the initial pose is "centroids aligned" rather than the
+  identity (pass ``init=`` to start elsewhere).
+"""
 
 from __future__ import annotations
 
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
 
 from .._validation import ANY_DIMS, as_points, check_choice, check_float, check_int
-from ..exceptions import ConvergenceWarning, InputError
-from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, SimilarityTransform
-from ._estep import E_STEP_METHODS, CentralityPrior, _e_step, dense_posterior
+from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
+from ..transforms import (
+    AffineTransform,
+    NonRigidTransform,
+    RigidTransform,
+    SimilarityTransform,
+    centred,
+    power_of_two_scale,
+)
+from ._estep import E_STEP_METHODS, CentralityPrior, EStepPlanner, _e_step, dense_posterior
 from ._mstep import LowRankKernel, affine_m_step, gaussian_kernel, nonrigid_m_step, rigid_m_step
 
 __all__ = ["RigidCPD", "AffineCPD", "NonRigidCPD", "IterationInfo", "Snapshots", "initial_sigma2", "alignment_error"]
 
 # sigma2 below this fraction of the data's spread means the sets coincide: stop, converged.
 _SIGMA2_FLOOR = 1e-14
+# The common scale factor must keep sigma2 = scale^2 sigma2_normalised representable.
+_SCALE_RANGE = (1e-150, 1e150)
+# A transformed moving set whose RMS radius falls below this fraction of both sets' radii
+# has collapsed to a blob.
+_COLLAPSE_RADIUS = 0.05
+# ... or when the matched mass Np ends below this fraction of the (1 - w) min(M, N) expected.
+_COLLAPSE_MATCHED = 0.25
+# w="auto": start and bounds of the estimated outlier fraction.
+_AUTO_W_START, _AUTO_W_MAX = 0.1, 0.9
 
 
 @dataclass(frozen=True)
 class IterationInfo:
-    """What a ``callback`` receives after each E-step (iteration 0 is the initial state)."""
+    """What a ``callback`` receives after each E-step (iteration 0 is the initial state).
+
+    Everything is in the caller's units (also under ``normalize=True``).
+    """
 
     iteration: int
     transform: object
@@ -92,46 +131,199 @@ def alignment_error(true_moving, moving_transformed) -> float:
     return float(np.linalg.norm(a - b))
 
 
-class _CPD:
+# --------------------------------------------------------------------- the normalised frame
+@dataclass(frozen=True)
+class _Frame:
+    """``y_n = (y - moving_centre) / scale`` and ``x_n = (x - fixed_centre) / scale``."""
+
+    moving_centre: np.ndarray
+    fixed_centre: np.ndarray
+    scale: float
+
+    @staticmethod
+    def of(moving: np.ndarray, fixed: np.ndarray, normalize: bool, *, same_centre: bool = False):
+        """The frame and both sets in it (the identity frame without ``normalize``).
+
+        ``same_centre`` centres both sets on the fixed set's mean (a start pose unchanged).
+        """
+        dim = moving.shape[1]
+        if not normalize:
+            return _Frame(np.zeros(dim), np.zeros(dim), 1.0), moving, fixed
+        mu_x, xc = centred(fixed)
+        if same_centre:
+            mu_y = mu_x
+            unit = max(power_of_two_scale(moving), power_of_two_scale(mu_x[None, :]))
+            yc = ((moving / unit) - (mu_x / unit)) * unit
+        else:
+            mu_y, yc = centred(moving)
+        unit = max(power_of_two_scale(yc), power_of_two_scale(xc))
+        total = float(np.sum((yc / unit) ** 2) + np.sum((xc / unit) ** 2))
+        scale = unit * math.sqrt(total / (moving.shape[0] + fixed.shape[0]))
+        if scale == 0.0:
+            scale = 1.0  # every point of both sets is the same point: only a translation is left
+        elif not _SCALE_RANGE[0] <= scale <= _SCALE_RANGE[1]:
+            raise InputError(
+                f"`moving` and `fixed` must have an RMS radius between {_SCALE_RANGE[0]:g} and {_SCALE_RANGE[1]:g} "
+                f"(their variance must fit in float64); got {scale:.3g}."
+            )
+        return _Frame(mu_y, mu_x, scale), yc / scale, xc / scale
+
+    @property
+    def identity(self) -> bool:
+        return self.scale == 1.0 and not np.any(self.moving_centre) and not np.any(self.fixed_centre)
+
+    def points_out(self, points_n: np.ndarray) -> np.ndarray:
+        """Points of the normalised fixed frame in the caller's units."""
+        return points_n if self.identity else points_n * self.scale + self.fixed_centre
+
+    def fixed_in(self, points: np.ndarray) -> np.ndarray:
+        return points if self.identity else (points - self.fixed_centre) / self.scale
+
+    def linear_in(self, transform):
+        """A caller-units similarity or affine transform as a map of the normalised frame."""
+        linear = (
+            transform.scale * transform.rotation if isinstance(transform, SimilarityTransform) else transform.linear
+        )
+        translation = (linear @ self.moving_centre + transform.translation - self.fixed_centre) / self.scale
+        if isinstance(transform, RigidTransform):
+            return RigidTransform(transform.rotation, translation)
+        if isinstance(transform, SimilarityTransform):
+            return SimilarityTransform(transform.rotation, translation, transform.scale)
+        return AffineTransform(linear, translation)
+
+    def linear_out(self, transform_n):
+        """The inverse of :meth:`linear_in`."""
+        if self.identity:
+            return transform_n
+        is_similarity = isinstance(transform_n, SimilarityTransform)
+        linear = transform_n.scale * transform_n.rotation if is_similarity else transform_n.linear
+        translation = self.scale * transform_n.translation + self.fixed_centre - linear @ self.moving_centre
+        if isinstance(transform_n, RigidTransform):
+            return RigidTransform(transform_n.rotation, translation)
+        if is_similarity:
+            return SimilarityTransform(transform_n.rotation, translation, transform_n.scale)
+        return AffineTransform(transform_n.linear, translation)
+
+
+def _rms_radius(points: np.ndarray) -> float:
+    if points.shape[0] == 0:
+        return 0.0
+    c = points - points.mean(axis=0)
+    return float(np.sqrt(np.mean(np.sum(c * c, axis=1))))
+
+
+def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
+    if landmarks is None:
+        return None
+    arr = np.asarray(landmarks)
+    if arr.size == 0:
+        return None
+    if arr.ndim != 2 or arr.shape[1] != 2 or not (np.issubdtype(arr.dtype, np.integer) or arr.dtype == object):
+        try:
+            as_float = np.asarray(landmarks, dtype=float)
+        except (TypeError, ValueError):
+            raise TypeError(
+                f"`landmarks` must be a sequence of (moving_index, fixed_index) pairs; got {landmarks!r}."
+            ) from None
+        if as_float.ndim != 2 or as_float.shape[1] != 2 or not np.all(as_float == np.round(as_float)):
+            raise InputError(
+                "`landmarks` must be a sequence of integer (moving_index, fixed_index) pairs, shape (L, 2); "
+                f"got shape {as_float.shape}."
+            )
+        arr = as_float
+    arr = arr.astype(np.int64)
+    for column, name, size in ((0, "moving", n_moving), (1, "fixed", n_fixed)):
+        bad = (arr[:, column] < 0) | (arr[:, column] >= size)
+        if np.any(bad):
+            raise InputError(f"`landmarks` {name} indices must be in [0, {size}); got {int(arr[bad, column][0])}.")
+    if np.unique(arr[:, 0]).size != arr.shape[0]:
+        raise InputError("`landmarks` must pin each moving point at most once; got a repeated moving index.")
+    return arr
+
+
+def _with_landmarks(post, fixed, landmarks, weight):
+    """The E-step statistics with each landmark pair added as a correspondence of mass ``weight``."""
+    i, j = landmarks[:, 0], landmarks[:, 1]
+    p1 = post.p1.copy()
+    pt1 = post.pt1.copy()
+    px = post.px.copy()
+    np.add.at(p1, i, weight)
+    np.add.at(pt1, j, weight)
+    np.add.at(px, i, weight * fixed[j])
+    return replace(post, p1=p1, pt1=pt1, px=px, n_p=post.n_p + weight * landmarks.shape[0])
+
+
+def _data_sigma2(post, fixed, moved) -> float:
+    """``sum_mn P_mn |x_n - T(y_m)|^2 / (Np D)`` from the statistics of the un-augmented ``P``."""
+    x_px = float(post.pt1 @ np.einsum("ij,ij->i", fixed, fixed))
+    y_py = float(post.p1 @ np.einsum("ij,ij->i", moved, moved))
+    return (x_px - 2.0 * float(np.sum(moved * post.px)) + y_py) / (post.n_p * fixed.shape[1])
+
+
+class _CPD(BaseEstimator):
     """The EM loop shared by every CPD variant (and by GPD, which adds a prior)."""
 
-    def __init__(self, *, w=0.0, max_iter=150, tol=1e-5, sigma2=None, method="auto", callback=None, progress=False):
+    _init_kinds: tuple = (RigidTransform, SimilarityTransform, AffineTransform)
+
+    def __init__(
+        self,
+        *,
+        w=0.0,
+        max_iter=150,
+        tol=1e-5,
+        sigma2=None,
+        normalize=True,
+        init=None,
+        landmark_weight=1.0,
+        method="auto",
+        callback=None,
+        progress=False,
+        random_state=None,
+    ):
         self.w = w
         self.max_iter = max_iter
         self.tol = tol
         self.sigma2 = sigma2
+        self.normalize = normalize
+        self.init = init
+        self.landmark_weight = landmark_weight
         self.method = method
         self.callback = callback
         self.progress = progress
+        self.random_state = random_state
 
     # ----------------------------------------------------------------- parameters
-    def get_params(self) -> dict:
-        import inspect
-
-        classes = [c for c in type(self).__mro__ if issubclass(c, _CPD) and "__init__" in c.__dict__]
-        names = [p for c in classes for p in inspect.signature(c.__init__).parameters if p != "self"]
-        return {name: getattr(self, name) for name in dict.fromkeys(names)}
-
-    def __repr__(self) -> str:
-        params = ", ".join(f"{k}={v!r}" for k, v in self.get_params().items())
-        return f"{type(self).__name__}({params})"
-
     def _check_common(self):
         name = type(self).__name__
-        check_float(self.w, name=f"{name}.w", low=0.0, high=1.0, high_open=True)
+        if not (isinstance(self.w, str) and self.w == "auto"):
+            if isinstance(self.w, str):
+                raise InputError(f"`{name}.w` must be a number in [0, 1) or 'auto'; got {self.w!r}.")
+            check_float(self.w, name=f"{name}.w", low=0.0, high=1.0, high_open=True)
         check_int(self.max_iter, name=f"{name}.max_iter", low=0)
         check_float(self.tol, name=f"{name}.tol", low=0.0)
         if self.sigma2 is not None:
             check_float(self.sigma2, name=f"{name}.sigma2", low=0.0, low_open=True)
+        check_float(self.landmark_weight, name=f"{name}.landmark_weight", low=0.0, low_open=True)
         check_choice(self.method, E_STEP_METHODS, name=f"{name}.method")
         if self.callback is not None and not callable(self.callback):
             raise TypeError(f"`{name}.callback` must be callable or None; got {self.callback!r}.")
+        if not isinstance(self.normalize, (bool, np.bool_)):
+            raise TypeError(f"`{name}.normalize` must be a bool; got {self.normalize!r}.")
+        init = self.init
+        if (
+            init is not None
+            and not (isinstance(init, str) and init == "global")
+            and not isinstance(init, self._init_kinds)
+        ):
+            kinds = ", ".join(k.__name__ for k in self._init_kinds)
+            raise TypeError(f"`{name}.init` must be None, 'global' or a {kinds}; got {init!r}.")
 
     def _check_params(self):  # variant-specific checks
         pass
 
     # ----------------------------------------------------------------- variant hooks
-    def _init_state(self, moving, fixed):
+    def _init_state(self, moving, fixed, start):
+        """The state of iteration 0; ``start`` is the initial transform in the normalised frame or None."""
         raise NotImplementedError
 
     def _m_step(self, post, moving, fixed, state, sigma2):
@@ -140,11 +332,15 @@ class _CPD:
     def _penalty(self, state) -> float:
         return 0.0
 
-    def _make_transform(self, state, moving):
+    def _make_transform(self, state, moving, frame: _Frame):
+        """The transform of ``state`` in the caller's units."""
         raise NotImplementedError
 
+    def _apply(self, state, moving):
+        return state(moving)
+
     # ----------------------------------------------------------------- the loop
-    def fit(self, moving, fixed, *, true_moving=None):
+    def fit(self, moving, fixed, *, true_moving=None, landmarks=None, prior=None):
         """Register ``moving`` (Y, M x D) onto ``fixed`` (X, N x D); returns ``self``.
 
         Parameters
@@ -154,35 +350,84 @@ class _CPD:
         true_moving : array_like of shape (M, D), optional
             Where each moving point truly belongs in the fixed frame; when given,
             ``history_["error"]`` holds ``|true_moving - T(Y)|`` per iteration.
+        landmarks : sequence of (i, j) pairs, optional
+            Moving point ``i`` corresponds to fixed point ``j``. Each pair enters every
+            M-step as an extra correspondence of mass ``landmark_weight * Np / L`` (``Np``
+            the posterior mass of the data, ``L`` the number of pairs), on top of the
+            posterior: with the default weight the landmarks together count as much as
+            all other points. sigma2 is still estimated from the data alone.
+        prior : CentralityPrior or callable, optional
+            The hook GPD uses: a log prior on the (moving, fixed) pairs added to the E-step
+            (thesis eq. 5.10), or ``prior(sigma2_ratio) -> CentralityPrior | None`` called
+            before each E-step with the current sigma2 over the initial one (a schedule).
         """
-        return self._fit(moving, fixed, true_moving=true_moving, prior=None)
+        self._check_common()
+        self._check_params()
+        moving, fixed, true_moving = self._validate(moving, fixed, true_moving)
+        landmarks = _as_landmarks(landmarks, moving.shape[0], fixed.shape[0])
+        if prior is not None and not (isinstance(prior, CentralityPrior) or callable(prior)):
+            raise TypeError(f"`prior` must be a CentralityPrior, a callable or None; got {prior!r}.")
+        frame, moving_n, fixed_n = _Frame.of(moving, fixed, bool(self.normalize))
+        true_n = None if true_moving is None else frame.fixed_in(true_moving)
+        start = self._start(moving_n, fixed_n, frame)
+        self._run(moving, moving_n, fixed_n, frame, true_n, start, landmarks, prior)
+        return self
 
     def _validate(self, moving, fixed, true_moving):
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
         fixed = as_points(fixed, name="fixed", n_dims=ANY_DIMS)
         if fixed.shape[1] != moving.shape[1]:
             raise InputError(
-                f"`moving` and `fixed` must have the same number of dimensions; got {moving.shape[1]} and {fixed.shape[1]}."
+                "`moving` and `fixed` must have the same number of dimensions; "
+                f"got {moving.shape[1]} and {fixed.shape[1]}."
             )
         if true_moving is not None:
             true_moving = as_points(true_moving, name="true_moving", n_dims=(moving.shape[1],))
             if true_moving.shape != moving.shape:
-                raise InputError(f"`true_moving` must have the shape of `moving` {moving.shape}; got {true_moving.shape}.")
+                raise InputError(
+                    f"`true_moving` must have the shape of `moving` {moving.shape}; got {true_moving.shape}."
+                )
         return moving, fixed, true_moving
 
-    def _fit(self, moving, fixed, *, true_moving, prior: CentralityPrior | None):
-        self._check_common()
-        self._check_params()
-        moving, fixed, true_moving = self._validate(moving, fixed, true_moving)
-        spread = max(initial_sigma2(fixed, fixed), initial_sigma2(moving, moving), 1e-300)
+    def _start(self, moving_n, fixed_n, frame):
+        """The initial transform in the normalised frame (None: the variant's identity)."""
+        init = self.init
+        if init is None:
+            return None
+        dim = moving_n.shape[1]
+        if isinstance(init, str):  # "global"
+            from ._pose import global_pose_search
+
+            scale = bool(getattr(self, "scale", True))
+            w = _AUTO_W_START if isinstance(self.w, str) else float(self.w)
+            return global_pose_search(moving_n, fixed_n, scale=scale, w=w, random_state=self.random_state)
+        linear = init.linear if isinstance(init, AffineTransform) else init.rotation
+        if linear.shape != (dim, dim):
+            raise InputError(f"`{type(self).__name__}.init` must be a {dim}D transform; got a {linear.shape[0]}D one.")
+        return frame.linear_in(init)
+
+    def _run(self, moving, moving_n, fixed, frame, true_n, start, landmarks, prior):
+        n_fixed, n_dims = fixed.shape
+        spread = max(initial_sigma2(fixed, fixed), initial_sigma2(moving_n, moving_n))
+        spread = 1.0 if spread <= 0 else max(spread, 1e-280)  # keeps 1 / (2 floor) finite
         floor = _SIGMA2_FLOOR * spread
-        sigma2 = initial_sigma2(moving, fixed) if self.sigma2 is None else float(self.sigma2)
+        state = self._init_state(moving_n, fixed, start)
+        moving_t = self._apply(state, self._work)
+        sigma2 = initial_sigma2(moving_t, fixed) if self.sigma2 is None else float(self.sigma2)
         sigma2 = max(sigma2, floor)
-        state = self._init_state(moving, fixed)
-        moving_t = self._apply(state, moving)
-        history = {"objective": [], "sigma2": [], "error": [], "method": []}
+        sigma2_start = sigma2
+        auto_w = isinstance(self.w, str)
+        w_fraction = _AUTO_W_START if auto_w else float(self.w)
+        # w="auto" estimates the fraction of outliers under a uniform density over the fixed
+        # set's bounding box; CPD's E-step takes the weight of a density 1/N instead.
+        box = float(np.prod(np.maximum(np.ptp(fixed, axis=0), 1e-12))) if auto_w else 1.0
+        history = {"objective": [], "sigma2": [], "error": [], "method": [], "w": []}
+        log_s = math.log(frame.scale)
         converged = False
+        stopped = None
         previous = None
+        current_prior = None
+        planner = EStepPlanner()  # method='auto': the E-step path by timing, per fit
         bar = None
         if self.progress:
             from tqdm.auto import tqdm
@@ -191,118 +436,204 @@ class _CPD:
         try:
             iteration = 0
             while True:
-                post = _e_step(moving_t, fixed, sigma2, self.w, prior, method=self.method)
+                current_prior = prior(sigma2 / sigma2_start) if callable(prior) else prior
+                w_e = w_fraction
+                if auto_w and w_fraction > 0:
+                    odds = w_fraction / (1.0 - w_fraction) * n_fixed / box
+                    w_e = odds / (1.0 + odds)
+                post = _e_step(moving_t, fixed, sigma2, w_e, current_prior, method=self.method, planner=planner)
                 objective = post.neg_log_likelihood + self._penalty(state)
-                error = None if true_moving is None else float(np.linalg.norm(true_moving - moving_t))
-                history["objective"].append(objective)
+                error = None if true_n is None else float(np.linalg.norm(true_n - moving_t))
+                history["objective"].append(objective + n_fixed * n_dims * log_s)
                 history["sigma2"].append(sigma2)
                 history["error"].append(error)
                 history["method"].append(post.method)
+                history["w"].append(w_fraction)
                 if self.callback is not None:
-                    info = IterationInfo(iteration, self._make_transform(state, moving), moving_t.copy(), sigma2, objective, error)
+                    info = IterationInfo(
+                        iteration,
+                        self._make_transform(state, moving, frame),
+                        frame.points_out(moving_t),
+                        sigma2 * frame.scale**2,
+                        objective + n_fixed * n_dims * log_s,
+                        None if error is None else error * frame.scale,
+                    )
                     if self.callback(info) is True:
                         break
                 if previous is not None and abs(objective - previous) <= self.tol * max(abs(objective), 1e-300):
                     converged = True
                     break
                 if iteration > 0 and sigma2 <= floor:
-                    converged = True  # the sets coincide to rounding error
+                    converged = True  # the sets coincide to rounding error (checked below)
                     break
                 if iteration >= self.max_iter:
                     break
-                if post.n_p <= 1e-12 * fixed.shape[0]:
-                    warnings.warn(
-                        f"{type(self).__name__}: every fixed point was explained by the outlier term at iteration "
-                        f"{iteration} (sigma2={sigma2:.3g}, w={self.w}); stopped. Try a smaller `w` or a larger `sigma2`.",
-                        ConvergenceWarning,
-                        stacklevel=3,
+                if post.n_p <= 1e-12 * n_fixed:
+                    stopped = (
+                        f"every fixed point was explained by the outlier term at iteration {iteration} "
+                        f"(sigma2={sigma2 * frame.scale**2:.3g}, w={w_e:.3g}); stopped. "
+                        "Try a smaller `w` or a larger `sigma2`."
                     )
                     break
                 previous = objective
-                state, moving_t, sigma2 = self._m_step(post, moving, fixed, state, sigma2)
+                m_post = (
+                    post
+                    if landmarks is None
+                    else _with_landmarks(
+                        post, fixed, landmarks, float(self.landmark_weight) * post.n_p / landmarks.shape[0]
+                    )
+                )
+                new_state, new_moving_t, new_sigma2 = self._m_step(m_post, self._work, fixed, state, sigma2)
+                if landmarks is not None:
+                    new_sigma2 = _data_sigma2(post, fixed, new_moving_t)
+                if not np.all(np.isfinite(new_moving_t)):
+                    stopped = (
+                        f"the M-step of iteration {iteration + 1} gave non-finite points; "
+                        "stopped at the last finite state."
+                    )
+                    break
+                state, moving_t, sigma2 = new_state, new_moving_t, new_sigma2
                 if not math.isfinite(sigma2) or sigma2 <= floor:
                     sigma2 = floor
+                if auto_w:
+                    w_fraction = min(max(1.0 - post.n_p / n_fixed, 0.0), _AUTO_W_MAX)
                 iteration += 1
                 if bar is not None:
                     bar.update(1)
-                    bar.set_postfix(sigma2=f"{sigma2:.3g}")
+                    bar.set_postfix(sigma2=f"{sigma2 * frame.scale**2:.3g}")
         finally:
             if bar is not None:
                 bar.close()
-        if not converged and iteration >= self.max_iter and self.max_iter > 0 and self.tol > 0:
+        name = type(self).__name__
+        if stopped is not None:
+            warnings.warn(f"{name}: {stopped}", ConvergenceWarning, stacklevel=3)
+        elif not converged and iteration >= self.max_iter and self.max_iter > 0 and self.tol > 0:
             warnings.warn(
-                f"{type(self).__name__} stopped at max_iter={self.max_iter} before the relative change of the "
+                f"{name} stopped at max_iter={self.max_iter} before the relative change of the "
                 f"objective fell below tol={self.tol}.",
                 ConvergenceWarning,
                 stacklevel=3,
             )
-        self.transform_ = self._make_transform(state, moving)
-        self.moving_transformed_ = moving_t
-        self.sigma2_ = float(sigma2)
+        collapse = self._collapse(moving_n, fixed, moving_t, w_fraction, post)
+        if collapse is not None:
+            warnings.warn(f"{name}: {collapse}", CollapseWarning, stacklevel=3)
+            converged = False
+        scale2 = frame.scale**2
+        self.transform_ = self._make_transform(state, moving, frame)
+        self.moving_transformed_ = frame.points_out(moving_t)
+        self.sigma2_ = float(sigma2 * scale2)
         self.n_iter_ = iteration
         self.converged_ = converged
+        self.w_ = float(w_fraction)
         self.history_ = {
             "objective": np.array(history["objective"]),
-            "sigma2": np.array(history["sigma2"]),
-            "error": None if true_moving is None else np.array(history["error"]),
+            "sigma2": np.array(history["sigma2"]) * scale2,
+            "error": None if true_n is None else np.array(history["error"]) * frame.scale,
             "method": history["method"],
+            "w": np.array(history["w"]),
         }
-        self.correspondence_ = post.best
-        self.posteriors_ = post
-        self._fixed = fixed
-        self._prior = prior
-        return self
+        self.fixed_to_moving_ = post.best
+        self.posteriors_ = (
+            post
+            if frame.identity
+            else replace(
+                post,
+                px=post.px * frame.scale + post.p1[:, None] * frame.fixed_centre,
+                neg_log_likelihood=post.neg_log_likelihood + n_fixed * n_dims * log_s,
+            )
+        )
+        # the normalised state, for posterior(): c depends on sigma2 in the frame's units
+        self._posterior_state = (moving_t, fixed, sigma2, w_e, current_prior)
 
-    def _apply(self, state, moving):
-        return self._make_transform(state, moving)(moving)
+    def _collapse(self, moving_n, fixed, moving_t, w, post) -> str | None:
+        radius_y, radius_x, radius_t = _rms_radius(moving_n), _rms_radius(fixed), _rms_radius(moving_t)
+        if min(radius_y, radius_x) > 0 and radius_t < _COLLAPSE_RADIUS * min(radius_y, radius_x):
+            return (
+                f"the transformed moving set collapsed (RMS radius {radius_t / radius_y:.3g} of the moving set's); "
+                "the result is not a registration. Try normalize=True, a smaller `w`, or `init=`."
+            )
+        expected = (1.0 - w) * min(moving_n.shape[0], fixed.shape[0])
+        if post.n_p < _COLLAPSE_MATCHED * expected:
+            return (
+                f"only {post.n_p:.3g} of {fixed.shape[0]} fixed points were matched at the end (the rest taken as "
+                f"outliers; about {expected:.3g} expected with w={w:.3g}); the result is not a registration. "
+                "Try normalize=True, a smaller `w`, or `init=`."
+            )
+        return None
 
     # ----------------------------------------------------------------- results
     def transform(self, points) -> np.ndarray:
         """Apply the fitted transform to new points."""
-        self._check_fitted()
+        check_is_fitted(self, "transform_")
         return self.transform_(points)
+
+    def score(self, moving, fixed) -> float:
+        """Minus the mean distance from each fixed point to its nearest transformed moving point.
+
+        Larger is better; in the caller's units. It lets scikit-learn's model selection
+        (e.g. ``GridSearchCV(..., cv=[(index, index)])`` on sets of equal size) rank settings.
+        """
+        from scipy.spatial import cKDTree
+
+        check_is_fitted(self, "transform_")
+        moved = self.transform_(as_points(moving, name="moving", n_dims=ANY_DIMS))
+        fixed = as_points(fixed, name="fixed", n_dims=(moved.shape[1],))
+        return -float(np.mean(cKDTree(moved).query(fixed, k=1)[0]))
 
     def posterior(self) -> np.ndarray:
         """The full posterior matrix ``P`` (M x N) of the final state; ``P[m, n] = P(m | x_n)``.
 
         Memory is M x N doubles, so it refuses sets above 50 million pairs; the fitted
-        ``posteriors_`` (its row and column sums) and ``correspondence_`` are always there.
+        ``posteriors_`` (its row and column sums) and ``fixed_to_moving_`` are always there.
         """
-        self._check_fitted()
-        n_moving, n_fixed = self.moving_transformed_.shape[0], self._fixed.shape[0]
-        if n_moving * n_fixed > 50_000_000:
+        check_is_fitted(self, "transform_")
+        moving_t, fixed, sigma2, w, prior = self._posterior_state
+        if moving_t.shape[0] * fixed.shape[0] > 50_000_000:
             raise InputError(
-                f"posterior() builds an M x N matrix; M x N = {n_moving * n_fixed:,} exceeds 50,000,000. "
-                "Use `correspondence_` or `posteriors_` instead."
+                "posterior() builds an M x N matrix; "
+                f"M x N = {moving_t.shape[0] * fixed.shape[0]:,} exceeds 50,000,000. "
+                "Use `fixed_to_moving_` or `posteriors_` instead."
             )
-        return dense_posterior(self.moving_transformed_, self._fixed, self.sigma2_, self.w, self._prior)
+        return dense_posterior(moving_t, fixed, sigma2, w, prior)
 
-    def _check_fitted(self):
-        if not hasattr(self, "transform_"):
-            raise InputError(f"This {type(self).__name__} is not fitted yet; call fit(moving, fixed) first.")
+    @property
+    def correspondence_(self) -> np.ndarray:
+        """Deprecated alias of ``fixed_to_moving_`` (for each fixed point, its moving point)."""
+        check_is_fitted(self, "fixed_to_moving_")
+        warnings.warn(
+            f"`{type(self).__name__}.correspondence_` is deprecated; use `fixed_to_moving_` (same values: for each "
+            "fixed point the most probable moving point, -1 for an outlier).",
+            FutureWarning,
+            stacklevel=2,
+        )
+        return self.fixed_to_moving_
 
 
-class RigidCPD(_CPD):
-    """Rigid (``scale=False``) or similarity (``scale=True``) Coherent Point Drift.
-
-    EM on a Gaussian mixture centred on the transformed moving points with an outlier
-    component of weight ``w`` (SPEC section 3). Stops when the relative change of the
-    objective ``-sum_n log(sum_m exp(-|x_n - T(y_m)|^2 / 2 sigma2) + c) + N D/2 log sigma2``
-    between two E-steps is at most ``tol``, after ``max_iter`` M-steps, or when sigma2
-    reaches 1e-14 of the data's spread (the sets coincide).
-
-    Parameters
-    ----------
-    scale : bool, default=True
-        Estimate an isotropic scale (similarity) or not (rigid).
-    w : float in [0, 1), default=0
-        Weight of the uniform outlier component.
+_COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
+        Weight of the uniform outlier component (CPD's w), read in the normalised frame.
+        0 trusts every fixed point; use 0.1 - 0.3 when the fixed set has clutter or the
+        moving set has parts the fixed set lacks (the larger the share of such points, the
+        larger w). 'auto' estimates it during EM: the fraction of fixed points that are
+        outliers under a uniform density over the fixed set's bounding box, updated as
+        ``1 - Np / N`` after each E-step, from 0.1 and at most 0.9 (the estimate is ``w_``).
     max_iter : int, default=150
         Maximum number of M-steps.
     tol : float, default=1e-5
         Tolerance on the relative change of the objective.
     sigma2 : float, optional
-        Initial variance; by default ``sum |x_n - y_m|^2 / (D M N)``.
+        Initial variance (in the normalised frame under ``normalize=True``); by default
+        ``sum |x_n - T0(y_m)|^2 / (D M N)`` for the starting pose T0.
+    normalize : bool, default=True
+        Run EM on both sets centred and divided by their common RMS radius (see the module
+        notes); results are equivariant under translating or scaling both inputs. False
+        runs on the raw coordinates, where ``beta``, ``sigma2`` and ``w`` have units.
+    init : None, transform or 'global', default=None
+        The starting pose: None (centroids aligned under ``normalize``, else the identity),
+        a transform in the caller's units, or 'global' (a rotation search over the whole
+        sphere, ``registration._pose.global_pose_search``, seeded by ``random_state``).
+    landmark_weight : float, default=1.0
+        Mass of the ``landmarks`` given to :meth:`fit`, as a multiple of the data's posterior
+        mass shared among the pairs.
     method : {'auto', 'dense', 'truncated', 'fgt'}, default='auto'
         E-step path: every pair ('dense'); for each fixed point only the moving points whose
         term is above exp(-36.8)/M of its largest ('truncated', a cell grid: equal to dense to
@@ -313,22 +644,51 @@ class RigidCPD(_CPD):
         Called with an :class:`IterationInfo` after each E-step; return ``True`` to stop.
     progress : bool, default=False
         Show a progress bar on stderr.
+    random_state : int, Generator or None, default=None
+        Seed of ``init='global'``."""
 
-    Attributes
-    ----------
-    transform_ : RigidTransform or SimilarityTransform
+_COMMON_ATTRIBUTES = """transform_ : transform
+        In the caller's units.
     moving_transformed_ : ndarray of shape (M, D)
     sigma2_ : float
+        Final variance, in the caller's units.
     n_iter_ : int
         Number of M-steps taken.
     converged_ : bool
+        The objective's relative change fell below ``tol`` (or the sets coincide); False on
+        ``max_iter``, on a stop for non-finite values and when the result collapsed (a
+        :class:`~centrality_vision.exceptions.CollapseWarning` is issued then).
+    w_ : float
+        The outlier weight used at the end (``w``, or the estimate of ``w='auto'``).
     history_ : dict
-        ``objective``, ``sigma2`` and ``error`` (or None without ``true_moving``), entry ``k``
-        for the state after ``k`` M-steps; ``method`` the E-step path of each.
-    correspondence_ : ndarray of shape (N,)
-        For each fixed point the most probable moving point, -1 for an outlier.
+        ``objective``, ``sigma2``, ``error`` (None without ``true_moving``) and ``w``: entry
+        ``k`` for the state after ``k`` M-steps, in the caller's units; ``method`` the
+        E-step path of each.
+    fixed_to_moving_ : ndarray of shape (N,)
+        For each fixed point the most probable moving point, -1 for an outlier
+        (``correspondence_`` is its deprecated alias).
     posteriors_ : Posteriors
-        The E-step statistics of the final state.
+        The E-step statistics of the final state (``px`` and the likelihood in the caller's units)."""
+
+
+class RigidCPD(_CPD):
+    """Rigid (``scale=False``) or similarity (``scale=True``) Coherent Point Drift.
+
+    EM on a Gaussian mixture centred on the transformed moving points with an outlier
+    component of weight ``w`` (the module notes give the posterior). Stops when the relative
+    change of the objective ``-sum_n log(sum_m exp(-|x_n - T(y_m)|^2 / 2 sigma2) + c) + N D/2 log sigma2``
+    between two E-steps is at most ``tol``, after ``max_iter`` M-steps, or when sigma2
+    reaches 1e-14 of the data's spread (the sets coincide).
+
+    Parameters
+    ----------
+    scale : bool, default=True
+        Estimate an isotropic scale (similarity) or not (rigid).
+    {common}
+
+    Attributes
+    ----------
+    {attributes}
 
     Examples
     --------
@@ -339,30 +699,82 @@ class RigidCPD(_CPD):
     >>> reg = RigidCPD(scale=True, tol=1e-10).fit(y, x)
     >>> round(reg.transform_.scale, 6), bool(np.allclose(reg.moving_transformed_, x, atol=1e-6))
     (1.5, True)
+    >>> far = RigidCPD(scale=True, tol=1e-10).fit(1e6 * y + 3e8, 1e6 * x + 3e8)  # other units, far away
+    >>> bool(np.allclose(far.transform_.rotation, reg.transform_.rotation, atol=1e-9))
+    True
     """
 
-    def __init__(self, *, scale=True, w=0.0, max_iter=150, tol=1e-5, sigma2=None, method="auto", callback=None, progress=False):
-        super().__init__(w=w, max_iter=max_iter, tol=tol, sigma2=sigma2, method=method, callback=callback, progress=progress)
+    _init_kinds = (RigidTransform, SimilarityTransform)
+
+    def __init__(
+        self,
+        *,
+        scale=True,
+        w=0.0,
+        max_iter=150,
+        tol=1e-5,
+        sigma2=None,
+        normalize=True,
+        init=None,
+        landmark_weight=1.0,
+        method="auto",
+        callback=None,
+        progress=False,
+        random_state=None,
+    ):
+        super().__init__(
+            w=w,
+            max_iter=max_iter,
+            tol=tol,
+            sigma2=sigma2,
+            normalize=normalize,
+            init=init,
+            landmark_weight=landmark_weight,
+            method=method,
+            callback=callback,
+            progress=progress,
+            random_state=random_state,
+        )
         self.scale = scale
 
     def _check_params(self):
         if not isinstance(self.scale, (bool, np.bool_)):
             raise TypeError(f"`RigidCPD.scale` must be a bool; got {self.scale!r}.")
+        if not self.scale and isinstance(self.init, SimilarityTransform) and not isinstance(self.init, RigidTransform):
+            if self.init.scale != 1.0:
+                raise InputError(f"`RigidCPD.init` must have scale 1 when scale=False; got {self.init.scale!r}.")
 
-    def _init_state(self, moving, fixed):
+    def _init_state(self, moving, fixed, start):
+        self._work = moving
         dim = moving.shape[1]
-        return SimilarityTransform(np.eye(dim), np.zeros(dim)) if self.scale else RigidTransform(np.eye(dim), np.zeros(dim))
+        if start is None:
+            return (
+                SimilarityTransform(np.eye(dim), np.zeros(dim))
+                if self.scale
+                else RigidTransform(np.eye(dim), np.zeros(dim))
+            )
+        if self.scale:
+            return SimilarityTransform(start.rotation, start.translation, start.scale)
+        return RigidTransform(start.rotation, start.translation)
 
     def _m_step(self, post, moving, fixed, state, sigma2):
         transform, sigma2 = rigid_m_step(post, moving, fixed, scale=bool(self.scale))
         return transform, transform(moving), sigma2
 
-    def _make_transform(self, state, moving):
-        return state
+    def _make_transform(self, state, moving, frame):
+        return frame.linear_out(state)
 
 
 class AffineCPD(_CPD):
-    """Affine Coherent Point Drift; the parameters and attributes of :class:`RigidCPD`.
+    """Affine Coherent Point Drift.
+
+    Parameters
+    ----------
+    {common}
+
+    Attributes
+    ----------
+    {attributes}
 
     Examples
     --------
@@ -374,65 +786,108 @@ class AffineCPD(_CPD):
     True
     """
 
-    def _init_state(self, moving, fixed):
+    def _init_state(self, moving, fixed, start):
+        self._work = moving
         dim = moving.shape[1]
-        return AffineTransform(np.eye(dim), np.zeros(dim))
+        if start is None:
+            return AffineTransform(np.eye(dim), np.zeros(dim))
+        linear = start.linear if isinstance(start, AffineTransform) else start.scale * start.rotation
+        return AffineTransform(linear, start.translation)
 
     def _m_step(self, post, moving, fixed, state, sigma2):
         transform, sigma2 = affine_m_step(post, moving, fixed)
         return transform, transform(moving), sigma2
 
-    def _make_transform(self, state, moving):
-        return state
+    def _make_transform(self, state, moving, frame):
+        return frame.linear_out(state)
 
 
 class NonRigidCPD(_CPD):
     """Non-rigid Coherent Point Drift: a motion-coherent displacement field.
 
-    ``T(Y) = Y + G W`` with ``G[i, j] = exp(-|y_i - y_j|^2 / (2 beta^2))``, regularised by
-    ``lam / 2 tr(W^T G W)`` (added to the objective). Other parameters and attributes as in
-    :class:`RigidCPD`; ``transform_`` is a :class:`NonRigidTransform` that can move any point.
+    ``T(Y) = Y + G C`` with ``G[i, j] = exp(-|y_i - y_j|^2 / (2 beta^2))`` and coefficients
+    ``C`` (W in the CPD paper), regularised by ``lam / 2 tr(C^T G C)`` (added to the
+    objective). With ``init=`` the field acts on ``init(Y)`` (the pose is kept, not refined).
+    ``transform_`` is a :class:`NonRigidTransform` that can move any point.
 
     Parameters
     ----------
     beta : float, default=2.0
-        Width of the Gaussian kernel, in the units of the points.
+        Width of the Gaussian kernel (in the normalised frame under ``normalize=True``, where
+        the sets have unit RMS radius; in the caller's units otherwise).
     lam : float, default=2.0
         Strength of the smoothness regularisation (lambda of the CPD paper).
     low_rank : int, 'auto' or None, default='auto'
         Number of eigenpairs of ``G`` kept (the CPD paper's fast variant, O(M K^2) per
         iteration instead of an O(M^3) solve). None solves exactly; 'auto' is exact up to
         500 moving points and keeps ``ceil(sqrt(M))`` eigenpairs (at least 50) above.
+    {common}
+
+    Attributes
+    ----------
+    {attributes}
 
     Examples
     --------
     >>> import numpy as np
     >>> y = np.random.default_rng(0).random((50, 2))
     >>> x = y + 0.05 * np.sin(3 * y[:, ::-1])
-    >>> reg = NonRigidCPD(beta=0.5, lam=0.5, tol=1e-8).fit(y, x)
+    >>> reg = NonRigidCPD(beta=1.0, lam=0.5, tol=1e-8).fit(y, x)
     >>> bool(np.linalg.norm(reg.moving_transformed_ - x) < 0.1 * np.linalg.norm(y - x))
     True
     """
 
     def __init__(
-        self, *, beta=2.0, lam=2.0, low_rank="auto", w=0.0, max_iter=150, tol=1e-5, sigma2=None, method="auto",
-        callback=None, progress=False,
+        self,
+        *,
+        beta=2.0,
+        lam=2.0,
+        low_rank="auto",
+        w=0.0,
+        max_iter=150,
+        tol=1e-5,
+        sigma2=None,
+        normalize=True,
+        init=None,
+        landmark_weight=1.0,
+        method="auto",
+        callback=None,
+        progress=False,
+        random_state=None,
     ):
-        super().__init__(w=w, max_iter=max_iter, tol=tol, sigma2=sigma2, method=method, callback=callback, progress=progress)
+        super().__init__(
+            w=w,
+            max_iter=max_iter,
+            tol=tol,
+            sigma2=sigma2,
+            normalize=normalize,
+            init=init,
+            landmark_weight=landmark_weight,
+            method=method,
+            callback=callback,
+            progress=progress,
+            random_state=random_state,
+        )
         self.beta = beta
         self.lam = lam
         self.low_rank = low_rank
 
     def _check_params(self):
-        check_float(self.beta, name="NonRigidCPD.beta", low=0.0, low_open=True)
-        check_float(self.lam, name="NonRigidCPD.lam", low=0.0, low_open=True)
-        if not (self.low_rank is None or self.low_rank == "auto"):
+        beta = check_float(self.beta, name="NonRigidCPD.beta", low=0.0, low_open=True)
+        if not 1e-150 <= beta <= 1e150:
+            raise InputError(
+                f"`NonRigidCPD.beta` must be between 1e-150 and 1e150 (beta^2 must be representable); got {beta!r}."
+            )
+        lam = check_float(self.lam, name="NonRigidCPD.lam", low=0.0, low_open=True)
+        if lam < 1e-150 or lam > 1e150:
+            raise InputError(f"`NonRigidCPD.lam` must be between 1e-150 and 1e150; got {lam!r}.")
+        if not (self.low_rank is None or (isinstance(self.low_rank, str) and self.low_rank == "auto")):
             check_int(self.low_rank, name="NonRigidCPD.low_rank", low=1)
 
     def _rank(self, n_moving: int):
         if self.low_rank is None:
             return None
-        if self.low_rank == "auto":
+        if isinstance(self.low_rank, str):  # 'auto'
             if n_moving <= 500:
                 return None
             rank = max(50, math.ceil(math.sqrt(n_moving)))
@@ -441,30 +896,62 @@ class NonRigidCPD(_CPD):
             return None  # ARPACK needs k < n; a full-rank "approximation" is the exact kernel
         return int(self.low_rank)
 
-    def _init_state(self, moving, fixed):
+    def _init_state(self, moving, fixed, start):
+        # the field acts on the pre-mapped moving points; the pre-map is kept for transform_
+        self._pre = start
+        self._work = moving if start is None else start(moving)
         rank = self._rank(moving.shape[0])
-        kernel = gaussian_kernel(moving, moving, self.beta) if rank is None else LowRankKernel(moving, self.beta, rank)
-        return {"kernel": kernel, "w": np.zeros_like(moving)}
+        beta = float(self.beta)
+        kernel = (
+            gaussian_kernel(self._work, self._work, beta) if rank is None else LowRankKernel(self._work, beta, rank)
+        )
+        return {"kernel": kernel, "coefficients": np.zeros_like(moving)}
 
     def _apply(self, state, moving):
         return moving.copy()
 
     def _penalty(self, state) -> float:
-        w, kernel = state["w"], state["kernel"]
-        if not np.any(w):
+        coefficients, kernel = state["coefficients"], state["kernel"]
+        if not np.any(coefficients):
             return 0.0
-        g_term = kernel.penalty(w) if isinstance(kernel, LowRankKernel) else float(np.sum(w * (kernel @ w)))
+        if isinstance(kernel, LowRankKernel):
+            g_term = kernel.penalty(coefficients)
+        else:
+            g_term = float(np.sum(coefficients * (kernel @ coefficients)))
         return 0.5 * self.lam * g_term
 
     def _m_step(self, post, moving, fixed, state, sigma2):
-        w, moved, sigma2 = nonrigid_m_step(post, moving, fixed, state["kernel"], self.lam, sigma2)
-        return {"kernel": state["kernel"], "w": w}, moved, sigma2
+        coefficients, moved, sigma2 = nonrigid_m_step(post, moving, fixed, state["kernel"], self.lam, sigma2)
+        return {"kernel": state["kernel"], "coefficients": coefficients}, moved, sigma2
 
-    def _make_transform(self, state, moving):
-        kernel, w = state["kernel"], state["w"]
+    def _make_transform(self, state, moving, frame):
+        kernel, coefficients = state["kernel"], state["coefficients"]
         if isinstance(kernel, LowRankKernel):
-            # G Q Q^T W ~ Q diag(values) Q^T W: coefficients projected on the kept eigenvectors
+            # G Q Q^T C ~ Q diag(values) Q^T C: coefficients projected on the kept eigenvectors
             # give a field defined everywhere that matches the low-rank iterate at the
             # moving points up to the discarded tail of G's spectrum
-            w = kernel.vectors @ (kernel.vectors.T @ w)
-        return NonRigidTransform(moving, w, self.beta)
+            coefficients = kernel.vectors @ (kernel.vectors.T @ coefficients)
+        pre = self._pre
+        dim = moving.shape[1]
+        linear = (
+            np.eye(dim)
+            if pre is None
+            else (pre.linear if isinstance(pre, AffineTransform) else pre.scale * pre.rotation)
+        )
+        translation_n = np.zeros(dim) if pre is None else pre.translation
+        if frame.identity and pre is None:
+            return NonRigidTransform(self._work, coefficients, self.beta)
+        # u = s * pre_n((y - mu_y) / s) + mu_x = L y + t; the field scales with s
+        translation = frame.scale * translation_n + frame.fixed_centre - linear @ frame.moving_centre
+        return NonRigidTransform(
+            frame.points_out(self._work),
+            frame.scale * coefficients,
+            frame.scale * float(self.beta),
+            linear=linear,
+            translation=translation,
+        )
+
+
+for _cls in (RigidCPD, AffineCPD, NonRigidCPD):
+    _cls.__doc__ = _cls.__doc__.replace("{common}", _COMMON_PARAMETERS).replace("{attributes}", _COMMON_ATTRIBUTES)
+del _cls

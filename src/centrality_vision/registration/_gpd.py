@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
-import copy
+from dataclasses import replace
 
 import numpy as np
+from sklearn.base import BaseEstimator, clone
+from sklearn.utils.validation import check_is_fitted
 
 from .. import graphs as _graphs
 from .._validation import ANY_DIMS, as_graph, as_points, check_choice, check_float, check_int
 from ..centrality import CENTRALITIES, compute
 from ..exceptions import InputError
-from ._cpd import RigidCPD, _CPD
+from ..transforms import centred, power_of_two_scale
+from ._cpd import _CPD, RigidCPD
 from ._estep import CentralityPrior
 
 __all__ = ["GPD", "GRAPHS", "centrality_prior", "normalize_centrality"]
@@ -25,9 +28,24 @@ def _edgeless(points):
     return sparse.csr_array((n, n))
 
 
+def _unit_radius(points: np.ndarray) -> np.ndarray:
+    """``points`` centred and scaled to unit RMS radius (the graphs below are similarity invariant)."""
+    _, c = centred(points)
+    unit = power_of_two_scale(c)
+    radius = unit * float(np.sqrt(np.mean(np.sum((c / unit) ** 2, axis=1))))
+    return c / radius if radius > 0 else c
+
+
 def _build_graph(points: np.ndarray, graph, k: int):
     if callable(graph):
-        return as_graph(graph(points), name="graph(points)")
+        built = as_graph(graph(points), name="graph(points)")
+        if built.shape[0] != points.shape[0]:
+            raise InputError(
+                f"`graph(points)` must return a graph with one node per point ({points.shape[0]}); "
+                f"got {built.shape[0]} nodes."
+            )
+        return built
+    points = _unit_radius(points)
     if points.shape[0] < 3 and graph in ("delaunay", "gabriel"):
         return _graphs.complete_graph(points) if points.shape[0] > 1 else _edgeless(points)
     if graph == "delaunay":
@@ -65,7 +83,7 @@ def normalize_centrality(values, *, name: str = "values") -> np.ndarray:
 
 
 def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> CentralityPrior:
-    """GPD's prior from normalised centralities of the moving and fixed sets (SPEC section 3).
+    """GPD's prior from normalised centralities of the moving and fixed sets (thesis eq. 5.10).
 
     ``h(m)`` is the share of moving points whose centrality falls in the histogram bin of
     ``v(y_m)`` (``bins`` equal bins on [0, 1], or any ``numpy.histogram`` rule name). It is
@@ -108,25 +126,47 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> Cen
     return CentralityPrior(log_weight, vy.copy(), vx.copy(), inv2phi2, (1.0 - kappa) / kappa)
 
 
-class GPD:
+_SCHEDULES = ("anneal",)
+
+
+class _Schedule:
+    """A prior that changes with sigma2 (picklable, so a fitted GPD can be copied)."""
+
+    def __init__(self, prior: CentralityPrior, schedule):
+        self.prior = prior
+        self.schedule = schedule
+
+    def __call__(self, sigma2_ratio: float):
+        if self.schedule == "anneal":
+            return replace(self.prior, scale=self.prior.scale * min(1.0, sigma2_ratio))
+        return self.prior if sigma2_ratio >= self.schedule else None
+
+
+class GPD(BaseEstimator):
     """Graph-based Point Drift: any CPD whose E-step is weighted by a centrality prior.
 
     Builds a data-graph on each set, computes a centrality on each, normalises it to [0, 1]
-    and runs ``base_cpd`` with the posterior of thesis eq. 5.10 (SPEC section 3):
+    and fits a clone of ``base_cpd`` with the posterior of thesis eq. 5.10:
     ``P_g(m | x_n) = h(m) exp(psi(x_n, m)) / (sum_k h(k) exp(psi(x_n, k)) + c)``,
-    ``psi = -(|x_n - T(y_m)|^2 / (2 sigma2) + (v(x_n) - v(y_m))^2 / (2 phi^2))``.
-    The M-steps are the base CPD's, unchanged. The graphs and centralities are computed once,
-    on the sets as given (topology does not move with the transform).
+    ``psi = -(|x_n - T(y_m)|^2 / (2 sigma2) + (v(x_n) - v(y_m))^2 / (2 phi^2))``
+    (``h`` the share of moving points in the histogram bin of ``v(y_m)``, ``c`` CPD's outlier
+    constant). The M-steps are the base CPD's, unchanged, and so are its ``normalize``,
+    ``init`` and ``landmarks``. The graphs and centralities are computed once, on the sets
+    as given (topology does not move with the transform); named graphs are built on each set
+    centred and scaled to unit RMS radius, which leaves them unchanged but well conditioned.
+    With a complete or edgeless graph every centrality is constant and GPD is CPD exactly
+    (Theorem 1).
 
     Parameters
     ----------
     base_cpd : RigidCPD, AffineCPD or NonRigidCPD, optional
         The CPD whose loop, M-step and stopping rule are used (default ``RigidCPD()``).
-        It is copied, never fitted itself.
+        It is cloned (``sklearn.base.clone``), never fitted itself; its ``callback`` is
+        shared with the clone, not copied.
     centrality : str or callable, default='closeness'
         One of :data:`centrality_vision.centrality.CENTRALITIES`, or ``f(graph) -> values``.
     graph : str or callable, default='delaunay'
-        One of :data:`GRAPHS` or ``f(points) -> sparse graph``.
+        One of :data:`GRAPHS` or ``f(points) -> sparse graph`` with one node per point.
     bins : int or str, default=10
         Histogram bins for ``h(m)`` (see :func:`centrality_prior`).
     phi : float, optional
@@ -135,6 +175,11 @@ class GPD:
     kappa : float in (0, 1], optional
         Geometry-vs-topology balance ``kappa A + (1 - kappa) B`` (thesis 5.4.5); None or 0.5
         is the thesis' equal weighting, 1 is plain CPD.
+    prior_schedule : None, 'anneal' or float in (0, 1), default=None
+        How the prior's weight follows sigma2: None keeps it (the thesis); 'anneal' scales
+        it by ``sigma2 / sigma2_0`` (the prior guides the coarse start and fades as the
+        sets close in); a float ``f`` keeps it while ``sigma2 >= f sigma2_0`` and then runs
+        plain CPD.
     weights : bool, default=False
         Use edge lengths in the centrality (shortest paths by length) instead of hop counts.
     k : int, default=6
@@ -142,10 +187,16 @@ class GPD:
 
     Attributes
     ----------
-    The fitted attributes of the base CPD (``transform_``, ``moving_transformed_``,
-    ``sigma2_``, ``n_iter_``, ``converged_``, ``history_``, ``correspondence_``,
-    ``posteriors_``), plus ``moving_centrality_`` and ``fixed_centrality_`` (normalised),
-    ``prior_`` (:class:`CentralityPrior`) and ``estimator_`` (the fitted copy of base_cpd).
+    estimator_ : RigidCPD, AffineCPD or NonRigidCPD
+        The fitted clone of ``base_cpd``. Its fitted attributes (``transform_``,
+        ``moving_transformed_``, ``sigma2_``, ``n_iter_``, ``converged_``, ``history_``,
+        ``fixed_to_moving_``, ``posteriors_``, ...) are readable on the GPD itself.
+    moving_centrality_, fixed_centrality_ : ndarray
+        The normalised centralities.
+    moving_graph_, fixed_graph_ : sparse array or None
+        The graphs (None where centralities were given).
+    prior_ : CentralityPrior
+        The prior at full weight.
 
     Examples
     --------
@@ -159,23 +210,36 @@ class GPD:
     True
     """
 
-    _FITTED = ("transform_", "moving_transformed_", "sigma2_", "n_iter_", "converged_", "history_", "correspondence_", "posteriors_")
-
-    def __init__(self, base_cpd=None, *, centrality="closeness", graph="delaunay", bins=10, phi=None, kappa=None, weights=False, k=6):
+    def __init__(
+        self,
+        base_cpd=None,
+        *,
+        centrality="closeness",
+        graph="delaunay",
+        bins=10,
+        phi=None,
+        kappa=None,
+        prior_schedule=None,
+        weights=False,
+        k=6,
+    ):
         self.base_cpd = base_cpd
         self.centrality = centrality
         self.graph = graph
         self.bins = bins
         self.phi = phi
         self.kappa = kappa
+        self.prior_schedule = prior_schedule
         self.weights = weights
         self.k = k
 
-    def __repr__(self) -> str:
-        return (
-            f"GPD({self.base_cpd!r}, centrality={self.centrality!r}, graph={self.graph!r}, bins={self.bins!r}, "
-            f"phi={self.phi!r}, kappa={self.kappa!r}, weights={self.weights!r}, k={self.k!r})"
-        )
+    def __getattr__(self, name):
+        # the base estimator's fitted attributes, read through estimator_ (no copies kept)
+        if name.endswith("_") and not name.startswith("_"):
+            estimator = self.__dict__.get("estimator_")
+            if estimator is not None:
+                return getattr(estimator, name)
+        raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
 
     def _check_params(self):
         if self.base_cpd is not None and not isinstance(self.base_cpd, _CPD):
@@ -187,6 +251,11 @@ class GPD:
         if not isinstance(self.weights, (bool, np.bool_)):
             raise TypeError(f"`weights` must be a bool; got {self.weights!r}.")
         check_int(self.k, name="k", low=1)
+        schedule = self.prior_schedule
+        if isinstance(schedule, str):
+            check_choice(schedule, _SCHEDULES, name="prior_schedule")
+        elif schedule is not None:
+            check_float(schedule, name="prior_schedule", low=0.0, high=1.0, low_open=True, high_open=True)
 
     def _centrality(self, points, graph, given, name):
         if given is not None:
@@ -206,21 +275,34 @@ class GPD:
         else:
             graph = as_graph(graph, name=f"{name}_graph")
             if graph.shape[0] != points.shape[0]:
-                raise InputError(f"`{name}_graph` must have {points.shape[0]} nodes, one per point; got {graph.shape[0]}.")
+                raise InputError(
+                    f"`{name}_graph` must have {points.shape[0]} nodes, one per point; got {graph.shape[0]}."
+                )
         if callable(self.centrality):
             values = np.asarray(self.centrality(graph), dtype=float)
             if values.shape != (points.shape[0],):
                 raise InputError(f"`centrality(graph)` must return shape ({points.shape[0]},); got {values.shape}.")
         else:
-            values = compute(graph, self.centrality, weights=bool(self.weights))
+            values = compute(graph, self.centrality, weights=True) if self.weights else compute(graph, self.centrality)
         return normalize_centrality(values, name=f"{name} centrality"), graph
 
-    def fit(self, moving, fixed, *, true_moving=None, moving_graph=None, fixed_graph=None, moving_centrality=None, fixed_centrality=None):
+    def fit(
+        self,
+        moving,
+        fixed,
+        *,
+        true_moving=None,
+        landmarks=None,
+        moving_graph=None,
+        fixed_graph=None,
+        moving_centrality=None,
+        fixed_centrality=None,
+    ):
         """Register ``moving`` onto ``fixed``; returns ``self``.
 
         ``moving_graph``/``fixed_graph`` (sparse adjacency, one node per point) or
         ``moving_centrality``/``fixed_centrality`` (raw values, normalised here) replace the
-        ones GPD would build. ``true_moving`` as in :meth:`RigidCPD.fit`.
+        ones GPD would build. ``true_moving`` and ``landmarks`` as in :meth:`RigidCPD.fit`.
         """
         self._check_params()
         base = RigidCPD() if self.base_cpd is None else self.base_cpd
@@ -229,26 +311,28 @@ class GPD:
         vy, gy = self._centrality(moving_arr, moving_graph, moving_centrality, "moving")
         vx, gx = self._centrality(fixed_arr, fixed_graph, fixed_centrality, "fixed")
         prior = centrality_prior(vy, vx, bins=self.bins, phi=self.phi, kappa=self.kappa)
-        estimator = copy.copy(base)
-        estimator._fit(moving_arr, fixed_arr, true_moving=true_moving, prior=prior)
-        for name in self._FITTED:
-            setattr(self, name, getattr(estimator, name))
+        hook = prior if self.prior_schedule is None else _Schedule(prior, self.prior_schedule)
+        # clone deep-copies parameters; the callback is a hook the caller watches, so it is shared
+        estimator = clone(base).set_params(callback=base.callback)
+        self.estimator_ = estimator.fit(moving_arr, fixed_arr, true_moving=true_moving, landmarks=landmarks, prior=hook)
         self.moving_centrality_ = vy
         self.fixed_centrality_ = vx
         self.moving_graph_ = gy
         self.fixed_graph_ = gx
         self.prior_ = prior
-        self.estimator_ = estimator
         return self
 
     def transform(self, points) -> np.ndarray:
         """Apply the fitted transform to new points."""
-        if not hasattr(self, "estimator_"):
-            raise InputError("This GPD is not fitted yet; call fit(moving, fixed) first.")
+        check_is_fitted(self, "estimator_")
         return self.estimator_.transform(points)
+
+    def score(self, moving, fixed) -> float:
+        """The fitted base estimator's :meth:`RigidCPD.score`."""
+        check_is_fitted(self, "estimator_")
+        return self.estimator_.score(moving, fixed)
 
     def posterior(self) -> np.ndarray:
         """The full GPD posterior matrix (M x N) of the final state; see :meth:`RigidCPD.posterior`."""
-        if not hasattr(self, "estimator_"):
-            raise InputError("This GPD is not fitted yet; call fit(moving, fixed) first.")
+        check_is_fitted(self, "estimator_")
         return self.estimator_.posterior()

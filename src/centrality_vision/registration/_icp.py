@@ -1,57 +1,139 @@
-"""Iterative Closest Point (Besl and McKay 1992) with a k-d tree and a closed-form update."""
+"""Iterative Closest Point (Besl and McKay 1992; Chen and Medioni 1992) with a k-d tree.
+
+Point-to-point updates are closed form (SVD, proper rotation); point-to-plane updates solve
+the linearised problem for a small rotation and a translation and compose it with the
+current pose. Pairs can be limited by a maximum distance and trimmed (Chetverikov et al.'s
+trimmed ICP: the worst fraction dropped at each iteration).
+"""
 
 from __future__ import annotations
 
+import math
 import warnings
 
 import numpy as np
 from scipy.spatial import cKDTree
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
 
 from .._parallel import get_num_threads
-from .._validation import ANY_DIMS, as_points, check_float, check_int
+from .._validation import ANY_DIMS, as_points, check_choice, check_float, check_int
 from ..exceptions import ConvergenceWarning, InputError
 from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity
-from ._cpd import IterationInfo
+from ._cpd import IterationInfo, _Frame
 
-__all__ = ["ICP"]
+__all__ = ["ICP", "estimate_normals"]
 
-
-def _fit(source, target, scale: bool):
-    """Least-squares rigid/similarity transform taking ``source`` rows onto ``target`` rows."""
-    rotation, translation, s = least_squares_similarity(source, target, scale=scale)
-    return SimilarityTransform(rotation, translation, s) if scale else RigidTransform(rotation, translation)
+METRICS = ("point_to_point", "point_to_plane")
+# A mean squared residual below this (sets of unit RMS radius) is rounding error: converged.
+_COINCIDE = 1e-26
 
 
-class ICP:
+def estimate_normals(points, *, k: int = 10) -> np.ndarray:
+    """Unit normals by local PCA: for each point, the direction of least variance of its
+    ``k`` nearest neighbours (itself included). The sign is arbitrary.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> g = np.stack(np.meshgrid(np.arange(5.0), np.arange(5.0)), -1).reshape(-1, 2)
+    >>> plane = np.c_[g, np.zeros(25)]  # the plane z = 0
+    >>> bool(np.allclose(np.abs(estimate_normals(plane, k=6)[:, 2]), 1.0))
+    True
+    """
+    points = as_points(points, name="points", n_dims=(2, 3), min_points=2)
+    k = min(check_int(k, name="k", low=2), points.shape[0])
+    _, neighbours = cKDTree(points).query(points, k=k, workers=get_num_threads())
+    patches = points[neighbours]  # (n, k, D)
+    patches = patches - patches.mean(axis=1, keepdims=True)
+    cov = np.einsum("nki,nkj->nij", patches, patches)
+    _, vectors = np.linalg.eigh(cov)  # ascending eigenvalues
+    return np.ascontiguousarray(vectors[:, :, 0])
+
+
+def _small_rotation(omega: np.ndarray, n_dims: int) -> np.ndarray:
+    """The rotation of angle vector ``omega`` (a scalar angle in 2D, Rodrigues in 3D)."""
+    if n_dims == 2:
+        a = float(omega[0])
+        return np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    angle = float(np.linalg.norm(omega))
+    if angle == 0.0:
+        return np.eye(3)
+    axis = omega / angle
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
+
+
+def _point_to_plane_step(current: np.ndarray, targets: np.ndarray, normals: np.ndarray):
+    """``(R, t)`` minimising ``sum (n_i . (R p_i + t - q_i))^2`` linearised in the rotation."""
+    n_dims = current.shape[1]
+    centre = current.mean(axis=0)
+    p = current - centre  # rotate about the centroid: better conditioned
+    if n_dims == 2:
+        rot_part = (p[:, 0] * normals[:, 1] - p[:, 1] * normals[:, 0])[:, None]
+    else:
+        rot_part = np.cross(p, normals)
+    a = np.hstack([rot_part, normals])
+    b = np.einsum("ij,ij->i", targets - current, normals)
+    solution = np.linalg.lstsq(a, b, rcond=None)[0]
+    n_rot = 1 if n_dims == 2 else 3
+    rotation = _small_rotation(solution[:n_rot], n_dims)
+    translation = solution[n_rot:] + centre - rotation @ centre
+    return rotation, translation
+
+
+class ICP(BaseEstimator):
     """Iterative Closest Point: match each moving point to its nearest fixed point, refit.
 
     Each iteration pairs every transformed moving point with its closest fixed point (k-d
-    tree) and solves the least-squares rigid (or similarity, ``scale=True``) transform of the
-    original moving set onto those partners in closed form (SVD, proper rotation). Stops when
-    the relative change of the mean squared distance is at most ``tol``, or after
-    ``max_iter`` updates. ICP converges to the nearest local minimum: start it close.
+    tree), keeps the pairs within ``max_distance`` and drops the ``trim`` fraction with the
+    largest distances, and solves for the pose: the least-squares rigid (or similarity,
+    ``scale=True``) transform of the kept moving points onto their partners in closed form
+    (``metric='point_to_point'``), or the rigid motion minimising the squared distances to
+    the partners' tangent planes (``'point_to_plane'``, normals of the fixed set by local
+    PCA over ``k_normals`` neighbours). Stops when the relative change of the objective
+    (the mean squared residual of the kept pairs) is at most ``tol``, or after ``max_iter``
+    updates. ICP converges to the nearest local minimum: start it close (``init=``).
+
+    The work is done on both sets centred on the fixed set's mean and divided by their
+    common RMS radius (the start pose is unchanged by this), so huge or tiny coordinates
+    neither overflow nor lose precision; results are in the caller's units.
 
     Parameters
     ----------
     scale : bool, default=False
+        Also fit an isotropic scale (point-to-point only).
     max_iter : int, default=100
     tol : float, default=1e-6
+    max_distance : float, optional
+        Pairs farther apart than this (in the caller's units) are ignored.
+    trim : float in [0, 1), default=0
+        Fraction of the pairs with the largest distances ignored at each iteration; set it
+        to about the share of moving points that have no partner (overlap 80% -> 0.2).
+    metric : {'point_to_point', 'point_to_plane'}, default='point_to_point'
+    k_normals : int, default=10
+        Neighbours for the normals of ``metric='point_to_plane'``.
+    init : RigidTransform or SimilarityTransform, optional
+        Starting pose (identity by default).
     callback : callable, optional
-        Called with an :class:`IterationInfo` (``objective`` = mean squared distance,
+        Called with an :class:`IterationInfo` (``objective`` = mean squared residual,
         ``sigma2`` = NaN) after each matching; return ``True`` to stop.
 
     Attributes
     ----------
     transform_, moving_transformed_, n_iter_, converged_ : as for :class:`RigidCPD`
     history_ : dict
-        ``objective`` (mean squared closest-point distance) and ``error`` per iteration.
-    correspondence_ : ndarray of shape (N,)
-        For each fixed point the nearest transformed moving point.
+        ``objective`` (mean squared residual of the kept pairs), ``n_pairs`` (pairs kept)
+        and ``error`` per iteration.
+    moving_to_fixed_ : ndarray of shape (M,)
+        For each moving point its nearest fixed point (-1 where it was not kept).
+    fixed_to_moving_ : ndarray of shape (N,)
+        For each fixed point the nearest transformed moving point (``correspondence_`` is
+        its deprecated alias).
 
     Examples
     --------
     >>> import numpy as np
-    >>> from centrality_vision.transforms import random_rotation
     >>> y = np.random.default_rng(0).random((200, 2))
     >>> angle = 0.1
     >>> r = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
@@ -60,67 +142,186 @@ class ICP:
     True
     """
 
-    def __init__(self, *, scale=False, max_iter=100, tol=1e-6, callback=None):
+    def __init__(
+        self,
+        *,
+        scale=False,
+        max_iter=100,
+        tol=1e-6,
+        max_distance=None,
+        trim=0.0,
+        metric="point_to_point",
+        k_normals=10,
+        init=None,
+        callback=None,
+    ):
         self.scale = scale
         self.max_iter = max_iter
         self.tol = tol
+        self.max_distance = max_distance
+        self.trim = trim
+        self.metric = metric
+        self.k_normals = k_normals
+        self.init = init
         self.callback = callback
 
-    def __repr__(self) -> str:
-        return f"ICP(scale={self.scale!r}, max_iter={self.max_iter!r}, tol={self.tol!r}, callback={self.callback!r})"
-
-    def fit(self, moving, fixed, *, true_moving=None):
-        """Register ``moving`` onto ``fixed``; returns ``self``. See :meth:`RigidCPD.fit`."""
+    def _check_params(self):
         if not isinstance(self.scale, (bool, np.bool_)):
             raise TypeError(f"`ICP.scale` must be a bool; got {self.scale!r}.")
         check_int(self.max_iter, name="ICP.max_iter", low=0)
         check_float(self.tol, name="ICP.tol", low=0.0)
+        if self.max_distance is not None:
+            check_float(self.max_distance, name="ICP.max_distance", low=0.0, low_open=True)
+        check_float(self.trim, name="ICP.trim", low=0.0, high=1.0, high_open=True)
+        check_choice(self.metric, METRICS, name="ICP.metric")
+        check_int(self.k_normals, name="ICP.k_normals", low=3)
+        if self.metric == "point_to_plane" and self.scale:
+            raise InputError("`ICP.scale=True` needs metric='point_to_point'; point-to-plane fits a rigid motion.")
+        if self.init is not None and not isinstance(self.init, SimilarityTransform):
+            raise TypeError(f"`ICP.init` must be None or a RigidTransform/SimilarityTransform; got {self.init!r}.")
         if self.callback is not None and not callable(self.callback):
             raise TypeError(f"`ICP.callback` must be callable or None; got {self.callback!r}.")
+
+    def fit(self, moving, fixed, *, true_moving=None):
+        """Register ``moving`` onto ``fixed``; returns ``self``. See :meth:`RigidCPD.fit`."""
+        self._check_params()
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
         fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
         if true_moving is not None:
             true_moving = as_points(true_moving, name="true_moving", n_dims=(moving.shape[1],))
             if true_moving.shape != moving.shape:
-                raise InputError(f"`true_moving` must have the shape of `moving` {moving.shape}; got {true_moving.shape}.")
+                raise InputError(
+                    f"`true_moving` must have the shape of `moving` {moving.shape}; got {true_moving.shape}."
+                )
         dim = moving.shape[1]
-        tree = cKDTree(fixed)
-        transform = SimilarityTransform(np.eye(dim), np.zeros(dim)) if self.scale else RigidTransform(np.eye(dim), np.zeros(dim))
-        moving_t = moving.copy()
-        objectives, errors = [], []
+        if self.metric == "point_to_plane" and dim not in (2, 3):
+            raise InputError(f"`ICP.metric='point_to_plane'` needs 2D or 3D points; got {dim}D.")
+        frame, moving_n, fixed_n = _Frame.of(moving, fixed, True, same_centre=True)
+        true_n = None if true_moving is None else frame.fixed_in(true_moving)
+        max_d = None if self.max_distance is None else float(self.max_distance) / frame.scale
+        normals = estimate_normals(fixed_n, k=self.k_normals) if self.metric == "point_to_plane" else None
+        tree = cKDTree(fixed_n)
+        if self.init is None:
+            transform = (
+                SimilarityTransform(np.eye(dim), np.zeros(dim))
+                if self.scale
+                else RigidTransform(np.eye(dim), np.zeros(dim))
+            )
+        else:
+            if self.init.rotation.shape != (dim, dim):
+                raise InputError(f"`ICP.init` must be a {dim}D transform; got a {self.init.rotation.shape[0]}D one.")
+            if not self.scale and self.init.scale != 1.0:
+                raise InputError(f"`ICP.init` must have scale 1 when scale=False; got {self.init.scale!r}.")
+            transform = frame.linear_in(self.init)
+            if not self.scale:
+                transform = RigidTransform(transform.rotation, transform.translation)
+        moving_t = transform(moving_n)
+        objectives, errors, n_pairs = [], [], []
         previous = None
         converged = False
+        stopped = None
         iteration = 0
+        scale2 = frame.scale**2
+        keep = np.ones(moving_n.shape[0], dtype=bool)
         while True:
             dist, partner = tree.query(moving_t, k=1, workers=get_num_threads())
-            objective = float(np.mean(dist * dist))
-            error = None if true_moving is None else float(np.linalg.norm(true_moving - moving_t))
-            objectives.append(objective)
+            keep = self._kept(dist, max_d)
+            if self.metric == "point_to_plane":
+                residual = np.einsum("ij,ij->i", moving_t - fixed_n[partner], normals[partner])
+                residual2 = residual * residual
+            else:
+                residual2 = dist * dist
+            objective = float(np.mean(residual2[keep])) if np.any(keep) else float("nan")
+            error = None if true_n is None else float(np.linalg.norm(true_n - moving_t)) * frame.scale
+            objectives.append(objective * scale2)
             errors.append(error)
+            n_pairs.append(int(np.count_nonzero(keep)))
             if self.callback is not None:
-                if self.callback(IterationInfo(iteration, transform, moving_t.copy(), float("nan"), objective, error)) is True:
+                info = IterationInfo(
+                    iteration,
+                    frame.linear_out(transform),
+                    frame.points_out(moving_t),
+                    float("nan"),
+                    objective * scale2,
+                    error,
+                )
+                if self.callback(info) is True:
                     break
-            if objective == 0.0 or (previous is not None and abs(previous - objective) <= self.tol * max(previous, 1e-300)):
+            if np.count_nonzero(keep) < dim + 1:
+                stopped = (
+                    f"only {int(np.count_nonzero(keep))} pairs within max_distance={self.max_distance} "
+                    "after trimming at "
+                    f"iteration {iteration}; stopped. Start closer (init=) or raise `max_distance`."
+                )
+                break
+            if objective <= _COINCIDE or (
+                previous is not None and abs(previous - objective) <= self.tol * max(previous, 1e-300)
+            ):
                 converged = True
                 break
             if iteration >= self.max_iter:
                 break
             previous = objective
-            transform = _fit(moving, fixed[partner], bool(self.scale))
-            moving_t = transform(moving)
+            if self.metric == "point_to_plane":
+                rotation, translation = _point_to_plane_step(
+                    moving_t[keep], fixed_n[partner[keep]], normals[partner[keep]]
+                )
+                transform = RigidTransform(
+                    rotation @ transform.rotation, rotation @ transform.translation + translation
+                )
+            else:
+                rotation, translation, s = least_squares_similarity(
+                    moving_n[keep], fixed_n[partner[keep]], scale=bool(self.scale)
+                )
+                transform = (
+                    SimilarityTransform(rotation, translation, s)
+                    if self.scale
+                    else RigidTransform(rotation, translation)
+                )
+            moving_t = transform(moving_n)
             iteration += 1
-        if not converged and iteration >= self.max_iter and self.max_iter > 0 and self.tol > 0:
-            warnings.warn(f"ICP stopped at max_iter={self.max_iter} before meeting tol={self.tol}.", ConvergenceWarning, stacklevel=2)
-        self.transform_ = transform
-        self.moving_transformed_ = moving_t
+        if stopped is not None:
+            warnings.warn(f"ICP: {stopped}", ConvergenceWarning, stacklevel=2)
+        elif not converged and iteration >= self.max_iter and self.max_iter > 0 and self.tol > 0:
+            warnings.warn(
+                f"ICP stopped at max_iter={self.max_iter} before meeting tol={self.tol}.",
+                ConvergenceWarning,
+                stacklevel=2,
+            )
+        self.transform_ = frame.linear_out(transform)
+        self.moving_transformed_ = frame.points_out(moving_t)
         self.n_iter_ = iteration
         self.converged_ = converged
-        self.history_ = {"objective": np.array(objectives), "error": None if true_moving is None else np.array(errors)}
-        self.correspondence_ = cKDTree(moving_t).query(fixed, k=1, workers=get_num_threads())[1]
+        self.history_ = {
+            "objective": np.array(objectives),
+            "n_pairs": np.array(n_pairs),
+            "error": None if true_moving is None else np.array(errors),
+        }
+        self.moving_to_fixed_ = np.where(keep, partner, -1)
+        self.fixed_to_moving_ = cKDTree(moving_t).query(fixed_n, k=1, workers=get_num_threads())[1]
         return self
+
+    def _kept(self, dist: np.ndarray, max_d: float | None) -> np.ndarray:
+        keep = np.ones(dist.shape[0], dtype=bool) if max_d is None else dist <= max_d
+        if self.trim > 0:
+            n_drop = int(math.floor(self.trim * dist.shape[0]))
+            if n_drop > 0:
+                worst = np.argsort(dist, kind="stable")[dist.shape[0] - n_drop :]
+                keep[worst] = False
+        return keep
 
     def transform(self, points) -> np.ndarray:
         """Apply the fitted transform to new points."""
-        if not hasattr(self, "transform_"):
-            raise InputError("This ICP is not fitted yet; call fit(moving, fixed) first.")
+        check_is_fitted(self, "transform_")
         return self.transform_(points)
+
+    @property
+    def correspondence_(self) -> np.ndarray:
+        """Deprecated alias of ``fixed_to_moving_``."""
+        check_is_fitted(self, "fixed_to_moving_")
+        warnings.warn(
+            "`ICP.correspondence_` is deprecated; use `fixed_to_moving_` (same values) or `moving_to_fixed_`.",
+            FutureWarning,
+            stacklevel=2,
+        )
+        return self.fixed_to_moving_

@@ -1,0 +1,95 @@
+"""The registration estimators as scikit-learn estimators; names and errors of issue 15."""
+
+import numpy as np
+import pytest
+from scipy import sparse
+from sklearn.base import clone
+from sklearn.exceptions import NotFittedError
+from sklearn.model_selection import GridSearchCV
+
+from centrality_vision.registration import GPD, ICP, AffineCPD, NonRigidCPD, RigidCPD
+
+ESTIMATORS = [
+    RigidCPD(scale=False, w=0.1),
+    AffineCPD(max_iter=7),
+    NonRigidCPD(beta=1.5),
+    ICP(max_iter=5),
+    GPD(RigidCPD(w=0.05), k=4),
+]
+
+
+@pytest.mark.parametrize("estimator", ESTIMATORS, ids=lambda e: type(e).__name__)
+def test_clone_get_and_set_params(estimator):
+    copy = clone(estimator)
+    assert type(copy) is type(estimator) and copy is not estimator
+    assert repr(copy) == repr(estimator)
+    params = estimator.get_params(deep=True)
+    assert params == copy.get_params(deep=True) or type(estimator) is GPD  # GPD's base is a new object
+    first = next(iter(estimator.get_params(deep=False)))
+    assert copy.set_params(**{first: params[first]}) is copy
+    with pytest.raises(ValueError, match="Invalid parameter"):
+        copy.set_params(nonsense=1)
+
+
+def test_gpd_nested_parameters():
+    gpd = GPD(RigidCPD(w=0.1))
+    assert gpd.get_params(deep=True)["base_cpd__w"] == 0.1
+    gpd.set_params(base_cpd__w=0.2, centrality="degree")
+    assert gpd.base_cpd.w == 0.2 and gpd.centrality == "degree"
+
+
+@pytest.mark.parametrize("estimator", ESTIMATORS, ids=lambda e: type(e).__name__)
+def test_one_not_fitted_error(estimator, fish):
+    with pytest.raises(NotFittedError, match="not fitted"):
+        estimator.transform(fish)
+
+
+def test_grid_search_picks_the_outlier_weight(fish, rot2):
+    # equal sizes: the clutter replaces part of the fixed set, so rows pair up for the splitter
+    rng = np.random.default_rng(3)
+    x = fish @ rot2(20).T + 0.1
+    x[rng.choice(len(x), 20, replace=False)] = rng.uniform(-2, 2, (20, 2))
+    index = np.arange(len(fish))
+    search = GridSearchCV(RigidCPD(scale=False, tol=1e-8), {"w": [0.0, 0.3]}, cv=[(index, index)]).fit(fish, x)
+    assert search.best_params_ == {"w": 0.3}
+    assert search.best_estimator_.converged_
+
+
+def test_gpd_fits_a_clone_and_reads_its_attributes(fish_pair):
+    base = RigidCPD(max_iter=4, tol=0)
+    gpd = GPD(base).fit(fish_pair.moving, fish_pair.fixed)
+    assert gpd.estimator_ is not base and not hasattr(base, "transform_")
+    assert gpd.transform_ is gpd.estimator_.transform_ and gpd.n_iter_ == 4
+    with pytest.raises(AttributeError):
+        _ = gpd.no_such_attribute_
+
+
+def test_correspondence_names_and_deprecated_alias(fish, rot2):
+    x = fish @ rot2(10).T
+    reg = RigidCPD().fit(fish, x)
+    assert reg.fixed_to_moving_.shape == (len(x),)
+    with pytest.warns(FutureWarning, match="fixed_to_moving_"):
+        np.testing.assert_array_equal(reg.correspondence_, reg.fixed_to_moving_)
+    icp = ICP().fit(fish, x)
+    assert icp.moving_to_fixed_.shape == (len(fish),) and icp.fixed_to_moving_.shape == (len(x),)
+    with pytest.warns(FutureWarning, match="fixed_to_moving_"):
+        np.testing.assert_array_equal(icp.correspondence_, icp.fixed_to_moving_)
+
+
+def test_gpd_callable_graph_with_the_wrong_node_count(fish_pair):
+    with pytest.raises(ValueError, match=r"graph\(points\)` must return a graph with one node per point \(91\); got 4"):
+        GPD(graph=lambda p: sparse.eye(4, format="csr")).fit(fish_pair.moving, fish_pair.fixed)
+
+
+@pytest.mark.parametrize("method", ["icp", "similarity"])
+def test_huge_coordinates_do_not_hang_the_svd(method):
+    from centrality_vision.transforms import fit_similarity
+
+    y = np.random.default_rng(0).random((20, 3))
+    y[0, 0] = 1e155
+    if method == "icp":
+        with pytest.raises(ValueError, match="RMS radius"):
+            ICP().fit(y, y + 1.0)
+    else:
+        t = fit_similarity(y, y)
+        assert np.all(np.isfinite(t.rotation)) and t.scale == pytest.approx(1.0)

@@ -1,0 +1,179 @@
+"""normalize=True: equivariance under translation and scaling, unit-free defaults, collapse warnings."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from centrality_vision.exceptions import CollapseWarning, ConvergenceWarning
+from centrality_vision.registration import GPD, AffineCPD, NonRigidCPD, RigidCPD, RigidTransform
+
+
+def _on_grid(points):
+    """Rounded to multiples of 2^-20, so that adding an offset up to 2^32 is exact."""
+    return np.round(np.asarray(points) * 2.0**20) / 2.0**20
+
+
+@pytest.fixture(scope="module")
+def exact_pair(fish_pair):
+    y = _on_grid(fish_pair.moving)
+    a = np.radians(35.0)
+    r = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    x = _on_grid(1.3 * y @ r.T + [0.4, -0.2])
+    return y, x, r
+
+
+def _size(points):
+    return float(np.sqrt(np.mean(np.sum((points - points.mean(0)) ** 2, axis=1))))
+
+
+# (factor, offset): offsets up to 1e8, scales 1e-6 to 1e6; powers of two and grid data keep
+# the transformed inputs exact where an offset is added (a shape of size 1e-6 at 1e3 would
+# already lose 1e-7 of its size to rounding before any registration)
+EQUIVARIANCE_CASES = [
+    (1.0, 1e3),
+    (1.0, 1e6),
+    (1.0, 1e8),
+    (1e-6, 0.0),
+    (1e6, 0.0),
+    (2.0**-20, 1e3),
+    (2.0**20, 1e8),
+    (2.0**20, -1e8),
+]
+
+
+@pytest.mark.parametrize(("factor", "offset"), EQUIVARIANCE_CASES)
+def test_similarity_cpd_is_equivariant_on_exact_copies(exact_pair, offset, factor):
+    y, x, r = exact_pair
+    ref = RigidCPD(scale=True, tol=1e-12).fit(y, x)
+    reg = RigidCPD(scale=True, tol=1e-12).fit(factor * y + offset, factor * x + offset)
+    assert ref.converged_ and reg.converged_
+    np.testing.assert_allclose(ref.transform_.rotation, r, atol=1e-6)  # x was rounded to the grid
+    np.testing.assert_allclose(reg.transform_.rotation, ref.transform_.rotation, atol=1e-9, rtol=0)
+    assert reg.transform_.scale == pytest.approx(ref.transform_.scale, rel=1e-9)
+    # positions: relative 1e-9 of the shape, plus the rounding of coordinates of size `offset`
+    tolerance = 1e-9 * factor * _size(x) + 4 * np.spacing(offset + factor * np.abs(x).max())
+    np.testing.assert_allclose(
+        reg.moving_transformed_, factor * ref.moving_transformed_ + offset, atol=tolerance, rtol=0
+    )
+    np.testing.assert_allclose(reg.transform(factor * y + offset), reg.moving_transformed_, atol=tolerance, rtol=0)
+    assert reg.sigma2_ == pytest.approx(factor**2 * ref.sigma2_, rel=1e-6, abs=1e-9 * (factor * _size(x)) ** 2)
+
+
+@pytest.mark.parametrize("cls", [AffineCPD, NonRigidCPD])
+def test_affine_and_nonrigid_are_equivariant(fish_pair, cls):
+    y, x = _on_grid(fish_pair.moving), _on_grid(fish_pair.fixed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ConvergenceWarning)  # 60 iterations are enough to compare
+        ref = cls(tol=1e-9, max_iter=60).fit(y, x)
+        runs = [(f, o, cls(tol=1e-9, max_iter=60).fit(f * y + o, f * x + o)) for f, o in EQUIVARIANCE_CASES[2:]]
+    for factor, offset, reg in runs:
+        assert reg.n_iter_ == ref.n_iter_
+        tolerance = 1e-9 * factor * _size(x) + 4 * np.spacing(abs(offset) + factor * np.abs(x).max())
+        np.testing.assert_allclose(
+            reg.moving_transformed_, factor * ref.moving_transformed_ + offset, atol=tolerance, rtol=0
+        )
+        np.testing.assert_allclose(reg.history_["sigma2"], factor**2 * ref.history_["sigma2"], rtol=1e-6)
+
+
+def test_nonrigid_default_is_unit_free_on_the_fish(fish_pair):
+    """The fish in metres, millimetres and pixels (origin at a corner) gives the same field."""
+    y, x = fish_pair.moving, fish_pair.fixed
+    metres = NonRigidCPD().fit(y, x)
+    corner = np.minimum(y.min(0), x.min(0))
+    for factor, offset in ((1000.0, np.zeros(2)), (512 / 4.0, -corner * 512 / 4.0 + 20)):
+        reg = NonRigidCPD().fit(factor * y + offset, factor * x + offset)
+        np.testing.assert_allclose(
+            (reg.moving_transformed_ - offset) / factor, metres.moving_transformed_, atol=1e-9 * _size(x)
+        )
+    rms = np.sqrt(np.mean(np.min(((metres.moving_transformed_[:, None] - x[None]) ** 2).sum(-1), axis=1)))
+    assert rms < 0.01 * _size(x)
+
+
+def test_pixel_outline_with_outliers_keeps_its_scale(fish):
+    """Issue example: a 100-pixel outline, w=0.2, clutter: the raw frame shrinks, the normalised one does not."""
+    y = (fish - fish.min(0)) / np.ptp(fish, axis=0).max() * 100
+    a = np.radians(20)
+    r = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    x = 1.25 * y @ r.T + [30, -10]
+    x = np.vstack([x, np.random.default_rng(0).uniform(x.min(0), x.max(0), (20, 2))])
+    reg = RigidCPD(w=0.2).fit(y, x)
+    assert reg.converged_ and reg.transform_.scale == pytest.approx(1.25, rel=1e-6)
+    np.testing.assert_allclose(reg.transform_.rotation, r, atol=1e-6)
+    with pytest.warns(CollapseWarning, match="fixed points were matched"):
+        raw = RigidCPD(w=0.2, normalize=False).fit(y, x)
+    assert not raw.converged_ and raw.transform_.scale < 1.0
+
+
+def test_far_offset_fish_is_registered_exactly(fish, rot2):
+    x = fish @ rot2(20).T
+    reg = RigidCPD(tol=1e-12, max_iter=300).fit(fish + 1e6, x + 1e6)
+    assert reg.converged_
+    assert np.sqrt(np.mean(np.sum((reg.moving_transformed_ - x - 1e6) ** 2, axis=1))) < 1e-9
+
+
+def test_collapse_of_the_moving_set_is_reported(fish):
+    # a dense blob and a few far points: the similarity shrinks the fish onto the blob
+    rng = np.random.default_rng(1)
+    x = np.vstack([rng.normal(0.0, 1e-3, (80, 2)), [[50.0, 0.0], [-50.0, 0.0], [0.0, 50.0], [0.0, -50.0]]])
+    with pytest.warns(CollapseWarning, match="collapsed"):
+        reg = RigidCPD(w=0.1, tol=1e-8).fit(fish, x)
+    assert not reg.converged_ and reg.transform_.scale < 1e-6
+
+
+def test_identical_moving_points_onto_a_shifted_copy():
+    y = np.ones((6, 2))
+    for cls in (RigidCPD, AffineCPD):
+        reg = cls().fit(y, y + [2.0, 3.0])
+        np.testing.assert_allclose(reg.moving_transformed_, y + [2.0, 3.0], atol=1e-12)
+        assert reg.converged_
+
+
+@pytest.mark.parametrize("factor", [1e-120, 1e120])
+def test_nonrigid_at_extreme_scales_is_finite_and_equivariant(fish_pair, factor):
+    y, x = fish_pair.moving, fish_pair.fixed
+    ref = NonRigidCPD(max_iter=20, tol=0).fit(y, x)
+    reg = NonRigidCPD(max_iter=20, tol=0).fit(factor * y, factor * x)
+    assert np.all(np.isfinite(reg.moving_transformed_)) and np.isfinite(reg.sigma2_)
+    np.testing.assert_allclose(reg.moving_transformed_ / factor, ref.moving_transformed_, atol=1e-9)
+
+
+def test_out_of_range_spread_is_refused(fish):
+    with pytest.raises(ValueError, match="RMS radius"):
+        RigidCPD().fit(fish * 1e200, fish * 1e200)
+
+
+def test_gpd_is_equivariant(fish_pair):
+    y, x = _on_grid(fish_pair.moving), _on_grid(fish_pair.fixed)
+    ref = GPD(RigidCPD(tol=1e-9)).fit(y, x)
+    reg = GPD(RigidCPD(tol=1e-9)).fit(1e4 * y + 1e7, 1e4 * x + 1e7)
+    np.testing.assert_array_equal(reg.moving_centrality_, ref.moving_centrality_)
+    np.testing.assert_allclose(reg.moving_transformed_, 1e4 * ref.moving_transformed_ + 1e7, atol=1e-9 * 1e4 + 1e-8)
+
+
+def test_init_transform_starts_from_a_given_pose(fish, rot2):
+    x = fish @ rot2(150).T + [0.3, 0.1]
+    plain = RigidCPD(scale=False, tol=1e-10).fit(fish, x)
+    assert np.linalg.norm(plain.moving_transformed_ - x) > 1.0  # the wrong basin
+    guess = RigidTransform(rot2(130), [0.0, 0.0])
+    started = RigidCPD(scale=False, tol=1e-10, init=guess).fit(fish, x)
+    np.testing.assert_allclose(started.moving_transformed_, x, atol=1e-6)
+    # affine and non-rigid accept a pose too; the non-rigid field then acts on init(Y)
+    affine = AffineCPD(tol=1e-10, init=guess).fit(fish, x)
+    np.testing.assert_allclose(affine.moving_transformed_, x, atol=1e-6)
+    field = NonRigidCPD(tol=1e-8, init=guess).fit(fish, x)
+    np.testing.assert_allclose(field.transform(fish), field.moving_transformed_, atol=1e-10)
+    assert np.linalg.norm(field.moving_transformed_ - x) < 0.05 * np.linalg.norm(plain.moving_transformed_ - x)
+
+
+def test_bad_init_and_parameters_are_named(fish):
+    with pytest.raises(TypeError, match="init"):
+        RigidCPD(init="nearby").fit(fish, fish)
+    with pytest.raises(ValueError, match="init"):
+        RigidCPD(init=RigidTransform(np.eye(3), np.zeros(3))).fit(fish, fish)
+    with pytest.raises(TypeError, match="normalize"):
+        RigidCPD(normalize="yes").fit(fish, fish)
+    with pytest.raises(ValueError, match="beta"):
+        NonRigidCPD(beta=1e-300).fit(fish, fish)
+    with pytest.raises(ValueError, match="w"):
+        RigidCPD(w="often").fit(fish, fish)
