@@ -579,7 +579,9 @@ def plot_registration(fixed, moving, *, ax=None, title=None, fixed_label="fixed"
         _check_ax(ax, three_d=three_d, why=f"for {fixed.shape[1]}D points")
     size = 5 if three_d else 14
     extra = {"depthshade": False} if three_d else {}
-    ax.scatter(*fixed.T, marker="*", s=size * 1.6, color="tab:red", label=fixed_label, **extra)
+    if three_d:
+        ax.computed_zorder = False  # the moving set stays above the fixed one, whatever the depth
+    ax.scatter(*fixed.T, marker="*", s=size * 1.6, color="tab:red", label=fixed_label, zorder=1, **extra)
     ax.scatter(
         *moving.T,
         marker="o",
@@ -588,6 +590,7 @@ def plot_registration(fixed, moving, *, ax=None, title=None, fixed_label="fixed"
         edgecolors="tab:blue",
         linewidths=0.7,
         label=moving_label,
+        zorder=2,
         **extra,
     )
     if three_d:
@@ -669,9 +672,14 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
         span = np.ptp(fixed, axis=0)
         aspect = float(span[1] / span[0]) if dim == 2 and span[0] > 0 else 1.0
         fig = plt.figure(figsize=(2.6 * len(cols), 0.9 + 2.6 * min(max(aspect, 0.4), 1.5) * n_rows))
-    kw = {"projection": "3d"} if dim == 3 else {}
+    kw = {"projection": "3d", "computed_zorder": False} if dim == 3 else {}
     extra = {"depthshade": False} if dim == 3 else {}
     size = 4 if dim == 3 else 10
+    # every panel on the same limits, so that the panels compare like with like
+    shown_sets = [fixed] + [record[k] for record in frames.values() for k in record]
+    low, high = np.min([p.min(axis=0) for p in shown_sets], axis=0), np.max([p.max(axis=0) for p in shown_sets], axis=0)
+    pad = 0.04 * np.maximum(high - low, 1e-12)
+    low, high = low - pad, high + pad
     for r in range(n_rows):
         iteration = rows[r] if r < len(rows) else None
         for c, label in enumerate(cols):
@@ -687,12 +695,24 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
                 if r > 0 and shown == iteration:
                     heading = ""
             moving = record[shown]
-            ax.scatter(*fixed.T, marker="*", s=size * 1.4, color="tab:red", **extra)
-            ax.scatter(*moving.T, marker="o", s=size, facecolors="none", edgecolors="tab:blue", linewidths=0.6, **extra)
+            ax.scatter(*fixed.T, marker="*", s=size * 1.4, color="tab:red", zorder=1, **extra)
+            ax.scatter(
+                *moving.T,
+                marker="o",
+                s=size,
+                facecolors="none",
+                edgecolors="tab:blue",
+                linewidths=0.6,
+                zorder=2,
+                **extra,
+            )
+            ax.set_xlim(low[0], high[0])
+            ax.set_ylim(low[1], high[1])
             if dim == 2:
                 ax.set_aspect("equal")
             else:
-                _equal_3d(ax, np.vstack([fixed, moving]))
+                ax.set_zlim(low[2], high[2])
+                _equal_3d(ax, np.vstack([low, high]))
                 ax.set_zticks([])
             ax.set_xticks([])
             ax.set_yticks([])
