@@ -30,6 +30,7 @@ def test_ply_written_by_plyfile_ascii_and_binary_with_an_intensity(tmp_path):
         assert np.allclose(picked, np.column_stack([CLOUD[:, 2], np.arange(7)]))
 
 
+@pytest.mark.slow  # importing Open3D takes seconds
 def test_pcd_written_by_open3d_ascii_and_binary(tmp_path):
     o3d = pytest.importorskip("open3d")
     cloud = o3d.geometry.PointCloud()
@@ -263,6 +264,7 @@ def test_written_csv_is_read_by_pandas_with_default_arguments(tmp_path):
     assert list(frame.columns) == ["x", "y", "z"] and np.array_equal(frame.to_numpy(), CLOUD)
 
 
+@pytest.mark.slow  # importing Open3D takes seconds
 def test_written_files_are_read_by_their_own_libraries(tmp_path):
     meshio = pytest.importorskip("meshio")
     o3d = pytest.importorskip("open3d")
