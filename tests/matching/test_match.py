@@ -170,8 +170,20 @@ def test_option_errors(kwargs, error, text):
         (np.vstack([FIXED, FIXED[:1]]), "robust", "duplicate"),
         (np.where(np.arange(N)[:, None] == 3, np.nan, FIXED), "robust", "finite"),
         (FIXED[:30], "mwme", "same shape"),
+        (np.array([[0, 0], [1e-200, 0], [1, 0], [0, 1], [1, 1.0]]), "robust", "`moving` has points closer"),
     ],
 )
 def test_data_errors(moving, method, text):
     with pytest.raises(ValueError, match=text):
         match(moving, FIXED, method=method)
+
+
+def test_large_sets_use_the_prefiltered_candidates():
+    """Above 256 fixed points each moving point compares signatures with 64 prefiltered ones."""
+    from centrality_vision.matching import _robust
+
+    u = np.sort(np.random.default_rng(0).uniform(0, 2 * np.pi, _robust.PREFILTER_ABOVE + 40))
+    fixed = _outline(u)
+    perm = np.random.default_rng(1).permutation(u.size)
+    result = match(_similar(fixed[perm], np.random.default_rng(2)), fixed)
+    np.testing.assert_array_equal(result.correspondence, perm)

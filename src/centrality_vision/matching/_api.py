@@ -10,6 +10,24 @@ from ._common import MatchResult, fit_pairs, normalise, similarity_to_units
 
 __all__ = ["METHODS", "match"]
 
+#: Smallest distance between two points, relative to the set's extent, that ``match`` accepts:
+#: below it the local graphs' squared distances underflow.
+MIN_RELATIVE_SPACING = 1e-150
+
+
+def _check_resolution(points, name: str) -> None:
+    """Refuse a set whose closest points coincide, or nearly, once centred and scaled to (-1, 1)."""
+    from scipy.spatial import cKDTree
+
+    spacing = float(cKDTree(points).query(points, k=2)[0][:, 1].min())
+    if not spacing > MIN_RELATIVE_SPACING:
+        raise InputError(
+            f"`{name}` has points closer than {MIN_RELATIVE_SPACING:g} times its extent "
+            f"(closest pair {spacing:.3g} of it): float64 cannot tell them apart at this dynamic range; "
+            "rescale or deduplicate the points."
+        )
+
+
 #: The methods :func:`match` offers.
 METHODS = ("robust", "mwme", "shape-context")
 
@@ -110,6 +128,8 @@ def match(
     moving = as_points(moving, name="moving", n_dims=(2,), min_points=4, allow_duplicates=False)
     fixed = as_points(fixed, name="fixed", n_dims=(2,), min_points=4, allow_duplicates=False)
     norm_m, norm_f = normalise(moving), normalise(fixed)
+    for name, norm in (("moving", norm_m), ("fixed", norm_f)):
+        _check_resolution(norm.points, name)
     unit_ratio = float(np.ldexp(1.0, norm_m.exponent - norm_f.exponent))  # scale 1 in the caller's units
     if method == "robust":
         from ._robust import robust_pose

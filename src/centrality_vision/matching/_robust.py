@@ -68,30 +68,59 @@ def local_signatures(points: np.ndarray, k: int) -> dict:
         shapes[:, s, :, 0] = x / units[:, None]
         shapes[:, s, :, 1] = y / units[:, None]
         shapes[:, s, :, 2] = DEGREE_WEIGHT * degrees / k
-    return {"units": units, "axes": axes, "shapes": shapes}
+    radii = np.sort(np.linalg.norm(rel[:, 1:], axis=2), axis=1) / units[:, None]
+    return {"units": units, "axes": axes, "shapes": shapes, "radii": radii}
 
 
-def _signature_distance(sig_m: dict, sig_f: dict) -> tuple[np.ndarray, np.ndarray]:
-    """Symmetric chamfer distance between every moving and fixed signature, and the sign of
-    the moving axis (0: +, 1: -) that attains it, both (m, f)."""
+#: Above this many fixed points, each moving point compares its signature only with the
+#: ``PREFILTER`` fixed points of most similar sorted neighbour distances (a k-d tree query)
+#: instead of all: O(m L k^2) instead of O(m f k^2).
+PREFILTER_ABOVE = 256
+PREFILTER = 64
+#: At most this many hypotheses (the most alike pairs) are scored.
+MAX_HYPOTHESES = 3000
+
+
+def _chamfer(block: np.ndarray, others: np.ndarray) -> np.ndarray:
+    """Symmetric chamfer distance of ``block`` (b, 2, K, 3) against ``others``, shared
+    (L, K, 3) or one row per block row (b, L, K, 3): shape (b, 2, L)."""
+    if others.ndim == 3:
+        cross = np.einsum("bski,fli->bsfkl", block, others, optimize=True)
+        sq_o = (others**2).sum(axis=2)[None, None, :, None, :]
+    else:
+        cross = np.einsum("bski,bfli->bsfkl", block, others, optimize=True)
+        sq_o = (others**2).sum(axis=3)[:, None, :, None, :]
+    sq = (block**2).sum(axis=3)[:, :, None, :, None] + sq_o - 2.0 * cross  # (b, 2, L, K, K) squared distances
+    np.maximum(sq, 0.0, out=sq)
+    return 0.5 * (np.sqrt(sq.min(axis=4)).mean(axis=3) + np.sqrt(sq.min(axis=3)).mean(axis=3))
+
+
+def _candidates(sig_m: dict, sig_f: dict, c: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The ``c`` most alike fixed points of every moving point: ``(pairs_m, pairs_f, signs,
+    distances)``, with the sign of the moving axis (0: +, 1: -) that makes them alike."""
+    from scipy.spatial import cKDTree
+
     shapes_m, shapes_f = sig_m["shapes"], sig_f["shapes"][:, 0]  # fixed frame: + sign only
     m, f, size = shapes_m.shape[0], shapes_f.shape[0], shapes_f.shape[1]
-    chunk = max(1, 4_000_000 // (2 * f * size * size))  # about 32 MB of temporaries per block
-    sq_f = (shapes_f**2).sum(axis=2)  # (f, K)
-    best = np.empty((m, f))
-    sign = np.empty((m, f), dtype=np.int64)
+    if f > PREFILTER_ABOVE:
+        _, pool = cKDTree(sig_f["radii"]).query(sig_m["radii"], k=PREFILTER)
+    else:
+        pool = np.broadcast_to(np.arange(f), (m, f))
+    width = pool.shape[1]
+    chunk = max(1, 4_000_000 // (2 * width * size * size))  # about 32 MB of temporaries per block
+    dist = np.empty((m, width))
+    sign = np.empty((m, width), dtype=np.int64)
     for lo in range(0, m, chunk):
-        block = shapes_m[lo : lo + chunk]  # (b, 2, K, 3)
-        sq = (
-            (block**2).sum(axis=3)[:, :, None, :, None]
-            + sq_f[None, None, :, None, :]
-            - 2.0 * np.einsum("bski,fli->bsfkl", block, shapes_f, optimize=True)
-        )  # (b, 2, f, K, K) squared distances
-        np.maximum(sq, 0.0, out=sq)
-        chamfer = 0.5 * (np.sqrt(sq.min(axis=4)).mean(axis=3) + np.sqrt(sq.min(axis=3)).mean(axis=3))
+        block = shapes_m[lo : lo + chunk]
+        others = shapes_f if f <= PREFILTER_ABOVE else shapes_f[pool[lo : lo + chunk]]
+        chamfer = _chamfer(block, others)
         sign[lo : lo + chunk] = chamfer.argmin(axis=1)
-        best[lo : lo + chunk] = chamfer.min(axis=1)
-    return best, sign
+        dist[lo : lo + chunk] = chamfer.min(axis=1)
+    c = min(c, width)
+    top = np.argpartition(dist, c - 1, axis=1)[:, :c]
+    rows = np.repeat(np.arange(m), c)
+    cols = top.ravel()
+    return rows, pool[rows, cols], sign[rows, cols], dist[rows, cols]
 
 
 def _hypotheses(moving, fixed, sig_m, sig_f, pairs_m, pairs_f, signs, *, scale: bool, unit_ratio: float):
@@ -197,12 +226,10 @@ def robust_pose(
     """
     k = min(n_neighbours, moving.shape[0] - 1, fixed.shape[0] - 1)
     sig_m, sig_f = local_signatures(moving, k), local_signatures(fixed, k)
-    dist, sign = _signature_distance(sig_m, sig_f)
-    c = min(n_candidates, fixed.shape[0])
-    top = np.argpartition(dist, c - 1, axis=1)[:, :c]
-    pairs_m = np.repeat(np.arange(moving.shape[0]), c)
-    pairs_f = top.ravel()
-    signs = sign[pairs_m, pairs_f]
+    pairs_m, pairs_f, signs, alike = _candidates(sig_m, sig_f, n_candidates)
+    if pairs_m.size > MAX_HYPOTHESES:
+        keep = np.sort(np.argsort(alike, kind="stable")[:MAX_HYPOTHESES])
+        pairs_m, pairs_f, signs = pairs_m[keep], pairs_f[keep], signs[keep]
     rot, t, s = _hypotheses(moving, fixed, sig_m, sig_f, pairs_m, pairs_f, signs, scale=scale, unit_ratio=unit_ratio)
     g_rot, g_t, g_s = _global_hypotheses(moving, fixed, scale=scale, unit_ratio=unit_ratio)
     rot, t, s = np.concatenate([rot, g_rot]), np.concatenate([t, g_t]), np.concatenate([s, g_s])
