@@ -413,3 +413,19 @@ def test_matching_shows_matches_not_a_hairball():
     np.testing.assert_allclose(moving_dots.get_facecolors(), fixed_dots.get_facecolors()[perm])
     with pytest.raises(ValueError, match="correspondence"):
         plot_matching(x, x, np.arange(5))
+
+
+def test_rowcol_points_are_drawn_the_way_the_image_looks():
+    from centrality_vision.plotting import plot_matching, plot_registration
+
+    # an L of pixels: rows 0-2 in column 0, then row 2 to the right
+    rowcol = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [2.0, 1.0], [2.0, 2.0]])
+    graph = sparse.csr_array((5, 5))
+    ax = plot_graph(rowcol, graph, rowcol=True)
+    np.testing.assert_array_equal(ax.collections[1].get_offsets(), rowcol[:, ::-1])  # x = column, y = row
+    assert ax.yaxis_inverted()  # row 0 at the top
+    assert plot_registration(rowcol, rowcol, rowcol=True).yaxis_inverted()
+    assert plot_matching(rowcol, rowcol, np.arange(5), rowcol=True).yaxis_inverted()
+    assert not plot_graph(rowcol, graph).yaxis_inverted()
+    with pytest.raises(ValueError, match="rowcol=True"):
+        plot_graph(np.zeros((3, 3)) + np.arange(3)[:, None], sparse.csr_array((3, 3)), rowcol=True)

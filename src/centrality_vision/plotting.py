@@ -56,6 +56,20 @@ def _norm(norm, values: np.ndarray):
     raise InputError(f"`norm` must be one of {', '.join(map(repr, _NORMS))} or a matplotlib Normalize; got {norm!r}.")
 
 
+def _image_axes(points: np.ndarray, rowcol: bool, name: str) -> np.ndarray:
+    """(row, col) pixel coordinates as (x, y) = (col, row); the caller then points the y axis down."""
+    if not rowcol:
+        return points
+    if points.shape[1] != 2:
+        raise InputError(f"`rowcol=True` needs 2D `{name}` (row, col); got {points.shape[1]} columns.")
+    return points[:, ::-1]
+
+
+def _row_zero_on_top(ax) -> None:
+    if not ax.yaxis_inverted():
+        ax.invert_yaxis()
+
+
 def _equal_3d(ax, points: np.ndarray) -> None:
     """Equal scale on the three axes of a 3D Axes (matplotlib's "equal" aspect is per-box), small ticks."""
     span = np.ptp(points, axis=0)
@@ -112,6 +126,7 @@ def plot_graph(
     label: str | None = None,
     title: str | None = None,
     norm=None,
+    rowcol: bool = False,
 ):
     """Draw a graph over its points, nodes coloured by a value such as a centrality.
 
@@ -154,6 +169,10 @@ def plot_graph(
     norm : {"linear", "log", "power"} or matplotlib.colors.Normalize, optional
         Colour scale of ``values``: linear (the default), logarithmic, or the square root
         ("power"), for values that span orders of magnitude such as betweenness.
+    rowcol : bool, default=False
+        The points are 2D (row, col) pixel coordinates, e.g. from
+        :func:`~centrality_vision.datasets.contour_points`: they are drawn with the
+        column across and row 0 at the top, the way the image looks (not transposed).
 
     Returns
     -------
@@ -173,7 +192,7 @@ def plot_graph(
     2
     >>> plt.close(ax.figure)
     """
-    points = as_points(points, name="points", n_dims=(2, 3), min_points=1)
+    points = _image_axes(as_points(points, name="points", n_dims=(2, 3), min_points=1), rowcol, "points")
     n, n_dims = points.shape
     graph = as_graph(graph, name="graph")
     if graph.shape != (n, n):
@@ -232,6 +251,8 @@ def plot_graph(
     else:
         ax.set_aspect("equal")
         ax.autoscale_view()
+        if rowcol:
+            _row_zero_on_top(ax)
     if title is not None:
         ax.set_title(title)
     return ax
@@ -433,6 +454,7 @@ def plot_matching(
     title=None,
     max_lines: int = 60,
     max_edges: int | None = None,
+    rowcol: bool = False,
 ):
     """Two 2D point sets side by side and their matching (thesis fig. 6.4).
 
@@ -457,6 +479,8 @@ def plot_matching(
         Most match lines drawn (0 for none).
     max_edges : int, optional
         Most edges of a graph drawn; by default 3 n (a planar graph's size).
+    rowcol : bool, default=False
+        The sets are (row, col) pixel coordinates: drawn with row 0 at the top.
 
     Returns
     -------
@@ -474,8 +498,8 @@ def plot_matching(
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
 
-    moving = as_points(moving, name="moving", n_dims=(2,))
-    fixed = as_points(fixed, name="fixed", n_dims=(2,))
+    moving = _image_axes(as_points(moving, name="moving", n_dims=(2,)), rowcol, "moving")
+    fixed = _image_axes(as_points(fixed, name="fixed", n_dims=(2,)), rowcol, "fixed")
     correspondence = np.asarray(correspondence)
     n = moving.shape[0]
     if correspondence.shape != (n,) or not np.issubdtype(correspondence.dtype, np.integer):
@@ -530,6 +554,8 @@ def plot_matching(
     )
     ax.set_aspect("equal")
     ax.autoscale_view()
+    if rowcol:
+        _row_zero_on_top(ax)
     ax.set_xticks([])
     ax.set_yticks([])
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.02), ncol=2, fontsize=8, frameon=False)
@@ -538,7 +564,9 @@ def plot_matching(
     return ax
 
 
-def plot_registration(fixed, moving, *, ax=None, title=None, fixed_label="fixed", moving_label="moving", legend=True):
+def plot_registration(
+    fixed, moving, *, ax=None, title=None, fixed_label="fixed", moving_label="moving", legend=True, rowcol=False
+):
     """One panel of a registration: the fixed set (red stars) and the moving set (blue circles).
 
     Use it twice for a before/after pair. 2D panels have equal aspect; 3D panels (a 3D
@@ -553,6 +581,8 @@ def plot_registration(fixed, moving, *, ax=None, title=None, fixed_label="fixed"
     ax : matplotlib Axes, optional
     title, fixed_label, moving_label : str, optional
     legend : bool, default=True
+    rowcol : bool, default=False
+        2D (row, col) pixel coordinates: drawn with row 0 at the top.
 
     Returns
     -------
@@ -569,8 +599,8 @@ def plot_registration(fixed, moving, *, ax=None, title=None, fixed_label="fixed"
     """
     import matplotlib.pyplot as plt
 
-    fixed = as_points(fixed, name="fixed", n_dims=(2, 3))
-    moving = as_points(moving, name="moving", n_dims=(fixed.shape[1],))
+    fixed = _image_axes(as_points(fixed, name="fixed", n_dims=(2, 3)), rowcol, "fixed")
+    moving = _image_axes(as_points(moving, name="moving", n_dims=(fixed.shape[1],)), rowcol, "moving")
     three_d = fixed.shape[1] == 3
     if ax is None:
         fig = plt.figure(figsize=(4.5, 4.2), layout="constrained")
@@ -598,6 +628,8 @@ def plot_registration(fixed, moving, *, ax=None, title=None, fixed_label="fixed"
     else:
         ax.set_aspect("equal")
         ax.tick_params(labelsize=7)
+        if rowcol:
+            _row_zero_on_top(ax)
     if legend:
         ax.legend(fontsize=7, loc="best")
     if title:
