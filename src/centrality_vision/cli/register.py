@@ -47,7 +47,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
         f"--out a point-set file ({', '.join(POINT_OUTPUTS)}): the aligned moving set, and all the\n"
         "rest in NAME.json beside it.",
         example="centrality-vision register fish_moving.txt fish_fixed.txt --method gpd --transform nonrigid \\\n"
-        "    --centrality closeness --out aligned.ply --plot aligned.png",
+        "    --centrality closeness --out aligned.csv --plot aligned.png\n"
+        "centrality-vision register scan.ply model.ply --method cpd --transform rigid --out aligned.ply",
     )
     parser.add_argument("moving", metavar="MOVING", help="point set to move")
     parser.add_argument("fixed", metavar="FIXED", help="point set to align onto")
