@@ -348,7 +348,8 @@ def plot_mstme(path, *, lam: float = 0.5) -> Path:
     from ..graphs import mstme_graph
     from ..plotting import save_figure
 
-    fig, axes = _figure(1, len(DATASETS), figsize=(5 * len(DATASETS), 4.5))
+    fig, axes = _figure(1, len(DATASETS), figsize=(5 * len(DATASETS), 4.5), squeeze=False)
+    axes = axes[0]
     for ax, name in zip(axes, DATASETS):
         points = load_points(name)
         tree = mstme_graph(points, lam=lam)
@@ -373,7 +374,8 @@ def plot_noise_levels(name: str, path, *, levels=(3, 5, 8, 10), seed: int = 0) -
 
     points = load_points(name)
     eps = float(pdist(points).min())
-    fig, axes = _figure(1, len(levels), figsize=(4.5 * len(levels), 4))
+    fig, axes = _figure(1, len(levels), figsize=(4.5 * len(levels), 4), squeeze=False)
+    axes = axes[0]
     for ax, level in zip(axes, levels):
         moved = perturb(points, level * eps, np.random.default_rng([seed, level]))
         xy = _xy(name, moved)
