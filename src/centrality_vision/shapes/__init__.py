@@ -5,6 +5,10 @@
 - :class:`CentralityComparisons` and :class:`CentralityComparisonForest`: random binary
   comparisons of centrality values at shape-relative positions, and a random forest
   over them (thesis 4.3.3).
+- :func:`pairwise_shape_distances`: shape retrieval from outline profiles of reach and
+  inner distances on the pixel graph, or from centrality histograms (chi-square, earth
+  mover's), with :func:`diffusion_rerank` and the field's scores
+  (:func:`bullseye_score`, :func:`retrieval_counts`, :func:`nearest_neighbour_accuracy`).
 - :func:`shape_centralities` and :class:`CentralityCache`: centralities per image,
   computed once and cached (in memory, or on disk shared by worker processes), in
   parallel with ``n_jobs``.
@@ -21,6 +25,16 @@ from ._cache import (
 )
 from ._comparisons import CentralityComparisonForest, CentralityComparisons, centrality_map
 from ._histogram import CentralityHistogram
+from ._retrieval import (
+    bullseye_score,
+    diffusion_rerank,
+    nearest_neighbour_accuracy,
+    normalize_shape,
+    outline_profiles,
+    pairwise_shape_distances,
+    retrieval_counts,
+    shape_distance,
+)
 
 __all__ = [
     "PATH_CENTRALITIES",
@@ -30,6 +44,14 @@ __all__ = [
     "CentralityComparisons",
     "CentralityHistogram",
     "as_shape_images",
+    "bullseye_score",
+    "diffusion_rerank",
+    "nearest_neighbour_accuracy",
+    "normalize_shape",
+    "outline_profiles",
+    "pairwise_shape_distances",
+    "retrieval_counts",
+    "shape_distance",
     "centrality_map",
     "default_cache",
     "resolve_cache",

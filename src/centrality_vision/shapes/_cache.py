@@ -147,7 +147,8 @@ class CentralityCache:
         self.misses = 0
 
     def __repr__(self) -> str:
-        return f"CentralityCache(max_images={self.max_images}, directory={None if self.directory is None else str(self.directory)!r})"
+        directory = None if self.directory is None else str(self.directory)
+        return f"CentralityCache(max_images={self.max_images}, directory={directory!r})"
 
     def __deepcopy__(self, memo):
         return self
@@ -296,7 +297,8 @@ class CentralityCache:
         values = np.array(values, dtype=np.float64)
         if values.shape != (int(np.count_nonzero(mask)),):
             raise InputError(
-                f"`values` must hold one value per foreground pixel ({int(np.count_nonzero(mask))}); got shape {values.shape}."
+                f"`values` must hold one value per foreground pixel ({int(np.count_nonzero(mask))}); "
+                f"got shape {values.shape}."
             )
         if self.directory is not None and not self._path(key, name).exists():
             self._save(key, name, values)

@@ -155,7 +155,8 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         check_choice(self.scaling, ("minmax", "max"), name="scaling")
         if self.connectivity not in (4, 8) or isinstance(self.connectivity, bool):
             raise ValueError(
-                f"The 'connectivity' parameter of CentralityHistogram must be 4 or 8. Got {self.connectivity!r} instead."
+                "The 'connectivity' parameter of CentralityHistogram must be 4 or 8. "
+                f"Got {self.connectivity!r} instead."
             )
         return names
 

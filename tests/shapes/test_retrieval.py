@@ -1,0 +1,165 @@
+"""Shape retrieval: outline profiles, pairwise distances, re-ranking and the field's scores."""
+
+import numpy as np
+import pytest
+from scipy import ndimage
+from scipy.stats import wasserstein_distance
+
+from centrality_vision.shapes import (
+    bullseye_score,
+    diffusion_rerank,
+    nearest_neighbour_accuracy,
+    normalize_shape,
+    outline_profiles,
+    pairwise_shape_distances,
+    retrieval_counts,
+    shape_distance,
+)
+
+
+def _ell(size=70):
+    image = np.zeros((size, size), dtype=bool)
+    image[10:60, 15:30] = True
+    image[45:60, 15:55] = True
+    return image
+
+
+def _cross(size=70):
+    image = np.zeros((size, size), dtype=bool)
+    image[15:55, 30:40] = True
+    image[30:40, 12:58] = True
+    return image
+
+
+def _disk(size=70, r=22):
+    yy, xx = np.mgrid[:size, :size]
+    return (yy - size / 2) ** 2 + (xx - size / 2) ** 2 < r**2
+
+
+def _rotate(image, degrees):
+    padded = np.pad(image, 30).astype(float)
+    return ndimage.rotate(padded, degrees, order=1, reshape=True) > 0.5
+
+
+def test_profile_distance_invariant_to_similarity_and_mirror():
+    ell = _ell()
+    variants = [
+        np.roll(ell, (7, -5), axis=(0, 1)),  # translation
+        ndimage.zoom(ell.astype(float), 1.7, order=1) > 0.5,  # scale
+        _rotate(ell, 37),  # rotation
+        ell[:, ::-1],  # mirror
+    ]
+    d = pairwise_shape_distances([ell, *variants, _cross(), _disk()], n_candidates=3, n_points=60, resolution=32)
+    same = d[0, 1:5]
+    other = d[0, 5:]
+    assert same.max() < 0.5 * other.min(), (same, other)
+    assert d[0, 1] < 1e-12  # translation changes nothing at all
+
+
+def test_distances_symmetric_zero_diagonal_and_refinement_never_worse():
+    images = [_ell(), _cross(), _disk(), _rotate(_cross(), 20)]
+    shift_only = pairwise_shape_distances(images, n_candidates=0)
+    refined = pairwise_shape_distances(images, n_candidates=3)
+    for d in (shift_only, refined):
+        np.testing.assert_array_equal(d, d.T)
+        assert np.all(np.diag(d) == 0) and np.all(d >= 0)
+    assert np.all(refined <= shift_only + 1e-12)
+    assert shape_distance(images[1], images[3], n_candidates=1) == pytest.approx(refined[1, 3])
+
+
+def test_n_jobs_does_not_change_the_result():
+    from joblib import parallel_config
+
+    images = [_ell(), _cross(), _disk(), _ell()[::-1]]
+    options = {"n_points": 40, "resolution": 24, "n_candidates": 2}
+    with parallel_config(backend="threading"):  # no process start-up in the unit tests
+        parallel = pairwise_shape_distances(images, n_jobs=2, **options)
+    np.testing.assert_array_equal(pairwise_shape_distances(images, n_jobs=1, **options), parallel)
+
+
+def test_grey_images_and_inputs_not_modified():
+    ell = _ell()
+    grey = np.where(ell, 0, 255).astype(np.uint8)  # dark shape on white
+    before = grey.copy()
+    d = pairwise_shape_distances([ell, grey])
+    assert d[0, 1] == 0.0
+    np.testing.assert_array_equal(grey, before)
+
+
+def test_profiles_shape_and_counterclockwise_start_invariance():
+    p = outline_profiles(_ell(), n_points=40)
+    assert p.shape == (40, 8 + 25)
+    reach = p[:, :8] / 2.0  # REACH_WEIGHT
+    assert np.all(np.diff(reach, axis=1) >= 0) and np.all((reach > 0) & (reach <= 1))
+
+
+def test_normalize_shape_keeps_largest_part_and_area():
+    image = np.zeros((300, 300), dtype=bool)
+    image[20:220, 40:140] = True
+    image[250:255, 250:255] = True  # a speck
+    small = normalize_shape(image, resolution=30)
+    assert abs(int(small.sum()) - 900) < 60
+    assert ndimage.label(small)[1] == 1
+
+
+def test_emd_equals_scipy_wasserstein_on_bin_centres():
+    from centrality_vision.shapes import CentralityHistogram
+
+    images = [_ell(), _cross()]
+    d = pairwise_shape_distances(images, method="emd", bins=10, resolution=12)
+    small = [normalize_shape(im, resolution=12) for im in images]
+    h = CentralityHistogram(bins=10, weights=True).fit_transform(small)
+    centres = (np.arange(10) + 0.5) / 10
+    assert d[0, 1] == pytest.approx(wasserstein_distance(centres, centres, h[0], h[1]))
+    chi2 = pairwise_shape_distances(images, method="chi2", bins=10, resolution=12)
+    total = h[0] + h[1]
+    expected = 0.5 * np.sum(np.where(total > 0, (h[0] - h[1]) ** 2 / np.where(total > 0, total, 1), 0))
+    assert chi2[0, 1] == pytest.approx(expected)
+
+
+def _blocks():
+    x = np.r_[np.arange(4.0), 50 + np.arange(4.0), 200 + np.arange(4.0)]
+    return np.abs(np.subtract.outer(x, x)), np.repeat(["a", "b", "c"], 4)
+
+
+def test_scores_by_hand():
+    d, labels = _blocks()
+    assert bullseye_score(d, labels, top=4) == 1.0
+    assert bullseye_score(d, labels, top=8) == 1.0  # capped at the class size
+    np.testing.assert_array_equal(retrieval_counts(d, labels, k=4), [12, 12, 12, 0])
+    assert nearest_neighbour_accuracy(d, labels, n_train=2, n_splits=4) == 1.0
+    swapped = labels.copy()
+    swapped[[0, 4]] = swapped[[4, 0]]  # two shapes in the wrong block
+    # rank 1 (ties to the lower index): queries 0, 1, 4 and 5 find the wrong class
+    assert retrieval_counts(d, swapped, k=1)[0] == 8
+    # top 4, query included: 1 + 3 + 3 + 3 in each of the first two blocks, 16 in the last
+    assert bullseye_score(d, swapped, top=4) == pytest.approx(36 / 48)
+
+
+def test_rerank_pulls_a_chain_together():
+    x = np.r_[np.arange(6.0) * 3, 40 + np.arange(6.0)]
+    d = np.abs(np.subtract.outer(x, x))
+    labels = np.repeat([0, 1], 6)
+    r = diffusion_rerank(d, n_neighbors=3, bandwidth=2)
+    np.testing.assert_allclose(r, r.T)
+    assert np.all(np.diag(r) == 0)
+    assert retrieval_counts(r, labels, k=5).sum() == 60
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "match"),
+    [
+        (lambda: pairwise_shape_distances([_ell()], method="hausdorff"), ValueError, "`method` must be one of"),
+        (lambda: pairwise_shape_distances([_ell()], n_points=3), ValueError, "`n_points`"),
+        (lambda: pairwise_shape_distances(_ell()), ValueError, "single 2D array"),
+        (lambda: pairwise_shape_distances([_ell()], n_jobs=0), ValueError, "`n_jobs`"),
+        (lambda: bullseye_score(np.zeros((3, 2)), [0, 1, 2]), ValueError, "square"),
+        (lambda: bullseye_score(np.full((2, 2), np.nan), [0, 1]), ValueError, "finite"),
+        (lambda: retrieval_counts(np.zeros((3, 3)), [0, 1]), ValueError, "one label per shape"),
+        (lambda: nearest_neighbour_accuracy(np.zeros((4, 4)), [0, 0, 1, 1], n_train=2), ValueError, "`n_train`"),
+        (lambda: diffusion_rerank(np.zeros((3, 3)), n_neighbors=5), ValueError, "`n_neighbors`"),
+    ],
+)
+def test_bad_inputs(call, error, match):
+    with pytest.raises(error, match=match):
+        call()
