@@ -107,3 +107,15 @@ def test_fig_7_4_figures(tmp_path):
     fig_7_4.plot_boxplots(_fig_7_4_result(True), tmp_path / "fig-7.4.png")
     for name in ("fig-7.2.png", "fig-7.3.png", "fig-7.4.png"):
         assert (tmp_path / name).stat().st_size > 10_000
+
+
+def test_fig_7_4_lambda_sweep_sentences():
+    result = _fig_7_4_result(False)
+    rows = {"0": (0.0, 0.9), "1": (0.25, 0.5), "2": (0.33, 0.2)}
+    result["lambda_sweep"] = {
+        name: {lam: {"mst_share": a, "stable_1": b, "stable_3": b / 2} for lam, (a, b) in rows.items()}
+        for name in fig_7_4.DATASETS
+    }
+    text = fig_7_4.explain(result)
+    assert "grows from 0% to 33% and the stable share at 1 eps falls from 0.90 to 0.20" in text
+    assert "lam 1: 25% | 0.50, 0.25" in fig_7_4.format_table(result)
