@@ -438,7 +438,11 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=dpi, bbox_inches="tight")
+    from matplotlib.layout_engine import ConstrainedLayoutEngine
+
+    # a constrained layout already fits everything in; a second, "tight" pass only costs time
+    tight = not isinstance(fig.get_layout_engine(), ConstrainedLayoutEngine)
+    fig.savefig(path, dpi=dpi, bbox_inches="tight" if tight else None)
     plt.close(fig)
     return path
 

@@ -111,16 +111,20 @@ def run(args: argparse.Namespace) -> int:
         estimator.fit(moving, target, true_moving=target)
         rms = np.asarray(estimator.history_["error"]) / np.sqrt(moving.shape[0])  # per-point RMS
         runs["CPD" if name == "CPD" else f"GPD ({name})"] = {"estimator": estimator, "rms": rms}
-    fig = plt.figure(figsize=(12, 4), layout="constrained")
+    fig = plt.figure(figsize=(12, 3.6), layout="constrained")
     panels = [
         ("before", moving),
         ("CPD", runs["CPD"]["estimator"].moving_transformed_),
         ("GPD (closeness)", runs["GPD (closeness)"]["estimator"].moving_transformed_),
     ]
+    everything = np.vstack([target] + [points for _, points in panels])
+    low, high = everything.min(axis=0) - 0.1, everything.max(axis=0) + 0.1
     for k, (title, points) in enumerate(panels, start=1):
         ax = fig.add_subplot(1, 3, k)
         done = "" if title == "before" else f", {runs[title]['estimator'].n_iter_} iterations"
         plot_registration(target, points, ax=ax, title=title + done, legend=k == 1)
+        ax.set_xlim(low[0], high[0])  # the same frame in the three panels
+        ax.set_ylim(low[1], high[1])
     fig.suptitle("Fish under a rotation of 50 degrees and scale 1.5: registered by CPD and by GPD")
     save_figure(fig, out / "fish_registration.png")
     ax = plot_alignment_errors(

@@ -303,8 +303,18 @@ def _plot(args, fixed, before, after, rms, label) -> None:
         moving_label="moving, aligned",
         fixed_label=f"fixed ({Path(args.fixed).name})",
     )
+    import numpy as np
+
+    everything = np.vstack([fixed, before, after])
+    pad = 0.04 * np.ptp(everything, axis=0)
+    low, high = everything.min(axis=0) - pad, everything.max(axis=0) + pad
+    for ax in axes:  # the same frame before and after
+        ax.set_xlim(low[0], high[0])
+        ax.set_ylim(low[1], high[1])
+        if three_d:
+            ax.set_zlim(low[2], high[2])
     if rms:
         ax = fig.add_subplot(1, n_panels, 3)
-        plot_alignment_errors({label: rms}, ax=ax, title="alignment error")
+        plot_alignment_errors({label: rms}, ax=ax, title="alignment error", ylabel="per-point RMS error")
     fig.suptitle(label)
     save_figure(fig, args.plot)
