@@ -1,12 +1,14 @@
 import json
 
 import numpy as np
+import pytest
 
-from centrality_vision.experiments import fig_5_3
+from centrality_vision.experiments import fig_5_3, table_5_1
+from centrality_vision.experiments._common import tally
 
 
-def test_fig_5_3_quick(tmp_path, capsys):
-    assert fig_5_3.main(["--quick", "--out", str(tmp_path)]) == 0
+def test_fig_5_3_quick_checks_its_claims_over_seeds(tmp_path, capsys):
+    assert fig_5_3.main(["--quick", "--out", str(tmp_path), "--seeds", "3", "--scheduler", "serial"]) == 0
     record = json.loads((tmp_path / "fig-5.3.json").read_text())
     methods = record["methods"]
     assert set(methods) == set(fig_5_3.METHODS)
@@ -14,24 +16,48 @@ def test_fig_5_3_quick(tmp_path, capsys):
         errors = np.asarray(m["errors"])
         assert len(errors) == m["n_iter"] + 1 and errors[-1] < 1e-3 * errors[0]
         assert {"3", "6", "9"} <= set(m["snapshots"])
-    # the thesis' claim for the fish under a similarity transform: closeness-GPD is faster than CPD
-    assert methods["closeness"]["below"]["0.01"] < methods["CPD"]["below"]["0.01"]
+    # the odds are the tally of the per-seed claims, and seed 0's own claims are among them
+    assert record["seeds"] == [0, 1, 2] and len(record["per_seed"]) == 3
+    assert record["odds"] == tally([r["claims"] for r in record["per_seed"]])
+    assert record["per_seed"][0]["claims"] == record["claims"]
+    # each seed draws its own transform
+    assert len({json.dumps(r["transform"]) for r in record["per_seed"]}) == 3
     assert (tmp_path / "fig-5.3.png").stat().st_size > 10_000 and (tmp_path / "fig-5.4.png").stat().st_size > 10_000
-    assert "closeness" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "Claims over 3 seeds" in out and "holds in" in out and 'thesis: "' in out
 
 
-def test_fig_5_5_quick(tmp_path):
+def test_fig_5_3_transform_is_a_seeded_similarity():
+    moving, fixed, t = fig_5_3.problem(4)
+    a = np.radians(t["rotation_deg"])
+    rotation = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    np.testing.assert_allclose(fixed, t["scale"] * moving @ rotation.T + t["translation"])
+    assert -60 <= t["rotation_deg"] <= 60 and 0.75 <= t["scale"] <= 1.5
+    np.testing.assert_array_equal(fig_5_3.problem(4)[1], fixed)
+
+
+def test_fig_5_5_cpd_and_gpd_recover_the_affine_map(tmp_path):
     from centrality_vision.experiments import fig_5_5
 
     moving, fixed, true_moving, linear, shift = fig_5_5.problem(0)
     assert moving.shape[1] == 3 and moving.shape[0] < 392 and fixed.shape[0] < 392
     assert np.allclose(true_moving, moving @ linear.T + shift)
-    assert fig_5_5.main(["--quick", "--out", str(tmp_path)]) == 0
+    assert fig_5_5.main(["--quick", "--out", str(tmp_path), "--seeds", "1", "--scheduler", "serial"]) == 0
     record = json.loads((tmp_path / "fig-5.5.json").read_text())
-    # affine CPD with 8% missing on each side heads for the true transform (30 iterations here)
-    errors = record["methods"]["CPD"]["errors"]
-    assert errors[-1] < 0.01 * errors[0]
+    # affine CPD and every GPD variant, with 8% missing on each side, head for the true map
+    for name, method in record["methods"].items():
+        errors = method["errors"]
+        assert errors[-1] < 0.01 * errors[0], name
+    assert set(record["odds"]) == set(fig_5_5.CLAIMS)
     assert {"fig-5.5.png", "fig-5.6.png"} <= {p.name for p in tmp_path.iterdir()}
+
+
+def test_fig_5_5_says_clearly_when_the_face_is_missing(tmp_path):
+    from centrality_vision.experiments import fig_5_5
+
+    with pytest.raises(FileNotFoundError, match="needs the CPD face"):
+        fig_5_5.main(["--quick", "--out", str(tmp_path / "o"), "--face-dir", str(tmp_path)])
+    assert not (tmp_path / "o").exists()  # nothing written
 
 
 def test_fig_5_7_quick(tmp_path):
@@ -39,31 +65,53 @@ def test_fig_5_7_quick(tmp_path):
 
     moving, fixed, true_moving = fig_5_7.problem(0)
     assert fixed.shape[0] == moving.shape[0] - fig_5_7.N_MISSING + fig_5_7.N_OUTLIERS
-    assert fig_5_7.main(["--quick", "--out", str(tmp_path)]) == 0
+    assert fig_5_7.main(["--quick", "--out", str(tmp_path), "--seeds", "2", "--scheduler", "serial"]) == 0
     record = json.loads((tmp_path / "fig-5.7.json").read_text())
     for m in record["methods"].values():
         assert m["errors"][-1] < 0.8 * m["errors"][0]  # every method reduces the misalignment
+    assert all(cell["n"] == 2 for cell in record["odds"].values())
     assert {"fig-5.7.png", "fig-5.8.png"} <= {p.name for p in tmp_path.iterdir()}
 
 
-def test_table_5_1_quick(tmp_path, capsys):
-    from centrality_vision.experiments import table_5_1
-
+def test_table_5_1_cells_follow_from_the_sets(tmp_path, capsys):
     for kind in table_5_1.CLASSES:
         pts = table_5_1.make_set(kind, 0, n_points=40)
         assert pts.shape[1] == 2 and abs(np.ptp(pts, axis=0).max() - 1) < 1e-12
         np.testing.assert_array_equal(pts, table_5_1.make_set(kind, 0, n_points=40))  # seeded
-    assert table_5_1.main(["--quick", "--out", str(tmp_path), "--scheduler", "serial"]) == 0
+    assert table_5_1.main(["--quick", "--out", str(tmp_path), "--scheduler", "serial", "--seeds", "2"]) == 0
     record = json.loads((tmp_path / "table-5.1-quick.json").read_text())
-    assert set(record["summary"]) == set(table_5_1.CLASSES)
-    for kind in table_5_1.CLASSES:
-        for m in table_5_1.METHODS:
-            cell = record["summary"][kind][m]
-            assert 0 <= cell["converged"] <= 100 and len(cell["iterations"]) == 4
     text = capsys.readouterr().out
-    assert "Table 5.3" in text and "| 100" in text  # ours | thesis side by side
-    lines = (tmp_path / "table-5.1-quick.jsonl").read_text().splitlines()
-    assert len(lines) == 20  # one line per unit, kept for a resumed run
+    lines = text.splitlines()
+    table_5_3 = lines[lines.index("Table 5.3: % converged") + 2 :][: len(table_5_1.CLASSES)]
+    for kind, line in zip(table_5_1.CLASSES, table_5_3):
+        for j, m in enumerate(table_5_1.METHODS):
+            cell = record["summary"][kind][m]
+            ok = np.asarray(cell["succeeded"])
+            its = np.asarray(cell["iterations"])
+            # the printed share and mean are those of the sets' own records
+            assert cell["converged"] == pytest.approx(100 * ok.mean())
+            if ok.any():
+                assert cell["mean"] == pytest.approx(its[ok].mean())
+            assert f"{cell['converged']:.0f} | {table_5_1.THESIS['converged'][kind][j]:.0f}" in line
+    # the speed-up ratios are CPD's mean over each variant's, per seed
+    s0 = record["speedup"]["0"]["cluster"]["closeness"]
+    assert s0 == pytest.approx(
+        record["summary"]["cluster"]["CPD"]["mean"] / record["summary"]["cluster"]["closeness"]["mean"]
+    )
+    assert "Speed-up" in text and "2.67" in text  # the thesis' 60.56 / 22.72 beside ours
+    assert all(cell["n"] == 2 for cell in record["odds"].values())
+    assert len((tmp_path / "table-5.1-quick.jsonl").read_text().splitlines()) == 40  # 2 seeds x 20 units, kept
+
+
+def test_table_5_1_never_reports_another_seeds_numbers(tmp_path):
+    """Re-running with another seed into the same folder computes that seed, never reuses the old one."""
+    kwargs = dict(quick=True, out=tmp_path, scheduler="serial", progress=False, n_sets=1)
+    first = table_5_1.run(seed=0, **kwargs)
+    again = table_5_1.run(seed=7, **kwargs)
+    fresh = table_5_1.run(seed=7, **{**kwargs, "out": tmp_path / "fresh"})
+    assert again["seed"] == 7 and again["summary"] == fresh["summary"]
+    assert again["summary"] != first["summary"]
+    assert table_5_1.format_table(again) == table_5_1.format_table(fresh)
 
 
 def test_table_2_1_and_fig_7_1_reproduce_the_thesis(tmp_path):
@@ -78,11 +126,12 @@ def test_table_2_1_and_fig_7_1_reproduce_the_thesis(tmp_path):
     assert (tmp_path / "f" / "fig-7.1.png").stat().st_size > 5_000
 
 
-def test_report_gathers_tables_and_figures(tmp_path):
-    from centrality_vision.experiments.report import run_all
+def test_table_2_1_explanation_follows_the_numbers():
+    from centrality_vision.experiments import table_2_1
 
-    path = run_all(tmp_path, quick=True, only=["table-2.1", "fig-7.1"])
-    text = path.read_text()
-    assert "## table-2.1" in text and "## fig-7.1" in text
-    assert "0.83 | 0.83" in text  # closeness of node b, ours | thesis
-    assert "![fig-7.1](fig-7.1/fig-7.1.png)" in text
+    result = table_2_1.run()
+    assert table_2_1.explain(result).startswith("4 of 4 centralities equal")
+    result["ours"]["closeness"][1] += 0.05
+    result["claims"]["closeness equals Table 2.1 to two decimals"] = False
+    text = table_2_1.explain(result)
+    assert text.startswith("3 of 4") and "closeness differ" in text and "0.05" in text

@@ -3,7 +3,7 @@ import os
 
 import pytest
 
-from centrality_vision.experiments._runner import Unit, load_results, run_units
+from centrality_vision.experiments._runner import Unit, load_results, run_units, unit_id
 from centrality_vision.experiments.table_5_1 import register_set
 
 
@@ -33,7 +33,7 @@ def test_a_crash_keeps_what_finished_and_a_rerun_does_the_rest(tmp_path):
     units = [Unit(f"u{i}", _square, {"x": i if i != 3 else -1, "marker_dir": str(tmp_path)}) for i in range(5)]
     with pytest.raises(RuntimeError, match="boom"):
         run_units(units, tmp_path / "r.jsonl", scheduler="serial", progress=False)
-    assert set(load_results(tmp_path / "r.jsonl")) == {"u0", "u1", "u2"}
+    assert {i.split("#")[0] for i in load_results(tmp_path / "r.jsonl")} == {"u0", "u1", "u2"}
     fixed = units[:3] + [Unit("u3", _square, {"x": 3, "marker_dir": str(tmp_path)})] + units[4:]
     before = _calls(tmp_path)
     out = run_units(fixed, tmp_path / "r.jsonl", scheduler="serial", progress=False)
@@ -44,13 +44,18 @@ def test_a_torn_last_line_is_dropped(tmp_path):
     path = tmp_path / "r.jsonl"
     path.write_text(json.dumps({"key": "a", "result": 1}) + "\n" + '{"key": "b", "res')
     assert load_results(path) == {"a": 1}
-    out = run_units([Unit("b", _square, {"x": 2, "marker_dir": str(tmp_path)})], path, scheduler="serial", progress=False)
+    unit = Unit("b", _square, {"x": 2, "marker_dir": str(tmp_path)})
+    out = run_units([unit], path, scheduler="serial", progress=False)
     assert out == {"b": {"x": 2, "square": 4}}
-    assert load_results(path) == {"a": 1, "b": {"x": 2, "square": 4}}
+    assert load_results(path) == {"a": 1, unit_id(unit): {"x": 2, "square": 4}}
 
 
 def test_process_pool_and_dask_give_identical_results(tmp_path):
-    units = [Unit(f"{k}/{i}", register_set, {"kind": k, "index": i, "n_points": 30}) for k in ("random", "contour") for i in range(2)]
+    units = [
+        Unit(f"{k}/{i}", register_set, {"kind": k, "index": i, "n_points": 30})
+        for k in ("random", "contour")
+        for i in range(2)
+    ]
     serial = run_units(units, tmp_path / "serial.jsonl", scheduler="serial", progress=False)
     pool = run_units(units, tmp_path / "pool.jsonl", scheduler="processes", workers=2, progress=False)
     assert pool == serial
@@ -65,3 +70,87 @@ def test_bad_runner_arguments(tmp_path):
         run_units([unit], tmp_path / "r.jsonl", scheduler="threads")
     with pytest.raises(ValueError, match="unique keys"):
         run_units([unit, unit], tmp_path / "r.jsonl", scheduler="serial")
+
+
+def test_other_parameters_in_the_same_file_are_recomputed_never_reused(tmp_path, capsys):
+    """A unit with the same label but another seed (or size) never gets the stored result."""
+    path = tmp_path / "r.jsonl"
+    first = run_units(
+        [Unit("u", _square, {"x": 2, "marker_dir": str(tmp_path)})], path, scheduler="serial", progress=False
+    )
+    second = run_units(
+        [Unit("u", _square, {"x": 3, "marker_dir": str(tmp_path)})], path, scheduler="serial", progress=False
+    )
+    assert first == {"u": {"x": 2, "square": 4}} and second == {"u": {"x": 3, "square": 9}}
+    assert _calls(tmp_path) == 2
+    assert "1 stored result(s) were computed with other parameters" in capsys.readouterr().err
+    # both stay in the file; asking for the first again reads it, computing nothing
+    again = run_units(
+        [Unit("u", _square, {"x": 2, "marker_dir": str(tmp_path)})], path, scheduler="serial", progress=False
+    )
+    assert again == first and _calls(tmp_path) == 2
+
+
+def test_unit_ids_change_with_every_parameter_and_the_version(monkeypatch):
+    import centrality_vision
+
+    base = unit_id(Unit("k", _square, {"x": 1, "marker_dir": "d"}))
+    assert base == unit_id(Unit("k", _square, {"marker_dir": "d", "x": 1}))  # argument order is irrelevant
+    assert base != unit_id(Unit("k", _square, {"x": 1, "marker_dir": "e"}))
+    assert base != unit_id(Unit("k", register_set, {"x": 1, "marker_dir": "d"}))
+    monkeypatch.setattr(centrality_vision, "__version__", "0.0.0-other")
+    assert base != unit_id(Unit("k", _square, {"x": 1, "marker_dir": "d"}))
+
+
+_KILL_SCRIPT = """
+import sys
+from centrality_vision.experiments._runner import Unit, run_units
+sys.path.insert(0, {tests!r})
+from test_runner import _sleeper
+units = [Unit(f"u{{i}}", _sleeper, {{"marker_dir": {folder!r}}}) for i in range(2)]
+run_units(units, {folder!r} + "/r.jsonl", scheduler={scheduler!r}, workers=2, progress=False)
+"""
+
+
+def _sleeper(marker_dir):
+    open(os.path.join(marker_dir, f"pid-{os.getpid()}"), "w").close()
+    import time
+
+    time.sleep(120)
+    return 0
+
+
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    try:  # a zombie (exited, not yet reaped by its new parent) counts as gone
+        with open(f"/proc/{pid}/stat") as handle:
+            return handle.read().split(")")[-1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize("scheduler", ["processes"])
+def test_a_killed_run_leaves_no_orphan_workers(tmp_path, scheduler):
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = _KILL_SCRIPT.format(tests=os.path.dirname(__file__), folder=str(tmp_path), scheduler=scheduler)
+    parent = subprocess.Popen([sys.executable, "-c", script])
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline and len([p for p in os.listdir(tmp_path) if p.startswith("pid-")]) < 2:
+            time.sleep(0.2)
+        workers = [int(p[4:]) for p in os.listdir(tmp_path) if p.startswith("pid-")]
+        assert len(workers) == 2 and all(_alive(w) for w in workers)
+    finally:
+        parent.send_signal(signal.SIGKILL)
+        parent.wait()
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline and any(_alive(w) for w in workers):
+        time.sleep(0.1)
+    assert not any(_alive(w) for w in workers)

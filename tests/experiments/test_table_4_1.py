@@ -65,7 +65,9 @@ def test_runner_unit_caches_exactly_the_centralities_of_the_noisy_copy(tmp_path)
     from centrality_vision.datasets import load_kimia99
     from centrality_vision.shapes import SHAPE_CENTRALITIES, CentralityCache, shape_centralities
 
-    record = table_4_1.centralities_unit(image_index=5, position=2, level_index=2, level=0.05, seed=7, cache_dir=str(tmp_path))
+    record = table_4_1.centralities_unit(
+        image_index=5, position=2, level_index=2, level=0.05, seed=7, cache_dir=str(tmp_path)
+    )
     images = [load_kimia99().images[i] for i in (0, 1, 5)]
     noisy = table_4_1.noisy_copies(images, table_4_1.NOISE_LEVELS, seed=7)[0.05][2]
     cache = CentralityCache(directory=tmp_path)

@@ -1,37 +1,162 @@
 """The thesis' experiments, one module each, printing our numbers beside the thesis'.
 
-Each module has ``run(quick=..., seed=...) -> dict``, ``format_table(result) -> str`` and
-``main(argv) -> int`` (``python -m centrality_vision.experiments.<module>`` or
-``centrality-vision reproduce <name>``); :data:`EXPERIMENTS` maps the command-line names to
-the modules. Long experiments run their independent units through
-:mod:`centrality_vision.experiments._runner` (resumable; local processes or Dask).
+:data:`REGISTRY` is the one list of experiments, read by the command line
+(``centrality-vision reproduce <name>``) and by the report
+(:mod:`centrality_vision.experiments.report`): each :class:`Experiment` names its module,
+the thesis figures and tables it reproduces and whether its units go through the shared
+runner. :data:`EXPERIMENTS` (name -> module name) and :data:`RUNNER_EXPERIMENTS` are
+derived from it, for code that only needs those; :func:`run_experiment` runs one experiment
+the way the command line does.
 
-- ``table-2.1`` (:mod:`.table_2_1`): the four centralities of the 6-node graph.
-- ``table-4.1`` (:mod:`.table_4_1`): shape classification on Kimia-99 under salt noise
-  (Table 4.1, fig. 4.8).
-- ``fig-5.3`` (:mod:`.fig_5_3`): the fish under a similarity transform, CPD against GPD with
-  four centralities (figs. 5.3, 5.4).
-- ``fig-5.5`` (:mod:`.fig_5_5`): the 3D face, affine with missing points (figs. 5.5, 5.6).
-- ``fig-5.7`` (:mod:`.fig_5_7`): the fish, non-rigid with outliers and missing points (figs. 5.7, 5.8).
-- ``table-5.1`` (:mod:`.table_5_1`): 495 point sets of five classes (Tables 5.1-5.3).
-- ``fig-6.4`` (:mod:`.fig_6_4`): MWME matching of Kimia-99 outlines under similarity
-  transforms and noise.
-- ``fig-7.1`` (:mod:`.fig_7_1`): MST against MSTME on five points, with an exhaustive check.
-- ``fig-7.4`` (:mod:`.fig_7_4`): stability of MSTME, Delaunay, Gabriel and EMST graphs under
-  perturbation (figs. 7.3-7.5).
+Each module has ``run(quick=..., seed=...) -> dict``, ``format_table(result) -> str``,
+``main(argv) -> int`` (``python -m centrality_vision.experiments.<module>``) and
+``explain(result) -> str``, the paragraph of the report written from the result's own
+numbers. ``main`` takes ``--quick``, ``--seed``, ``--seeds N`` (how many seeds the thesis'
+claims are checked over), ``--out`` and, where units run on the runner, ``--scheduler``
+and ``--workers``. Figures are drawn on :class:`matplotlib.figure.Figure` objects and
+saved with the Agg canvas: no module switches the matplotlib backend.
 """
 
-EXPERIMENTS = {
-    "table-2.1": "table_2_1",
-    "table-4.1": "table_4_1",
-    "fig-5.3": "fig_5_3",
-    "fig-5.5": "fig_5_5",
-    "fig-5.7": "fig_5_7",
-    "table-5.1": "table_5_1",
-    "fig-6.1": "fig_6_1",
-    "fig-6.4": "fig_6_4",
-    "fig-7.1": "fig_7_1",
-    "fig-7.4": "fig_7_4",
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["Experiment", "REGISTRY", "EXPERIMENTS", "RUNNER_EXPERIMENTS", "experiment_argv", "run_experiment"]
+
+
+@dataclass(frozen=True)
+class Experiment:
+    """One entry of :data:`REGISTRY`.
+
+    Attributes
+    ----------
+    name : str
+        Command-line name, also the output sub-folder (``results/<name>/``).
+    module : str
+        Module name under :mod:`centrality_vision.experiments`.
+    title : str
+        One line for listings.
+    reproduces : tuple of str
+        Thesis figures ("fig. 5.3") and tables ("Table 5.1") whose data it recomputes.
+    runner : bool
+        Its units run on the shared runner (``--scheduler``, ``--workers``).
+    """
+
+    name: str
+    module: str
+    title: str
+    reproduces: tuple = ()
+    runner: bool = True
+
+
+REGISTRY = {
+    e.name: e
+    for e in (
+        Experiment(
+            "table-2.1",
+            "table_2_1",
+            "the four centralities of the 6-node graph",
+            ("Table 2.1", "fig. 2.12"),
+            runner=False,
+        ),
+        Experiment(
+            "fig-4.2",
+            "fig_4_2",
+            "centralities of Kimia-99 shapes, noiseless and noisy, and their histograms",
+            ("fig. 4.1", "fig. 4.2", "fig. 4.3", "fig. 4.4", "fig. 4.5", "fig. 4.6"),
+        ),
+        Experiment(
+            "table-4.1", "table_4_1", "shape classification on Kimia-99 under salt noise", ("Table 4.1", "fig. 4.8")
+        ),
+        Experiment(
+            "fig-5.1", "fig_5_1", "GPD's prior and posterior of one fixed point", ("fig. 5.1", "fig. 5.2"), runner=False
+        ),
+        Experiment(
+            "fig-5.3", "fig_5_3", "the fish under a similarity transform, CPD against GPD", ("fig. 5.3", "fig. 5.4")
+        ),
+        Experiment("fig-5.5", "fig_5_5", "the 3D face, affine with missing points", ("fig. 5.5", "fig. 5.6")),
+        Experiment(
+            "fig-5.7", "fig_5_7", "the fish, non-rigid with outliers and missing points", ("fig. 5.7", "fig. 5.8")
+        ),
+        Experiment(
+            "fig-5.10", "fig_5_10", "sample point sets of the five classes of Table 5.1", ("fig. 5.10",), runner=False
+        ),
+        Experiment(
+            "table-5.1",
+            "table_5_1",
+            "495 point sets of five classes, CPD against GPD",
+            ("Table 5.1", "Table 5.2", "Table 5.3"),
+        ),
+        Experiment(
+            "fig-6.1",
+            "fig_6_1",
+            "worked examples of ch. 6: six-vertex entropies, Table 6.1",
+            ("fig. 6.1", "fig. 6.3", "Table 6.1"),
+            runner=False,
+        ),
+        Experiment("fig-6.4", "fig_6_4", "MWME matching of Kimia-99 outlines", ("fig. 6.4",)),
+        Experiment("fig-7.1", "fig_7_1", "MST against MSTME on five points", ("fig. 7.1",), runner=False),
+        Experiment(
+            "fig-7.4", "fig_7_4", "stability of data-graphs under perturbation", ("fig. 7.3", "fig. 7.4", "fig. 7.5")
+        ),
+    )
 }
 
-__all__ = ["EXPERIMENTS"]
+#: Command-line name -> module name under :mod:`centrality_vision.experiments` (from :data:`REGISTRY`).
+EXPERIMENTS = {name: e.module for name, e in REGISTRY.items()}
+#: The experiments whose units run on the shared runner (they accept ``--scheduler``/``--workers``).
+RUNNER_EXPERIMENTS = tuple(name for name, e in REGISTRY.items() if e.runner)
+
+
+def experiment_argv(
+    name: str,
+    out,
+    *,
+    quick: bool = False,
+    seed: int = 0,
+    seeds: int | None = None,
+    scheduler: str | None = None,
+    workers: int | None = None,
+) -> list[str]:
+    """The command line of experiment ``name``'s ``main`` for these options (``scheduler`` and
+    ``workers`` only for experiments of :data:`RUNNER_EXPERIMENTS`)."""
+    if name not in REGISTRY:
+        from ..exceptions import InputError
+
+        raise InputError(f"`name` must be one of {', '.join(REGISTRY)}; got {name!r}.")
+    argv = ["--out", str(out), "--seed", str(seed)]
+    if quick:
+        argv.append("--quick")
+    if seeds is not None:
+        argv += ["--seeds", str(seeds)]
+    if REGISTRY[name].runner:
+        if scheduler is not None:
+            argv += ["--scheduler", scheduler]
+        if workers is not None:
+            argv += ["--workers", str(workers)]
+    return argv
+
+
+def run_experiment(
+    name: str,
+    out,
+    *,
+    quick: bool = False,
+    seed: int = 0,
+    seeds: int | None = None,
+    scheduler: str | None = None,
+    workers: int | None = None,
+) -> int:
+    """Run experiment ``name`` into folder ``out`` (its files go to ``out`` itself) and return
+    its exit status; what ``centrality-vision reproduce <name>`` does.
+
+    ``seeds`` is how many seeds the thesis' claims are checked over (``--seeds N`` of
+    ``reproduce``; default 20, 3 with ``quick``). ``scheduler``/``workers`` go to the
+    experiments of :data:`RUNNER_EXPERIMENTS` and are ignored by the others (they are
+    instant). For ``reproduce all`` see :func:`centrality_vision.experiments.report.run_all`,
+    which takes the same options.
+    """
+    from importlib import import_module
+
+    argv = experiment_argv(name, out, quick=quick, seed=seed, seeds=seeds, scheduler=scheduler, workers=workers)
+    return import_module(f"{__name__}.{REGISTRY[name].module}").main(argv)

@@ -1,27 +1,85 @@
-"""What every experiment module shares: its command-line options, its output files, its claims."""
+"""What every experiment module shares: its options, its output files, its claims and their odds.
+
+A *claim* is one sentence of the thesis turned into a check on our numbers (``True`` when
+it holds). Claims are evaluated once per seed (or once per image or point set where the
+thesis speaks about a data set) and printed as "holds in k of n" with a 95% Wilson score
+interval for the share of draws in which the claim holds, beside the thesis' own words.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 from pathlib import Path
 
-__all__ = ["experiment_parser", "prepare_out", "save_outputs", "claim_lines"]
+__all__ = [
+    "SCHEDULER_HELP",
+    "DEFAULT_SEEDS",
+    "QUICK_SEEDS",
+    "experiment_parser",
+    "prepare_out",
+    "save_outputs",
+    "claim_lines",
+    "seed_list",
+    "wilson_interval",
+    "tally",
+    "odds_lines",
+    "verdict",
+    "share",
+    "new_figure",
+    "run_seed_units",
+]
 
 SCHEDULER_HELP = "serial, processes (default), dask, or tcp://host:port"
+#: Seeds over which a claim is checked unless ``--seeds`` says otherwise (full runs / ``--quick``).
+DEFAULT_SEEDS = 20
+QUICK_SEEDS = 3
 
 
-def experiment_parser(module: str, doc: str, name: str, *, quick_help=None, seed_help=None, runner=False):
+def experiment_parser(module: str, doc: str, name: str, *, quick_help=None, seed_help=None, runner=False, seeds=True):
     """The options of ``python -m centrality_vision.experiments.<module>``: --quick, --seed, --out
-    (default ``results/<name>``) and, for experiments on the shared runner, --scheduler and --workers."""
-    parser = argparse.ArgumentParser(prog=f"python -m centrality_vision.experiments.{module}", description=doc.splitlines()[0])
+    (default ``results/<name>``), --seeds (how many seeds the claims are checked over, from
+    --seed on) and, for experiments on the shared runner, --scheduler and --workers."""
+    parser = argparse.ArgumentParser(
+        prog=f"python -m centrality_vision.experiments.{module}", description=doc.splitlines()[0]
+    )
     parser.add_argument("--quick", action="store_true", help=quick_help)
-    parser.add_argument("--seed", type=int, default=0, help=seed_help)
+    parser.add_argument(
+        "--seed", type=int, default=0, help=seed_help or "seed of the run drawn in the figures (default: %(default)s)"
+    )
     parser.add_argument("--out", default=f"results/{name}")
-    if runner:
+    if seeds:
+        parser.add_argument(
+            "--seeds",
+            type=int,
+            default=None,
+            help=f"check the claims over this many seeds, --seed, --seed+1, ... (default: {DEFAULT_SEEDS}, --quick: "
+            f"{QUICK_SEEDS})",
+        )
+    if runner or seeds:
         parser.add_argument("--scheduler", default="processes", help=SCHEDULER_HELP)
         parser.add_argument("--workers", type=int, default=None)
     return parser
+
+
+def seed_list(seed: int, seeds: int | None, quick: bool) -> list[int]:
+    """``seeds`` consecutive seeds from ``seed`` (default :data:`DEFAULT_SEEDS`, or
+    :data:`QUICK_SEEDS` when ``quick``).
+
+    Examples
+    --------
+    >>> seed_list(5, 3, False)
+    [5, 6, 7]
+    >>> len(seed_list(0, None, False)), len(seed_list(0, None, True))
+    (20, 3)
+    """
+    n = (QUICK_SEEDS if quick else DEFAULT_SEEDS) if seeds is None else int(seeds)
+    if n < 1:
+        from ..exceptions import InputError
+
+        raise InputError(f"`seeds` must be a positive int; got {seeds!r}.")
+    return list(range(int(seed), int(seed) + n))
 
 
 def prepare_out(args) -> Path:
@@ -40,5 +98,109 @@ def save_outputs(out: Path, stem: str, text: str, result) -> None:
 
 
 def claim_lines(claims: dict, suffix: str = "") -> list[str]:
-    """One ``[holds]`` / ``[does not hold]`` line per claim."""
+    """One ``[holds]`` / ``[does not hold]`` line per claim (one run)."""
     return [f"[{'holds' if holds else 'does not hold'}] {claim}{suffix}" for claim, holds in claims.items()]
+
+
+def wilson_interval(k: int, n: int, z: float = 1.959963984540054) -> tuple[float, float]:
+    """The Wilson score interval (95% by default) for a share of ``k`` successes in ``n`` trials.
+
+    Examples
+    --------
+    >>> [round(v, 3) for v in wilson_interval(17, 20)]
+    [0.64, 0.948]
+    >>> wilson_interval(0, 20)[0], round(wilson_interval(0, 20)[1], 3)
+    (0.0, 0.161)
+    """
+    if n <= 0:
+        return 0.0, 1.0
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def tally(draws) -> dict:
+    """``{claim: {"k", "n", "low", "high"}}`` from a sequence of ``{claim: bool}`` (one per draw).
+
+    A claim missing from a draw (not defined there) is not counted for it.
+
+    Examples
+    --------
+    >>> t = tally([{"a": True}, {"a": False}, {"a": True}])
+    >>> t["a"]["k"], t["a"]["n"]
+    (2, 3)
+    """
+    out = {}
+    for draw in draws:
+        for claim, holds in draw.items():
+            cell = out.setdefault(claim, {"k": 0, "n": 0})
+            cell["k"] += bool(holds)
+            cell["n"] += 1
+    for cell in out.values():
+        cell["low"], cell["high"] = wilson_interval(cell["k"], cell["n"])
+    return out
+
+
+def verdict(cell: dict) -> str:
+    """How a tallied claim fares: 'holds' (95% interval above one half), 'fails' (below
+    one half) or 'undecided'; 'holds always' / 'never holds' at k = n / k = 0.
+
+    Examples
+    --------
+    >>> verdict({"k": 20, "n": 20, "low": 0.84, "high": 1.0}), verdict({"k": 9, "n": 20, "low": 0.26, "high": 0.66})
+    ('holds always', 'undecided')
+    """
+    if cell["n"] and cell["k"] == cell["n"]:
+        return "holds always"
+    if cell["k"] == 0:
+        return "never holds"
+    if cell["low"] > 0.5:
+        return "holds"
+    if cell["high"] < 0.5:
+        return "fails"
+    return "undecided"
+
+
+def share(cell: dict) -> str:
+    """``"k of n (95% interval lo-hi%)"``.
+
+    Examples
+    --------
+    >>> share({"k": 17, "n": 20, "low": 0.64, "high": 0.948})
+    'holds in 17 of 20 (95% interval 64-95%)'
+    """
+    return f"holds in {cell['k']} of {cell['n']} (95% interval {100 * cell['low']:.0f}-{100 * cell['high']:.0f}%)"
+
+
+def odds_lines(odds: dict, thesis: dict | None = None, *, unit: str = "seeds") -> list[str]:
+    """One line per tallied claim: ``[holds in k of n seeds (95% interval)] claim -- thesis: "..."``."""
+    lines = []
+    for claim, cell in odds.items():
+        line = f"[{share(cell).replace(' (', f' {unit} (', 1)}] {claim}"
+        if thesis and thesis.get(claim):
+            line += f' -- thesis: "{thesis[claim]}"'
+        lines.append(line)
+    return lines
+
+
+def new_figure(**kwargs):
+    """A matplotlib Figure drawn off-screen, with no pyplot and no backend switch.
+
+    ``Figure.savefig`` (used by :func:`centrality_vision.plotting.save_figure`) renders it
+    with the Agg canvas; nothing here needs a display or ``matplotlib.use``.
+    """
+    from matplotlib.figure import Figure
+
+    return Figure(**kwargs)
+
+
+def run_seed_units(
+    func, seeds, path, *, scheduler="processes", workers=None, progress=True, desc="seeds", **kwargs
+) -> list:
+    """``func(seed=s, **kwargs)`` for every seed, as units of the shared runner (kept in ``path``)."""
+    from ._runner import Unit, run_units
+
+    units = [Unit(f"seed-{s}", func, {"seed": s, **kwargs}) for s in seeds]
+    done = run_units(units, path, scheduler=scheduler, workers=workers, progress=progress, desc=desc)
+    return [done[u.key] for u in units]

@@ -11,7 +11,19 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["METHODS", "LEVELS", "compare_methods", "faster_than_cpd", "error_at", "format_comparison", "comparison_text", "plot_comparison"]
+__all__ = [
+    "METHODS",
+    "LEVELS",
+    "compare_methods",
+    "faster_than_cpd",
+    "error_at",
+    "format_comparison",
+    "comparison_text",
+    "plot_comparison",
+    "seed_summary",
+    "comparison_main",
+    "odds_sentences",
+]
 
 METHODS = ("betweenness", "closeness", "degree", "eigenvector", "CPD")
 LEVELS = (0.1, 0.01, 0.001)
@@ -58,12 +70,72 @@ def faster_than_cpd(methods: dict, level: float = 0.01) -> dict:
     return out
 
 
-def comparison_text(header: str, result: dict, figure: str, *, at=()) -> str:
-    """The printed table of a comparison experiment: header, iteration counts, the thesis, the claims."""
-    from ._common import claim_lines
+def comparison_text(header: str, result: dict, figure: str, *, at=(), sources=None) -> str:
+    """The printed table of a comparison experiment: header, iteration counts, the thesis, the
+    claims on this seed and, when checked over several seeds, their odds."""
+    from ._common import claim_lines, odds_lines
 
     lines = [header, *format_comparison(result["methods"], at=at), f"Thesis ({figure}): {result['thesis']}."]
-    return "\n".join(lines + claim_lines(result["claims"]))
+    lines += [f"Claims on seed {result['seed']} (the run drawn above):", *claim_lines(result["claims"])]
+    if result.get("odds"):
+        lines += [
+            f"Claims over {len(result['seeds'])} seeds ({result['seeds'][0]}-{result['seeds'][-1]}):",
+            *odds_lines(result["odds"], sources),
+        ]
+    return "\n".join(lines)
+
+
+def seed_summary(result: dict) -> dict:
+    """What a multi-seed run keeps of one seed's result: its claims and a few numbers per method."""
+    return {
+        "claims": result["claims"],
+        "below": {name: m["below"] for name, m in result["methods"].items()},
+        "n_iter": {name: m["n_iter"] for name, m in result["methods"].items()},
+        "converged": {name: m["converged"] for name, m in result["methods"].items()},
+        "final_error": {name: m["final_error"] for name, m in result["methods"].items()},
+        "error_at_10": error_at(result["methods"], 10),
+    }
+
+
+def odds_sentences(odds: dict, n_label: str = "seeds") -> list[str]:
+    """One sentence per tallied claim, from its numbers: 'It holds in 7 of 20 seeds (35%, 95%
+    interval 18-57%): undecided.'"""
+    from ._common import verdict
+
+    out = []
+    for claim, cell in odds.items():
+        out.append(
+            f'"{claim}" holds in {cell["k"]} of {cell["n"]} {n_label} ({100 * cell["k"] / cell["n"]:.0f}%, 95% '
+            "interval "
+            f"{100 * cell['low']:.0f}-{100 * cell['high']:.0f}%): {verdict(cell)}."
+        )
+    return out
+
+
+def comparison_main(argv, *, module: str, doc: str, name: str, run, seed_unit, format_table, plot) -> int:
+    """``main`` of a comparison experiment: the run of ``--seed`` (tables, figures) and the claims
+    over ``--seeds`` seeds, each seed a unit of the shared runner (``OUT/<name>-seeds.jsonl``)."""
+    from ._common import experiment_parser, prepare_out, run_seed_units, save_outputs, seed_list, tally
+
+    args = experiment_parser(module, doc, name).parse_args(argv)
+    out = prepare_out(args)
+    result = run(quick=args.quick, seed=args.seed)
+    seeds = seed_list(args.seed, args.seeds, args.quick)
+    records = run_seed_units(
+        seed_unit,
+        seeds,
+        out / f"{name}-seeds{'-quick' if args.quick else ''}.jsonl",
+        quick=args.quick,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        desc=f"{name} seeds",
+    )
+    result["seeds"] = seeds
+    result["per_seed"] = records
+    result["odds"] = tally([r["claims"] for r in records])
+    save_outputs(out, name, format_table(result), result)
+    plot(result, out)
+    return 0
 
 
 def error_at(methods: dict, iteration: int) -> dict:
@@ -73,15 +145,23 @@ def error_at(methods: dict, iteration: int) -> dict:
 
 def format_comparison(methods: dict, *, at=()) -> list[str]:
     if at:
-        lines = ["Alignment error |X - T(Y)| after a number of iterations:",
-                 f"{'method':>12}" + "".join(f"{f'it. {k}':>10}" for k in at) + f"{'final':>10}"]
+        lines = [
+            "Alignment error |X - T(Y)| after a number of iterations:",
+            f"{'method':>12}" + "".join(f"{f'it. {k}':>10}" for k in at) + f"{'final':>10}",
+        ]
         for name, m in methods.items():
-            lines.append(f"{name:>12}" + "".join(f"{error_at(methods, k)[name]:>10.3f}" for k in at) + f"{m['final_error']:>10.3f}")
+            lines.append(
+                f"{name:>12}"
+                + "".join(f"{error_at(methods, k)[name]:>10.3f}" for k in at)
+                + f"{m['final_error']:>10.3f}"
+            )
     else:
         lines = []
     lines += [
         "Iterations until |X - T(Y)| falls below a share of its initial value, and to convergence:",
-        f"{'method':>12}" + "".join(f"{f'<= {100 * lv:g}%':>10}" for lv in LEVELS) + f"{'stopped at':>12}{'final error':>13}",
+        f"{'method':>12}"
+        + "".join(f"{f'<= {100 * lv:g}%':>10}" for lv in LEVELS)
+        + f"{'stopped at':>12}{'final error':>13}",
     ]
     for name, m in methods.items():
         cells = "".join(f"{'-' if m['below'][str(lv)] is None else m['below'][str(lv)]:>10}" for lv in LEVELS)
@@ -91,19 +171,21 @@ def format_comparison(methods: dict, *, at=()) -> list[str]:
     return lines
 
 
-def plot_comparison(methods: dict, fixed, folder, *, curve_name, snap_name, snapshots, curve_title, snap_title, max_iter_shown=None):
+def plot_comparison(
+    methods: dict, fixed, folder, *, curve_name, snap_name, snapshots, curve_title, snap_title, max_iter_shown=None
+):
     """Error curves (``curve_name``) and snapshots (``snap_name``) as PNG files in ``folder``."""
-    import matplotlib
-
-    matplotlib.use("Agg")
     from ..plotting import plot_alignment_errors, plot_registration_snapshots, save_figure
+    from ._common import new_figure
 
     folder = Path(folder)
     labels = {name: (name if name == "CPD" else name.capitalize()) for name in methods}
     cut = slice(None) if max_iter_shown is None else slice(0, max_iter_shown + 1)
     errors = {labels[name]: m["errors"][cut] for name, m in methods.items()}
-    ax = plot_alignment_errors(errors, title=curve_title)
+    ax = new_figure(figsize=(5, 3.5)).subplots()
+    plot_alignment_errors(errors, ax=ax, title=curve_title)
     first = save_figure(ax.figure, folder / curve_name)
     snaps = {labels[name]: {int(k): np.asarray(v) for k, v in m["snapshots"].items()} for name, m in methods.items()}
-    fig = plot_registration_snapshots(np.asarray(fixed), snaps, iterations=snapshots, title=snap_title)
+    fig = new_figure(figsize=(2.6 * len(methods), 0.6 + 2.6 * len(snapshots)))
+    plot_registration_snapshots(np.asarray(fixed), snaps, iterations=snapshots, fig=fig, title=snap_title)
     return [first, save_figure(fig, folder / snap_name)]

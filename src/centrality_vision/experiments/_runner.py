@@ -1,26 +1,40 @@
 """The runner shared by the experiments: independent units, results kept as they finish.
 
-An experiment is a list of :class:`Unit` (a key, a module-level function, its keyword
-arguments). :func:`run_units` runs those whose key is not yet in the experiment's results
-file and appends each result as one JSON line the moment it finishes, so a run that is
-killed loses nothing finished and a re-run computes only what is missing. The same units
-run in this process (``"serial"``), on a local process pool (``"processes"``, the default),
-on a local Dask cluster started for the run (``"dask"``) or on a running Dask scheduler
+An experiment is a list of :class:`Unit` (a label, a module-level function, its keyword
+arguments). :func:`run_units` runs those not yet in the experiment's results file and
+appends each result as one JSON line the moment it finishes, so a run that is killed loses
+nothing finished and a re-run computes only what is missing. The same units run in this
+process (``"serial"``), on a local process pool (``"processes"``, the default), on a local
+Dask cluster started for the run (``"dask"``) or on a running Dask scheduler
 (``"tcp://host:port"``). Every unit runs with one compiled-kernel thread, and its result
 depends only on its arguments, so the results are identical whichever runs them.
+
+A stored result is found again by its :func:`unit_id`: the label plus a digest of the
+function's qualified name, every keyword argument (seed, sizes, methods, quick, ...) and
+the package version. A unit with any other parameter has another id, so a folder that
+holds results of another run (another seed, size or version) is never read as this one:
+those lines stay in the file, unused, and a note on stderr says how many there are.
+
+Workers die with the process that started them: pool workers and the processes of a
+local Dask cluster poll their parent and exit when it is gone (on Linux the pool workers
+also get ``PR_SET_PDEATHSIG``), so a run killed with SIGKILL leaves no orphans.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import sys
+import threading
+import time
+from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
-__all__ = ["Unit", "run_units", "load_results", "SCHEDULERS"]
+__all__ = ["Unit", "unit_id", "run_units", "load_results", "SCHEDULERS"]
 
 SCHEDULERS = ("serial", "processes", "dask")
 
@@ -32,6 +46,64 @@ class Unit:
     key: str
     func: Callable[..., Any]
     kwargs: dict = field(default_factory=dict)
+
+
+def unit_id(unit: Unit) -> str:
+    """The key under which ``unit``'s result is stored: its label and a digest of everything
+    that changes the result (function, keyword arguments, package version).
+
+    Examples
+    --------
+    >>> a = unit_id(Unit("set/0", max, {"seed": 0}))
+    >>> a.startswith("set/0#") and a != unit_id(Unit("set/0", max, {"seed": 1}))
+    True
+    """
+    from .. import __version__
+
+    func = unit.func
+    name = f"{getattr(func, '__module__', '?')}.{getattr(func, '__qualname__', repr(func))}"
+    payload = json.dumps([name, unit.kwargs, __version__], sort_keys=True, default=repr)
+    return f"{unit.key}#{hashlib.sha256(payload.encode()).hexdigest()[:16]}"
+
+
+def _watch_parent(parent: int, interval: float = 0.5) -> None:
+    """Pool-worker initializer: exit (at once, no clean-up) when process ``parent`` is gone.
+
+    The worker's parent id changes (to init or a subreaper) the moment the parent dies;
+    on Linux ``PR_SET_PDEATHSIG`` makes the kernel send SIGKILL even sooner.
+    """
+    try:
+        import ctypes
+
+        ctypes.CDLL(None).prctl(1, 9, 0, 0, 0)  # PR_SET_PDEATHSIG = 1, SIGKILL = 9
+    except (OSError, AttributeError):  # pragma: no cover - not Linux
+        pass
+    if os.getppid() != parent:  # died before we got here
+        os._exit(1)
+
+    def loop():
+        while os.getppid() == parent:
+            time.sleep(interval)
+        os._exit(1)
+
+    threading.Thread(target=loop, name="parent-watch", daemon=True).start()
+
+
+def _watch_pid(pid: int, interval: float = 0.5) -> None:
+    """In a Dask worker or nanny: exit once the run's main process ``pid`` is gone."""
+
+    def loop():
+        while True:
+            try:
+                os.kill(pid, 0)
+            except ProcessLookupError:
+                os._exit(1)
+            except PermissionError:
+                pass
+            time.sleep(interval)
+
+    if not any(t.name == f"run-watch-{pid}" for t in threading.enumerate()):
+        threading.Thread(target=loop, name=f"run-watch-{pid}", daemon=True).start()
 
 
 def _call(func, kwargs):
@@ -47,7 +119,8 @@ def _call(func, kwargs):
 
 
 def load_results(path) -> dict:
-    """``{key: result}`` from a results file; a torn last line (a crash mid-write) is ignored."""
+    """``{unit id: result}`` from a results file (see :func:`unit_id`); a torn last line (a crash
+    mid-write) is ignored."""
     path = Path(path)
     out = {}
     if not path.exists():
@@ -91,17 +164,25 @@ class _Appender:
 
 def _check_scheduler(scheduler: str) -> str:
     if not isinstance(scheduler, str) or not (scheduler in SCHEDULERS or scheduler.startswith("tcp://")):
-        raise ValueError(f"`scheduler` must be one of {', '.join(map(repr, SCHEDULERS))} or 'tcp://host:port'; got {scheduler!r}.")
+        raise ValueError(
+            f"`scheduler` must be one of {', '.join(map(repr, SCHEDULERS))} or 'tcp://host:port'; got {scheduler!r}."
+        )
     return scheduler
 
 
-def run_units(units, path, *, scheduler: str = "processes", workers: int | None = None, progress: bool = True, desc: str = "") -> dict:
-    """Run the units missing from ``path`` and return ``{key: result}`` for all of them.
+def run_units(
+    units, path, *, scheduler: str = "processes", workers: int | None = None, progress: bool = True, desc: str = ""
+) -> dict:
+    """Run the units missing from ``path`` and return ``{unit.key: result}`` for all of them.
+
+    A stored result is used only for the unit with the same :func:`unit_id` (same label,
+    function, keyword arguments and package version); results of other runs kept in the
+    same file are left there, unused, and counted in a note on stderr.
 
     Parameters
     ----------
     units : sequence of Unit
-        Keys must be unique.
+        Keys (labels) must be unique.
     path : path-like
         The experiment's results file (JSON lines); created if missing.
     scheduler : {'serial', 'processes', 'dask'} or 'tcp://host:port', default='processes'
@@ -116,8 +197,17 @@ def run_units(units, path, *, scheduler: str = "processes", workers: int | None 
     if len(set(keys)) != len(keys):
         raise ValueError("`units` must have unique keys; got duplicates.")
     path = Path(path)
-    done = load_results(path)
+    ids = {u.key: unit_id(u) for u in units}
+    stored = load_results(path)
+    done = {key: stored[i] for key, i in ids.items() if i in stored}
     todo = [u for u in units if u.key not in done]
+    other = len(set(stored) - set(ids.values()))
+    if other:
+        print(
+            f"{path}: {other} stored result(s) were computed with other parameters (another seed, size, method or "
+            f"package version); they are kept in the file and not used. Computing {len(todo)} of {len(units)} unit(s).",
+            file=sys.stderr,
+        )
     if workers is None:
         from .._parallel import available_cores
 
@@ -126,12 +216,19 @@ def run_units(units, path, *, scheduler: str = "processes", workers: int | None 
     if progress and todo:
         from tqdm.auto import tqdm
 
-        bar = tqdm(total=len(units), initial=len(units) - len(todo), desc=desc or path.stem, unit="unit", file=sys.stderr, leave=False)
+        bar = tqdm(
+            total=len(units),
+            initial=len(units) - len(todo),
+            desc=desc or path.stem,
+            unit="unit",
+            file=sys.stderr,
+            leave=False,
+        )
     appender = _Appender(path)
 
     def finished(key, result):
         done[key] = result
-        appender.add(key, result)
+        appender.add(ids[key], result)
         if bar is not None:
             bar.update(1)
 
@@ -156,7 +253,12 @@ def _run_pool(todo, workers, finished):
     import multiprocessing
 
     # "spawn" keeps worker processes free of the parent's threads (numba, BLAS pools)
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+    with ProcessPoolExecutor(
+        max_workers=workers,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_watch_parent,
+        initargs=(os.getpid(),),
+    ) as pool:
         pending = {pool.submit(_call, u.func, u.kwargs): u.key for u in todo}
         try:
             while pending:
@@ -183,6 +285,9 @@ def _run_dask(todo, scheduler, workers, finished):
     else:
         client = Client(scheduler)
     try:
+        if cluster is not None:  # its nannies and workers end with this process, even on SIGKILL
+            client.run(_watch_pid, os.getpid(), nanny=True)
+            client.run(_watch_pid, os.getpid())
         futures = {client.submit(_call, u.func, u.kwargs, key=f"cv-{u.key}", pure=False): u.key for u in todo}
         for future in as_completed(futures):
             finished(futures[future], future.result())

@@ -1,0 +1,111 @@
+import json
+
+import matplotlib
+import numpy as np
+import pytest
+
+from centrality_vision.experiments import EXPERIMENTS, REGISTRY, RUNNER_EXPERIMENTS, experiment_argv
+
+
+def test_the_registry_is_the_one_list():
+    assert EXPERIMENTS == {name: e.module for name, e in REGISTRY.items()}
+    assert set(RUNNER_EXPERIMENTS) == {name for name, e in REGISTRY.items() if e.runner}
+    assert experiment_argv("fig-5.1", "o", scheduler="dask", seeds=4) == ["--out", "o", "--seed", "0", "--seeds", "4"]
+    assert experiment_argv("table-5.1", "o", quick=True, scheduler="dask")[-3:] == ["--quick", "--scheduler", "dask"]
+    with pytest.raises(ValueError, match="name"):
+        experiment_argv("fig-9.9", "o")
+
+
+def test_no_experiment_switches_the_matplotlib_backend(tmp_path, monkeypatch):
+    from centrality_vision.experiments import fig_5_10, table_2_1
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("matplotlib.use called by library code")
+
+    monkeypatch.setattr(matplotlib, "use", refuse)
+    assert table_2_1.main(["--out", str(tmp_path / "t")]) == 0
+    assert fig_5_10.main(["--quick", "--out", str(tmp_path / "f")]) == 0
+    assert (tmp_path / "f" / "fig-5.10.png").stat().st_size > 10_000
+
+
+def test_fig_5_10_draws_the_sets_table_5_1_registers(tmp_path):
+    from centrality_vision.experiments import fig_5_10, table_5_1
+
+    result = fig_5_10.run(seed=3, index=5)
+    for kind in table_5_1.CLASSES:
+        np.testing.assert_array_equal(result["sets"][kind], table_5_1.make_set(kind, 5, seed=3))
+
+
+def test_fig_5_1_prior_is_eq_5_1_and_posteriors_are_distributions(tmp_path):
+    from centrality_vision.experiments import fig_5_1
+
+    result = fig_5_1.run(seed=0)
+    c = result["chosen"]
+    v, vx = np.asarray(result["v_moving"]), result["v_fixed"][c]
+    counts, edges = np.histogram(v, bins=10, range=(0, 1))
+    h = counts[np.clip(np.searchsorted(edges, v, side="right") - 1, 0, 9)]
+    by_hand = h * np.exp(-((v - vx) ** 2) / (2 * result["phi2"]))
+    np.testing.assert_allclose(result["column"]["prior_gpd"], by_hand / by_hand.sum(), rtol=1e-9)
+    np.testing.assert_allclose(result["column"]["prior_cpd"], 1 / v.size)
+    for key in ("posterior_cpd", "posterior_gpd"):
+        assert sum(result["column"][key]) == pytest.approx(1.0)
+    # Delaunay graphs and closeness are similarity-invariant: each point's partner has its closeness
+    np.testing.assert_allclose(result["v_fixed"], result["v_moving"], atol=1e-12)
+    assert all(cell["n"] == v.size for cell in result["odds"].values())
+    paths = fig_5_1.plot(result, tmp_path)
+    assert [p.name for p in paths] == ["fig-5.1.png", "fig-5.2.png"] and all(p.stat().st_size > 10_000 for p in paths)
+
+
+def test_fig_4_2_distances_and_figures(tmp_path):
+    from centrality_vision.datasets import load_kimia99
+    from centrality_vision.experiments import fig_4_2
+
+    names = list(load_kimia99().names)
+    d = fig_4_2.histogram_distances(names.index("fish14"), 0, seed=0)
+    assert set(d) == set(fig_4_2.CENTRALITIES) and all(0 <= v <= 1 for v in d.values())
+    # 5% of the pixels removed: interior pixels lose neighbours, so the degree histogram moves
+    assert d["degree"] > 0.05
+    result = {"seed": 0, "shapes": ["fish14"]}
+    paths = fig_4_2.plot(result, tmp_path)
+    assert {p.name for p in paths} == {
+        "fig-4.1.png",
+        "fig-4.2.png",
+        "fig-4.3.png",
+        "fig-4.4.png",
+        "fig-4.5.png",
+        "fig-4.6.png",
+    }
+
+
+def test_report_index_and_computed_explanations(tmp_path):
+    from centrality_vision.experiments.report import run_all, write_report
+
+    path = run_all(tmp_path, quick=True, only=["table-2.1", "fig-5.10"])
+    text = path.read_text()
+    assert "## table-2.1" in text and "0.83 | 0.83" in text  # closeness of node b, ours | thesis
+    assert (
+        "| fig. 5.10 | Sample point-sets of 495 database used | [fig-5.10/fig-5.10.png](fig-5.10/fig-5.10.png) |"
+        in text
+    )
+    assert "| fig. 2.12 | A toy example for graph centralities | [table-2.1/table-2.1.png]" in text
+    assert "| fig. 4.2 | Centrality distribution of graphs | **missing**" in text  # not run here, and said so
+    assert "| fig. 1.1 | Scene Understanding | none:" in text
+    assert "**What the numbers show.** 4 of 4 centralities equal" in text
+    # the paragraph is computed from the stored result: change a number, the sentence changes
+    record = json.loads((tmp_path / "table-2.1" / "table-2.1.json").read_text())
+    record["claims"]["degree equals Table 2.1 to two decimals"] = False
+    (tmp_path / "table-2.1" / "table-2.1.json").write_text(json.dumps(record))
+    text = write_report(tmp_path, ["table-2.1"], quick=True, seed=0).read_text()
+    assert "3 of 4 centralities equal" in text and "degree differ" in text
+
+
+def test_report_says_why_an_experiment_did_not_run(tmp_path, monkeypatch):
+    from centrality_vision.experiments import fig_5_5
+    from centrality_vision.experiments.report import run_all
+
+    def missing(face_dir=None):
+        raise FileNotFoundError("fig-5.5 needs the CPD face (test)")
+
+    monkeypatch.setattr(fig_5_5, "face_points", missing)
+    text = run_all(tmp_path, quick=True, only=["fig-5.5"]).read_text()
+    assert "**Not run here.** fig-5.5 needs the CPD face (test)" in text
