@@ -78,7 +78,7 @@ def test_plot_graph_hand_made_path(path3):
     segments = sorted(tuple(map(tuple, seg)) for seg in ax.collections[0].get_segments())
     assert segments == [((0.0, 0.0), (1.0, 0.0)), ((1.0, 0.0), (3.0, 0.0))]
     assert ax.get_aspect() == 1.0  # "equal"
-    assert len(ax.figure.axes) == 1  # no colorbar without values
+    assert len(ax.figure.axes) == 1 and ax.child_axes == []  # no colorbar without values
 
 
 def test_plot_graph_scatter_colours_map_values(planar):
@@ -94,8 +94,9 @@ def test_plot_graph_scatter_colours_map_values(planar):
     expected = plt.get_cmap("plasma")((values - values.min()) / (values.max() - values.min()))
     np.testing.assert_allclose(scatter.get_facecolors(), expected)
     # colorbar added, with its label; title set
-    assert len(ax.figure.axes) == 2
-    assert ax.figure.axes[1].get_ylabel() == "betweenness"
+    (colorbar,) = ax.child_axes  # an inset as tall as the drawn Axes
+    assert colorbar.get_ylabel() == "betweenness"
+    assert colorbar.get_position().height == pytest.approx(ax.get_position().height)
     assert ax.get_title() == "Delaunay"
 
 
@@ -107,7 +108,7 @@ def test_plot_graph_nodes_above_edges_and_styles(path3):
     np.testing.assert_allclose(lines.get_linewidths(), [2.5])
     np.testing.assert_allclose(lines.get_colors(), [[1, 0, 0, 1]])
     np.testing.assert_allclose(nodes.get_sizes(), [12])
-    assert len(ax.figure.axes) == 1
+    assert len(ax.figure.axes) == 1 and ax.child_axes == []
 
 
 def test_plot_graph_on_given_axes(path3):
@@ -215,7 +216,7 @@ def test_centrality_image_masks_background_and_places_values():
     np.testing.assert_array_equal(np.ma.getmaskarray(shown), ~mask)
     np.testing.assert_array_equal(shown[mask], values)
     assert shown[0, 2] == values[1] and shown[2, 0] == values[3]
-    assert ax.figure.axes[1].get_ylabel() == "closeness"
+    assert ax.child_axes[0].get_ylabel() == "closeness"
     assert ax.get_title() == "shape"
     norm = ax.images[0].norm
     assert (norm.vmin, norm.vmax) == (1.0, float(nodes.size))
@@ -226,7 +227,7 @@ def test_centrality_image_finite_background_is_shown():
     shown = ax.images[0].get_array()
     assert not np.ma.getmaskarray(shown).any()
     np.testing.assert_array_equal(shown, [[3.0, 0.0], [0.0, 4.0]])
-    assert len(ax.figure.axes) == 1
+    assert len(ax.figure.axes) == 1 and ax.child_axes == []
 
 
 def test_centrality_image_on_given_axes_and_inputs_unchanged():

@@ -70,6 +70,15 @@ def _row_zero_on_top(ax) -> None:
         ax.invert_yaxis()
 
 
+def _colorbar(ax, mappable, label, *, three_d: bool):
+    """A colorbar as tall as the drawn Axes: beside an equal-aspect 2D Axes it sits in an inset
+    that follows the Axes' box, so it does not stretch past a short plot."""
+    if three_d:
+        return ax.figure.colorbar(mappable, ax=ax, label=label, shrink=0.7, pad=0.1)
+    cax = ax.inset_axes((1.04, 0.0, 0.045, 1.0))
+    return ax.figure.colorbar(mappable, cax=cax, label=label)
+
+
 def _equal_3d(ax, points: np.ndarray) -> None:
     """Equal scale on the three axes of a 3D Axes (matplotlib's "equal" aspect is per-box), small ticks."""
     span = np.ptp(points, axis=0)
@@ -245,7 +254,7 @@ def plot_graph(
             **({"depthshade": False} if three_d else {}),
         )
         if colorbar:
-            ax.figure.colorbar(nodes, ax=ax, label=label, shrink=0.75 if three_d else 1.0)
+            _colorbar(ax, nodes, label, three_d=three_d)
     if three_d:
         _equal_3d(ax, points)
     else:
@@ -393,7 +402,7 @@ def plot_centrality_image(
         ax.set_ylim(min(rows.max() + 3, shape[0] - 1) + 0.5, max(rows.min() - 3, 0) - 0.5)  # row 0 at the top
     ax.set_axis_off()
     if colorbar:
-        ax.figure.colorbar(shown, ax=ax, label=label)
+        _colorbar(ax, shown, label, three_d=False)
     if title is not None:
         ax.set_title(title)
     return ax
