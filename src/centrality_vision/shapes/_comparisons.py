@@ -133,7 +133,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
     random_state : int, Generator or None, default=0
         Seed of the random comparisons.
     progress : bool, default=False
-    weights, foreground, threshold, cache, n_jobs :
+    weights, foreground, threshold, cache, n_jobs, fill_holes :
         As in :class:`CentralityHistogram` (``n_jobs`` also grows the trees in
         parallel in the forest).
     seed : deprecated
@@ -163,6 +163,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         threshold=None,
         cache=None,
         n_jobs=None,
+        fill_holes: bool = False,
         seed=None,
     ):
         self.centrality = centrality
@@ -177,6 +178,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         self.threshold = threshold
         self.cache = cache
         self.n_jobs = n_jobs
+        self.fill_holes = fill_holes
         self.seed = seed
 
     def fit(self, X, y=None):
@@ -245,7 +247,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
     random_state : int or None, default=0
         Seeds the comparisons and the trees.
     progress : bool, default=False
-    weights, foreground, threshold, cache, n_jobs :
+    weights, foreground, threshold, cache, n_jobs, fill_holes :
         As in :class:`CentralityHistogram` (``n_jobs`` also grows the trees in
         parallel in the forest).
     seed : deprecated
@@ -291,6 +293,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         threshold=None,
         cache=None,
         n_jobs=None,
+        fill_holes: bool = False,
         seed=None,
     ):
         self.centrality = centrality
@@ -308,6 +311,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         self.threshold = threshold
         self.cache = cache
         self.n_jobs = n_jobs
+        self.fill_holes = fill_holes
         self.seed = seed
 
     def _seeds(self) -> tuple[int, int]:

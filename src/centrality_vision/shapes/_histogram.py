@@ -21,7 +21,12 @@ class ShapeInputMixin:
     """
 
     def _masks(self, X):
-        return as_shape_images(X, foreground=self.foreground, threshold=self.threshold)
+        masks = as_shape_images(X, foreground=self.foreground, threshold=self.threshold)
+        if getattr(self, "fill_holes", False):
+            from scipy.ndimage import binary_fill_holes
+
+            masks = [binary_fill_holes(mask) for mask in masks]
+        return masks
 
     def _centralities(self, masks, names):
         return shape_centralities(
@@ -108,6 +113,15 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         Images computed in parallel through joblib (``joblib.parallel_backend("dask")``
         runs them on a Dask cluster); the kernel threads are divided among the jobs.
         Results do not depend on it.
+    fill_holes : bool, default=False
+        Fill background regions enclosed by the shape before building its graph. Salt
+        noise punches such holes; the leading eigenvector of the adjacency then
+        localises on the largest hole-free patch (its participation ratio on Kimia-99
+        falls from 0.31 to 0.19 at 1% noise and 0.04 at 10%), and an eigenvector
+        histogram learned on clean shapes reads every noisy shape alike. With the holes
+        filled it keeps 0.89 held-in accuracy at 1% noise instead of 0.12 (see
+        ``results/benchmarks/shapes_eigenvector.txt``). Real holes of a shape are
+        filled too.
 
     Attributes
     ----------
@@ -137,6 +151,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         threshold=None,
         cache=None,
         n_jobs=None,
+        fill_holes: bool = False,
     ):
         self.centrality = centrality
         self.bins = bins
@@ -148,6 +163,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         self.threshold = threshold
         self.cache = cache
         self.n_jobs = n_jobs
+        self.fill_holes = fill_holes
 
     def _validate_params(self) -> tuple[str, ...]:
         names = resolve_centralities(self.centrality)
