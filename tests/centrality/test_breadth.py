@@ -94,7 +94,9 @@ def test_networkx_and_igraph_inputs_keep_order_and_labels():
 
 def test_zero_length_edges_are_edges():
     # 0 -- 1 of length 0 (a stored zero), 1 -- 2 of length 1.
-    graph = sparse.csr_array((np.array([0.0, 0.0, 1.0, 1.0]), (np.array([0, 1, 1, 2]), np.array([1, 0, 2, 1]))), shape=(3, 3))
+    graph = sparse.csr_array(
+        (np.array([0.0, 0.0, 1.0, 1.0]), (np.array([0, 1, 1, 2]), np.array([1, 0, 2, 1]))), shape=(3, 3)
+    )
     np.testing.assert_allclose(cen.closeness(graph), [2 / 3, 1, 2 / 3])  # hops: a path of 3
     np.testing.assert_allclose(cen.betweenness(graph), [0, 1, 0])
     np.testing.assert_allclose(cen.degree(graph), [1, 2, 1])
@@ -177,7 +179,9 @@ def test_eccentricity_bounds_are_exact_with_few_searches(weights):
     assert info["searches"] < graph.shape[0] / 4
     # A disconnected graph with an isolated node.
     two = sparse.block_diag([graph, sparse.csr_array((1, 1)), graph]).tocsr()
-    np.testing.assert_allclose(cen.eccentricity(two, weights=weights, method="bounds"), np.r_[exact, 0, exact], rtol=1e-12)
+    np.testing.assert_allclose(
+        cen.eccentricity(two, weights=weights, method="bounds"), np.r_[exact, 0, exact], rtol=1e-12
+    )
 
 
 def test_eigenvector_of_long_thin_graphs_is_fast_and_exact():

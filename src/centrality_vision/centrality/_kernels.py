@@ -483,8 +483,6 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
     return bc, n_log
 
 
-
-
 # --- few distinct edge lengths: Dijkstra with one FIFO queue per length ---------------------
 #
 # On pixel graphs every edge is 1 or sqrt 2 long (nD: a few more with ``spacing``). With K
@@ -529,8 +527,24 @@ def _class_workspace(n, kind, n_classes):
 
 @njit(cache=True, nogil=True)
 def _class_search(
-    indptr, indices, kind, lengths, s, counts, dist, done, order, qstart, qnode, qhead, qtail, cand,
-    sigma, count_paths, use_log, rtol,
+    indptr,
+    indices,
+    kind,
+    lengths,
+    s,
+    counts,
+    dist,
+    done,
+    order,
+    qstart,
+    qnode,
+    qhead,
+    qtail,
+    cand,
+    sigma,
+    count_paths,
+    use_log,
+    rtol,
 ):
     """Dijkstra from ``s`` with one FIFO queue per length class; returns the count settled.
 
@@ -628,8 +642,24 @@ def class_stats(indptr, indices, kind, lengths, sources):
     sigma = np.empty(0)
     for i in range(k):
         count = _class_search(
-            indptr, indices, kind, lengths, sources[i], counts, dist, done, order, qstart, qnode,
-            qhead, qtail, cand, sigma, False, False, 0.0,
+            indptr,
+            indices,
+            kind,
+            lengths,
+            sources[i],
+            counts,
+            dist,
+            done,
+            order,
+            qstart,
+            qnode,
+            qhead,
+            qtail,
+            cand,
+            sigma,
+            False,
+            False,
+            0.0,
         )
         t = 0.0
         h = 0.0
@@ -669,8 +699,24 @@ def class_brandes(indptr, indices, kind, lengths, sources, rtol, force_log, edge
         use_log = force_log
         while True:
             count = _class_search(
-                indptr, indices, kind, lengths, s, counts, dist, done, order, qstart, qnode,
-                qhead, qtail, cand, sigma, True, use_log, rtol,
+                indptr,
+                indices,
+                kind,
+                lengths,
+                s,
+                counts,
+                dist,
+                done,
+                order,
+                qstart,
+                qnode,
+                qhead,
+                qtail,
+                cand,
+                sigma,
+                True,
+                use_log,
+                rtol,
             )
             if count > 0:
                 break
@@ -680,7 +726,9 @@ def class_brandes(indptr, indices, kind, lengths, sources, rtol, force_log, edge
             use_log = True
         if use_log:
             n_log += 1
-        _accumulate(indptr, indices, lengths, kind, order, count, dist, sigma, delta, bc, eb, use_log, rtol, edge_values)
+        _accumulate(
+            indptr, indices, lengths, kind, order, count, dist, sigma, delta, bc, eb, use_log, rtol, edge_values
+        )
         for q in range(count):
             dist[order[q]] = np.inf
             done[order[q]] = False
@@ -730,8 +778,26 @@ def distances_from(indptr, indices, data, kind, lengths, s, weighted):
         qhead = np.empty(lengths.shape[0], dtype=np.int64)
         qtail = np.empty(lengths.shape[0], dtype=np.int64)
         cand = np.empty(lengths.shape[0])
-        _class_search(indptr, indices, kind, lengths, s, counts, dist, done, order, qstart, qnode,
-                      qhead, qtail, cand, np.empty(0), False, False, 0.0)
+        _class_search(
+            indptr,
+            indices,
+            kind,
+            lengths,
+            s,
+            counts,
+            dist,
+            done,
+            order,
+            qstart,
+            qnode,
+            qhead,
+            qtail,
+            cand,
+            np.empty(0),
+            False,
+            False,
+            0.0,
+        )
         return dist
     dist, done, heap_d, heap_v = _dijkstra_workspace(n, indices.shape[0])
     _dijkstra(indptr, indices, data, s, dist, done, order, heap_d, heap_v)

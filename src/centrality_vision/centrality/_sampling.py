@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["sample_paths", "single_source_distances", "sampled_source_stats"]
+__all__ = ["sample_paths", "single_source_distances", "uniform"]
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _RESCALE = 1e200
@@ -136,11 +136,15 @@ def sample_paths(indptr, indices, t_indptr, t_indices, pairs, seed, first, stop)
             for a in range(nt):
                 cost_t += t_indptr[front_t[a] + 1] - t_indptr[front_t[a]]
             if cost_s <= cost_t:
-                ns, n_visited, met = _expand(indptr, indices, front_s, ns, dist_s, sig_s, dist_t, nxt, visited, n_visited)
+                ns, n_visited, met = _expand(
+                    indptr, indices, front_s, ns, dist_s, sig_s, dist_t, nxt, visited, n_visited
+                )
                 front_s[:ns] = nxt[:ns]
                 meet_side = 0
             else:
-                nt, n_visited, met = _expand(t_indptr, t_indices, front_t, nt, dist_t, sig_t, dist_s, nxt, visited, n_visited)
+                nt, n_visited, met = _expand(
+                    t_indptr, t_indices, front_t, nt, dist_t, sig_t, dist_s, nxt, visited, n_visited
+                )
                 front_t[:nt] = nxt[:nt]
                 meet_side = 1
         work += n_visited

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import sparse
 
+from .._seeding import as_generator
 from .._validation import as_binary_image, check_float
 from ..exceptions import InputError
-from .._seeding import as_generator
 
 __all__ = ["pixel_graph", "pixel_coordinates", "salt_noise"]
 
@@ -134,7 +134,9 @@ def pixel_coordinates(nodes, shape) -> np.ndarray:
     if len(shape) not in (2, 3) or min(shape) < 1:
         raise InputError(f"`shape` must be (n_rows, n_cols) or (n_planes, n_rows, n_cols); got {shape!r}.")
     if nodes.size and (nodes.min() < 0 or nodes.max() >= np.prod(shape)):
-        raise InputError(f"`nodes` must index into an image of shape {shape}; got values in [{nodes.min()}, {nodes.max()}].")
+        raise InputError(
+            f"`nodes` must index into an image of shape {shape}; got values in [{nodes.min()}, {nodes.max()}]."
+        )
     return np.stack(np.unravel_index(nodes, shape), axis=1).astype(np.int64)
 
 

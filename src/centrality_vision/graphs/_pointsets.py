@@ -75,9 +75,7 @@ def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
     scale = np.abs(centred).max()
     if np.linalg.matrix_rank(centred / scale, tol=1e-12) < dim:
         what = "collinear" if dim == 2 else "coplanar"
-        raise InputError(
-            f"`{name}` must span {dim} dimensions for a Delaunay triangulation; got {n} {what} points."
-        )
+        raise InputError(f"`{name}` must span {dim} dimensions for a Delaunay triangulation; got {n} {what} points.")
     try:
         tri = Delaunay(points)
     except QhullError as exc:  # numerically degenerate input
