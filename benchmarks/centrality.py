@@ -36,6 +36,9 @@ Usage::
     python benchmarks/centrality.py --only betweenness,closeness
     python benchmarks/centrality.py --graphs delaunay-1000,delaunay-5000 --repeat 5 --json out.json
     python benchmarks/centrality.py --with-slow-networkx       # many minutes
+    python benchmarks/centrality.py --scale   # image scale: silhouettes of 100,000 pixels and
+                                              # a 1-megapixel mask, weighted vs hop kernels,
+                                              # sampling, eccentricity bounds, long thin eigenvector
 """
 
 from __future__ import annotations
@@ -95,6 +98,12 @@ def parse_args(argv=None):
                    help="threads for networkit, rustworkx (RAYON_NUM_THREADS) and ours "
                         "(default: %(default)s; igraph and networkx are single-threaded)")
     p.add_argument("--json", metavar="PATH", default=None, help="also write the results as JSON")
+    p.add_argument("--scale", action="store_true",
+                   help="run the image-scale section instead (ours, with igraph for exact betweenness)")
+    p.add_argument("--scale-exact", action="store_true",
+                   help="with --scale: also exact betweenness of the 100,000-pixel silhouette (minutes)")
+    p.add_argument("--scale-sections", default="exact,closeness,approx,eccentricity,eigenvector",
+                   help="with --scale: comma list of sections (default: %(default)s)")
     args = p.parse_args(argv)
 
     def split(s, allowed, what):
@@ -731,9 +740,184 @@ def _our_threads():
         return "?"
 
 
+# --------------------------------------------------------------------------- image scale
+
+MPEG7 = Path(os.environ.get("CV_DATA", "/work/shared/data")) / "mpeg7"
+
+
+def silhouette_mask(name, target):
+    """An MPEG-7 silhouette zoomed (nearest neighbour) to about ``target`` foreground pixels."""
+    import imageio.v3 as iio
+    from scipy import ndimage
+
+    image = np.asarray(iio.imread(MPEG7 / ("%s.gif" % name)))
+    mask = image.reshape(-1, *image.shape[-3:])[0, ..., 0] > 127 if image.ndim == 4 else image > 127
+    if mask.ndim == 3:
+        mask = mask[..., 0]
+    zoom = math.sqrt(target / mask.sum())
+    mask = ndimage.zoom(mask.astype(np.uint8), zoom, order=0).astype(bool)
+    labels, count = ndimage.label(mask, structure=np.ones((3, 3)))
+    if count > 1:  # keep the largest 8-connected part
+        mask = labels == np.argmax(np.bincount(labels.ravel())[1:]) + 1
+    return np.pad(mask, 1)
+
+
+def _timed(fn):
+    start = time.perf_counter()
+    out = fn()
+    return out, time.perf_counter() - start
+
+
+def scale_main(args):
+    """Image-scale measurements of ours (one process, same graphs); ratios are the point."""
+    import centrality_vision
+    from centrality_vision import centrality as cen
+    from centrality_vision.centrality import _kernels
+    from centrality_vision.graphs import pixel_graph
+
+    centrality_vision.set_num_threads(args.threads)
+    print("=" * 78)
+    print("centrality benchmark: image scale (ours; igraph for exact betweenness)")
+    info = machine_info(args.threads)
+    print("machine: %s, os.cpu_count() = %s, threads (ours) = %d; numba %s, igraph %s"
+          % (info["platform"], info["cpu_count"], args.threads, info["numba"], info["igraph"]))
+    print(load_line("every timing is inflated; compare the ratios measured side by side"))
+    print("=" * 78)
+    graphs = {}
+    disk, _ = disk_mask(10000)
+    graphs["disk-10000"] = disk
+    graphs["silhouette-100k"] = silhouette_mask("horse-1", 100_000)
+    graphs["mask-1M"] = silhouette_mask("elephant-1", 1_000_000)
+    built = {}
+    for name, mask in graphs.items():
+        (g, _), t = _timed(lambda: pixel_graph(mask))
+        built[name] = g
+        print("  %-16s n = %8d  edges = %8d  mask %dx%d  (pixel_graph, 8-neighbour, %.2f s)"
+              % (name, g.shape[0], g.nnz // 2, *mask.shape, t))
+    tiny, _ = pixel_graph(disk_mask(30)[0])
+    for f in (cen.betweenness, cen.closeness, cen.eccentricity):  # compile
+        f(tiny)
+        f(tiny, weights=True)
+    cen.betweenness(tiny, epsilon=0.5, seed=0)
+    cen.harmonic(tiny, epsilon=0.5, seed=0)
+    cen.eccentricity(tiny, method="bounds")
+
+    def eps(edges, seconds):
+        return "%.3g" % (edges / seconds) if seconds > 0 else "-"
+
+    sections = set(args.scale_sections.split(","))
+
+    # 1. Exact betweenness, ours vs igraph.
+    if "exact" in sections:
+        _scale_exact(args, built, cen, eps)
+    if "closeness" in sections:
+        _scale_closeness(built, cen, _kernels)
+    if "approx" in sections:
+        _scale_approx(built, cen, eps)
+    if "eccentricity" in sections:
+        _scale_eccentricity(built, cen)
+    if "eigenvector" in sections:
+        _scale_eigenvector(built, cen, pixel_graph)
+    print()
+    print(load_line("every timing is inflated; compare the ratios measured side by side"))
+    return 0
+
+
+def _scale_exact(args, built, cen, eps):
+    print("\n### exact betweenness (hop counts); edges/s = n * edges / seconds")
+    rows = []
+    names = ["disk-10000"] + (["silhouette-100k"] if args.scale_exact else [])
+    for name in names:
+        g = built[name]
+        n, m = g.shape[0], g.nnz // 2
+        ours, t_ours = _timed(lambda: cen.betweenness(g))
+        row = [name, n, m, "%.2f" % t_ours, eps(n * m, t_ours)]
+        if ig is not None and name == "disk-10000":
+            upper = sp.triu(g, k=1).tocoo()
+            G = ig.Graph(n=n, edges=np.column_stack([upper.row, upper.col]).tolist())
+            ref, t_ig = _timed(lambda: G.betweenness(directed=False))
+            row += ["%.2f" % t_ig, "%.2f" % (t_ig / t_ours), "%.1e" % np.abs(np.asarray(ref) - ours).max()]
+        else:
+            row += ["-", "-", "-"]
+        rows.append(row)
+    print(table(["graph", "n", "edges", "ours [s]", "ours edges/s", "igraph [s]", "igraph/ours", "max |diff|"], rows))
+
+
+
+def _scale_closeness(built, cen, _kernels):
+    """Weighted (1, sqrt 2) versus hop-count closeness on pixel graphs."""
+    print("\n### closeness on pixel graphs: by length (1, sqrt 2) versus hop counts, same process")
+    rows = []
+    for name in ("disk-10000",):
+        g = built[name]
+        n, m = g.shape[0], g.nnz // 2
+        hop, t_hop = _timed(lambda: cen.closeness(g))
+        fifo, t_fifo = _timed(lambda: cen.closeness(g, weights=True))
+        prep = cen._api._prepare(g)
+        sources = np.arange(n, dtype=np.int64)
+        heap, t_heap = _timed(lambda: _kernels.dijkstra_stats(prep.indptr, prep.indices, prep.data, sources))
+        heap_close = prep.unpermute((n - 1) / heap[0])
+        rows.append([name, n, m, "%.2f" % t_hop, "%.2f" % t_fifo, "%.2f" % t_heap, "%.1f" % (t_fifo / t_hop),
+                     "%.1f" % (t_heap / t_fifo), "%.1e" % np.abs(fifo - heap_close).max()])
+    print(table(["graph", "n", "edges", "hops [s]", "length FIFO [s]", "length heap [s]",
+                 "FIFO/hops", "heap/FIFO", "FIFO vs heap |diff|"], rows))
+    print("  hops: bit-parallel search, 64 sources at a time; by length: one exact FIFO-queue search per "
+          "source (heap: the Dijkstra kernel it replaces, one thread)")
+
+
+
+def _scale_approx(built, cen, eps):
+    print("\n### approximate betweenness, epsilon = 0.01 (normalised), delta = 0.1, seed = 0")
+    rows = []
+    for name in ("disk-10000", "silhouette-100k", "mask-1M"):
+        g = built[name]
+        n, m = g.shape[0], g.nnz // 2
+        (approx, infod), t = _timed(lambda: cen.betweenness(g, normalized=True, epsilon=0.01, seed=0, return_info=True))
+        err = "-"
+        if name == "disk-10000":
+            err = "%.4f" % np.abs(approx - cen.betweenness(g, normalized=True)).max()
+        rows.append([name, n, m, "%.1f" % t, infod["samples"], "%.4f" % infod["bound"], err,
+                     eps(infod["visited"] * 2 * m / n, t)])
+    print(table(["graph", "n", "edges", "seconds", "samples", "guaranteed error", "observed error",
+                 "edges/s"], rows))
+
+
+
+def _scale_eccentricity(built, cen):
+    """One search per node versus Takes-Kosters bounds."""
+    print("\n### eccentricity: all searches versus Takes-Kosters bounds (exact both)")
+    rows = []
+    for name, weighted in (("disk-10000", False), ("disk-10000", True), ("silhouette-100k", False),
+                           ("silhouette-100k", True)):
+        g = built[name]
+        (b, ib), t_b = _timed(lambda: cen.eccentricity(g, weights=weighted, method="bounds", return_info=True))
+        if name == "disk-10000" or not weighted:
+            (a, ia), t_a = _timed(lambda: cen.eccentricity(g, weights=weighted, method="all", return_info=True))
+            diff = "%.1e" % np.abs(a - b).max()
+            row_a = ["%.2f" % t_a, ia["searches"]]
+        else:
+            diff, row_a = "-", ["(skipped)", g.shape[0]]
+        rows.append([name, "length" if weighted else "hops", g.shape[0], *row_a, "%.2f" % t_b, ib["searches"], diff])
+    print(table(["graph", "distance", "n", "all [s]", "all searches", "bounds [s]", "bounds searches",
+                 "max |diff|"], rows))
+    print("  'all' by hops counts 64-source groups of the bit-parallel search")
+
+
+
+def _scale_eigenvector(built, cen, pixel_graph):
+    print("\n### eigenvector on long thin graphs (issue before: path 27.7 s, strip 92 s)")
+    rows = []
+    path = sp.diags_array([np.ones(9999), np.ones(9999)], offsets=[-1, 1], format="csr")
+    strip, _ = pixel_graph(np.ones((3, 10000), dtype=bool))
+    for name, g in (("path-10000", path), ("strip-3x10000", strip), ("disk-10000", built["disk-10000"])):
+        v, t = _timed(lambda: cen.eigenvector(g))
+        rows.append([name, g.shape[0], "%.3f" % t])
+    print(table(["graph", "n", "ours [s]"], rows))
+
+
 if __name__ == "__main__":
     try:
-        sys.exit(main(_ARGS))
+        sys.exit(scale_main(_ARGS) if _ARGS.scale else main(_ARGS))
     except KeyboardInterrupt:
         sys.exit(130)
     except Exception:  # noqa: BLE001

@@ -59,8 +59,9 @@ def _bernstein(hits: np.ndarray, k: int, log_term: float) -> float:
 def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool):
     """Normalised betweenness estimates (node order of ``prep``) and an info dict."""
     n = prep.n
+    rng = as_generator(seed)  # validated even when there is nothing to sample
     if n < 3:
-        return np.zeros(n), {"samples": 0, "searches": 0, "bound": 0.0}
+        return np.zeros(n), {"samples": 0, "searches": 0, "bound": 0.0, "visited": 0}
     # E[hits / k] = b / (n (n - 1)) over ordered pairs; normalised b is that times n / (n - 2).
     target = epsilon * (n - 2) / n
     if prep.directed:
@@ -75,7 +76,6 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool)
         k = int(math.ceil(k * _GROWTH))
     checkpoints.append(cap)
     log_term = math.log(4.0 * n * len(checkpoints) / (delta / 2))
-    rng = as_generator(seed)
     s = rng.integers(0, n, size=cap)
     t = (s + 1 + rng.integers(0, n - 1, size=cap)) % n
     pairs = np.stack([s, t], axis=1).astype(np.int64)
@@ -118,12 +118,12 @@ def sample_sources(prep, epsilon: float, delta: float, seed, progress: bool, des
     from scipy.sparse.csgraph import connected_components
 
     n = prep.n
+    rng = as_generator(seed)
     k = int(math.ceil(math.log(2.0 * n / delta) / (2.0 * (epsilon * (n - 1) / n) ** 2))) if n > 1 else n
     if k >= n:  # sampling would not save anything: exact values
         from ._api import _hop_stats
 
         return (*_hop_stats(prep.indptr, prep.indices, progress, desc), {"searches": n, "samples": n})
-    rng = as_generator(seed)
     sources = np.sort(rng.choice(n, size=k, replace=False)).astype(np.int64)  # RCM order: nearby
     group_ptr = np.arange(0, k + 64, 64, dtype=np.int64)
     group_ptr[-1] = k
