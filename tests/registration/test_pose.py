@@ -92,13 +92,18 @@ def test_rotation_lattice_is_proper_and_covers(n_dims, n):
     lattice = rotation_lattice(n_dims, n)
     assert lattice.shape == (n, n_dims, n_dims)
     np.testing.assert_allclose(lattice[0], np.eye(n_dims), atol=1e-15)
-    np.testing.assert_allclose(lattice @ lattice.transpose(0, 2, 1), np.broadcast_to(np.eye(n_dims), lattice.shape), atol=1e-12)
+    np.testing.assert_allclose(
+        lattice @ lattice.transpose(0, 2, 1), np.broadcast_to(np.eye(n_dims), lattice.shape), atol=1e-12
+    )
     np.testing.assert_allclose(np.linalg.det(lattice), 1.0, atol=1e-12)
     # every rotation lies near one of the lattice: the covering radius shrinks as n grows
     from centrality_vision.transforms import random_rotation
 
     rng = np.random.default_rng(0)
-    worst = max(min(angle_degrees(q, r) for r in lattice) for q in (random_rotation(n_dims, rng) for _ in range(200)))
+    queries = np.stack([random_rotation(n_dims, rng) for _ in range(200)])
+    trace = np.einsum("qij,lij->ql", queries, lattice)  # tr(Q^T R) for every pair
+    cos = (trace - 1) / 2 if n_dims == 3 else trace / 2
+    worst = np.degrees(np.arccos(np.clip(cos.max(axis=1), -1, 1))).max()
     bound = 180.0 / n + 1e-9 if n_dims == 2 else {72: 50.0, 500: 25.0}[n]
     assert worst <= bound
 
@@ -130,3 +135,18 @@ def test_rotation_lattice_bad_inputs():
         rotation_lattice(4, 10)
     with pytest.raises(InputError, match="n_rotations"):
         rotation_lattice(3, 0)
+
+
+@pytest.mark.parametrize("degrees", [90, 180])
+def test_rigid_cpd_init_global_and_gpd_over_it(fish, rot2, degrees):
+    from centrality_vision.registration import GPD
+
+    r = rot2(degrees)
+    x = 3.0 * (fish @ r.T) + [100.0, -50.0]  # any units: fit normalises before the search
+    plain = RigidCPD(scale=True, tol=1e-8).fit(fish, x)
+    assert angle_degrees(plain.transform_.rotation, r) > 5.0
+    cpd = RigidCPD(scale=True, tol=1e-8, init="global", random_state=0).fit(fish, x)
+    assert angle_degrees(cpd.transform_.rotation, r) < 1e-3
+    np.testing.assert_allclose(cpd.moving_transformed_, x, atol=1e-4)
+    gpd = GPD(RigidCPD(scale=True, tol=1e-8, init="global", random_state=0), centrality="closeness").fit(fish, x)
+    assert angle_degrees(gpd.transform_.rotation, r) < 1e-3

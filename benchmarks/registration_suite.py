@@ -1,0 +1,685 @@
+#!/usr/bin/env python
+"""Registration benchmark suite: the field's protocols, ours beside five CPD libraries.
+
+One command runs everything, resumably (each finished unit is appended as one JSON line to
+``<out>.jsonl`` by the project's runner and skipped on a re-run; a unit's key holds every
+parameter that shapes its result), then prints the tables and writes ``<out>.txt``,
+``<out>.json`` and the figures ``<out>-synthetic.png`` and ``<out>-rotation.png``.
+
+Families (2D outlines: the CPD fish, 91 points, and the Kimia-99 ``dog1`` outline, 100
+points by arc length; each centred and scaled to unit RMS radius):
+
+==============  ==========================================================================
+family          fixed set X from the moving set Y (rows of X always shuffled)
+==============  ==========================================================================
+deformation     ``warp(Y)``: a Gaussian-RBF warp, 12 control points drawn from Y, width
+                0.5, weights ~ N(0, std^2) per coordinate, std 0.02 .. 0.08 (5 levels)
+noise           ``warp(Y) + N(0, std^2)``, std 0 .. 0.05 (6 levels), warp std 0.04
+outliers        ``warp(Y)`` plus ``r * M`` uniform points in its bounding box, r = 0 .. 2
+                (5 levels), warp std 0.04
+occlusion       ``warp(Y)`` without the ``f * M`` points nearest a random point of it (a
+                contiguous part), f = 0 .. 0.5 (6 levels), warp std 0.04
+==============  ==========================================================================
+
+The error of a pair is the mean distance ``mean_m |T(y_m) - warp(y_m)|`` to the true
+positions (in units of the RMS radius); a pair succeeds when it is below 0.05. Every method
+gets the same pairs (seeded by family, shape, level and pair index), the same ``w``
+(deformation and noise 0, outliers 0.5, occlusion 0.1), ``beta`` = 2, ``lam`` (``alpha``) = 3
+(the CPD paper's fish settings), the same numeric tolerance (1e-7) and iteration cap (150).
+
+Rotation (the 2D fish and the 3D Stanford bunny, 1,000 points drawn once with seed 0 from
+``../shared/data/bunny/bunny.txt``, or ``--bunny``): X is Y rotated by the level's angle
+(2D: either sign; 3D: about a random axis), translated by N(0, 1), with Gaussian noise 0.01,
+the 20% of points nearest a random point removed (a missing part) and 20% outliers
+(uniform in the bounding box), rows shuffled; ``w`` = 0.2 for every method. A trial
+succeeds when the rotation error is below 5 degrees (the rotation of each method's output
+is read by a least-squares fit of its transformed moving points, so every library's
+convention is handled alike).
+
+Methods. Ours: ``NonRigidCPD`` / ``RigidCPD(scale=False)`` (``cpd``), ``GPD`` over it with
+each centrality on Delaunay graphs (``gpd-<centrality>``; only closeness in the rotation
+family), rigid ``ICP``, and on the rotation family each of those started from
+``global_pose_search`` (``+global``; through ``RigidCPD(init="global")`` once that exists).
+Peers: pycpd 2.0 (its rigid registration always estimates a scale), cycpd 0.28 (deformable:
+low-rank with ``num_eig`` = M - 1), probreg 0.3.8 (``registration_cpd``; its kernel is
+``exp(-|d|^2 / beta^2)``, so it gets ``beta * sqrt(2)`` for the same kernel), rustcpd 4.0
+(``low_rank=None``: exact) and biocpd 1.3 (``low_rank=False``). Each library's tolerance
+means something else (see ``registration.py``); they get the same number. A library that
+fails on a case is reported with its error instead of a number.
+
+Run it with ``nice -n 5 python benchmarks/registration_suite.py [--pairs 20] [--trials 20]
+[--workers 2]``; ``--quick`` is a smoke run (2 pairs, 2 trials, 3 angles).
+"""
+
+from __future__ import annotations
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMBA_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")  # one thread per worker: 2 workers share 2 cores
+
+import argparse  # noqa: E402
+import inspect  # noqa: E402
+import json  # noqa: E402
+import math  # noqa: E402
+import sys  # noqa: E402
+import time  # noqa: E402
+import warnings  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _common import load_line, table  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+BUNNY = ROOT.parent / "shared" / "data" / "bunny" / "bunny.txt"
+
+FAMILIES = {
+    "deformation": [0.02, 0.035, 0.05, 0.065, 0.08],
+    "noise": [0.0, 0.01, 0.02, 0.03, 0.04, 0.05],
+    "outliers": [0.0, 0.5, 1.0, 1.5, 2.0],
+    "occlusion": [0.0, 0.1, 0.2, 0.3, 0.4, 0.5],
+}
+FAMILY_W = {"deformation": 0.0, "noise": 0.0, "outliers": 0.5, "occlusion": 0.1}
+BASE_WARP = 0.04
+WARP_WIDTH = 0.5
+N_CONTROL = 12
+SUCCESS_ERROR = 0.05
+ANGLES = [0, 30, 60, 90, 120, 150, 180]
+ROTATION_SETTINGS = {"noise": 0.01, "missing": 0.2, "outliers": 0.2, "w": 0.2}
+SUCCESS_DEGREES = 5.0
+SETTINGS = {"beta": 2.0, "lam": 3.0, "tol": 1e-7, "max_iter": 150}
+CENTRALITIES = ("degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity")
+PEERS = ("pycpd", "cycpd", "probreg", "rustcpd", "biocpd")
+NONRIGID_METHODS = ("cpd",) + tuple(f"gpd-{c}" for c in CENTRALITIES) + ("icp",) + PEERS
+ROTATION_METHODS = ("cpd", "cpd+global", "gpd-closeness", "gpd-closeness+global", "icp", "icp+global") + PEERS
+SHAPES_2D = ("fish", "dog1")
+
+
+# ----------------------------------------------------------------------------- data
+def _unit(points):
+    points = np.asarray(points, dtype=float)
+    points = points - points.mean(axis=0)
+    return points / math.sqrt(np.mean(np.sum(points * points, axis=1)))
+
+
+def load_shape(name, bunny_points=1000):
+    from centrality_vision.datasets import contour_points, load_fish, load_kimia99
+
+    if name == "fish":
+        return _unit(load_fish().moving)
+    if name == "bunny":
+        raw = np.loadtxt(BUNNY)
+        pick = np.random.default_rng(0).choice(raw.shape[0], size=min(bunny_points, raw.shape[0]), replace=False)
+        return _unit(raw[np.sort(pick)])
+    return _unit(contour_points(load_kimia99().image(name), 100))
+
+
+def rbf_warp(points, rng, std):
+    """``p + sum_j W_j exp(-|p - c_j|^2 / (2 width^2))``: 12 control points from the set."""
+    control = points[rng.choice(points.shape[0], size=N_CONTROL, replace=False)]
+    weights = rng.normal(scale=std, size=(N_CONTROL, points.shape[1]))
+    d2 = np.sum((points[:, None, :] - control[None, :, :]) ** 2, axis=2)
+    return points + np.exp(-d2 / (2 * WARP_WIDTH**2)) @ weights
+
+
+def _remove_part(points, fraction, rng):
+    n_drop = int(round(fraction * points.shape[0]))
+    centre = points[rng.integers(points.shape[0])]
+    return points[np.argsort(np.sum((points - centre) ** 2, axis=1), kind="stable")[n_drop:]]
+
+
+def _add_outliers(points, count, rng):
+    if count == 0:
+        return points
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    return np.vstack([points, rng.uniform(lo, hi, size=(count, points.shape[1]))])
+
+
+def synthetic_pair(family, shape, level, pair):
+    """``(Y, X, true)`` for one seeded pair of a Chui-Rangarajan family."""
+    y = load_shape(shape)
+    rng = np.random.default_rng(
+        [list(FAMILIES).index(family), SHAPES_2D.index(shape), FAMILIES[family].index(level), pair]
+    )
+    true = rbf_warp(y, rng, level if family == "deformation" else BASE_WARP)
+    x = true
+    if family == "noise":
+        x = x + rng.normal(scale=level, size=x.shape)
+    elif family == "outliers":
+        x = _add_outliers(x, int(round(level * y.shape[0])), rng)
+    elif family == "occlusion":
+        x = _remove_part(x, level, rng)
+    return y, x[rng.permutation(x.shape[0])], true
+
+
+def rotation_about(n_dims, degrees, rng):
+    a = math.radians(degrees)
+    if n_dims == 2:
+        a *= rng.choice([-1.0, 1.0])
+        return np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    axis = rng.standard_normal(3)
+    axis /= np.linalg.norm(axis)
+    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    return np.eye(3) + math.sin(a) * k + (1 - math.cos(a)) * k @ k
+
+
+def rotation_pair(shape, degrees, trial, bunny_points=1000):
+    """``(Y, X, R)``: Y rotated by R, translated, noisy, a part missing, outliers added."""
+    y = load_shape(shape, bunny_points)
+    rng = np.random.default_rng([7, ("fish", "bunny").index(shape), int(degrees), trial])
+    r = rotation_about(y.shape[1], degrees, rng)
+    x = y @ r.T + rng.normal(size=y.shape[1])
+    x = _remove_part(x, ROTATION_SETTINGS["missing"], rng)
+    x = x + rng.normal(scale=ROTATION_SETTINGS["noise"], size=x.shape)
+    x = _add_outliers(x, int(round(ROTATION_SETTINGS["outliers"] * y.shape[0])), rng)
+    return y, x[rng.permutation(x.shape[0])], r
+
+
+# ----------------------------------------------------------------------------- methods
+def _preload_libusb():
+    """open3d 0.20 (imported by probreg) needs libusb-1.0; load the wheel's copy if there is one."""
+    try:
+        import ctypes
+
+        import libusb_package
+
+        ctypes.CDLL(str(libusb_package.get_library_path()), mode=ctypes.RTLD_GLOBAL)
+    except Exception:
+        pass
+
+
+def _has_global_init():
+    from centrality_vision.registration import RigidCPD
+
+    return "random_state" in inspect.signature(RigidCPD.__init__).parameters
+
+
+def run_method(method, y, x, *, rigid, w, seed):
+    """The moving set after registration by ``method`` (M x D), and extra info."""
+    beta, lam, tol, max_iter = SETTINGS["beta"], SETTINGS["lam"], SETTINGS["tol"], SETTINGS["max_iter"]
+    base, _, glob = method.partition("+")
+    info = {}
+    if base in ("cpd", "icp") or base.startswith("gpd-"):
+        from centrality_vision.registration import GPD, ICP, NonRigidCPD, RigidCPD
+        from centrality_vision.registration._pose import global_pose_search
+
+        start = y
+        pose = None
+        if glob:
+            t0 = time.perf_counter()
+            pose = global_pose_search(y, x, scale=False, w=w, random_state=seed)
+            info["search_s"] = time.perf_counter() - t0
+            start = pose(y)
+        if base == "icp":
+            return ICP(max_iter=max_iter, tol=tol).fit(start, x).moving_transformed_, info
+        if rigid:
+            cpd = RigidCPD(scale=False, w=w, tol=tol, max_iter=max_iter)
+        else:
+            cpd = NonRigidCPD(beta=beta, lam=lam, w=w, tol=tol, max_iter=max_iter)
+        est = cpd if base == "cpd" else GPD(cpd, centrality=base[4:], graph="delaunay")
+        return est.fit(start, x).moving_transformed_, info
+    if base == "pycpd":
+        import pycpd
+
+        cls = pycpd.RigidRegistration if rigid else pycpd.DeformableRegistration
+        kw = {} if rigid else {"alpha": lam, "beta": beta}
+        return cls(X=x, Y=y, w=w, tolerance=tol, max_iterations=max_iter, **kw).register()[0], info
+    if base == "cycpd":
+        import cycpd
+
+        if rigid:
+
+            class Rigid(cycpd.rigid_registration):  # cycpd 0.28 keeps sigma2 a 1x1 array under NumPy 2
+                def update_variance(self):
+                    super().update_variance()
+                    self.sigma2 = float(np.asarray(self.sigma2).reshape(-1)[0])
+
+            reg = Rigid(
+                X=x,
+                Y=y,
+                scale=False,
+                w=w,
+                tolerance=tol,
+                max_iterations=max_iter,
+                verbose=False,
+                print_reg_params=False,
+            )
+        else:
+            reg = cycpd.deformable_registration(
+                X=x,
+                Y=y,
+                alpha=lam,
+                beta=beta,
+                low_rank=True,
+                num_eig=y.shape[0] - 1,
+                w=w,
+                tolerance=tol,
+                max_iterations=max_iter,
+                verbose=False,
+                print_reg_params=False,
+            )
+        return np.asarray(reg.register()[0]), info
+    if base == "probreg":
+        _preload_libusb()
+        from probreg import cpd as probreg_cpd
+
+        # probreg's kernel is exp(-|d|^2 / beta^2): beta * sqrt(2) is CPD's exp(-|d|^2 / (2 beta^2))
+        kw = {"update_scale": False} if rigid else {"beta": beta * math.sqrt(2.0), "lmd": lam}
+        res = probreg_cpd.registration_cpd(
+            y, x, tf_type_name="rigid" if rigid else "nonrigid", w=w, maxiter=max_iter, tol=tol, **kw
+        )
+        return np.asarray(res.transformation.transform(y)), info
+    if base == "rustcpd":
+        import rustcpd
+
+        if rigid:
+            res = rustcpd.register_rigid(x, y, scale=False, max_iterations=max_iter, tolerance=tol, outlier_weight=w)
+        else:
+            res = rustcpd.register_deformable(
+                x, y, alpha=lam, beta=beta, low_rank=None, max_iterations=max_iter, tolerance=tol, outlier_weight=w
+            )
+        return np.asarray(res.points), info
+    if base == "biocpd":
+        import biocpd
+
+        if rigid:
+            reg = biocpd.RigidRegistration(X=x, Y=y, scale=False, w=w, tolerance=tol, max_iterations=max_iter)
+        else:
+            reg = biocpd.DeformableRegistration(
+                X=x, Y=y, alpha=lam, beta=beta, low_rank=False, w=w, tolerance=tol, max_iterations=max_iter
+            )
+        return np.asarray(reg.register()[0]), info
+    raise ValueError(f"unknown method {method!r}")
+
+
+def _angle(r1, r2):
+    d = r1.T @ r2
+    cos = (np.trace(d) - 1) / 2 if d.shape[0] == 3 else np.trace(d) / 2
+    return math.degrees(math.acos(min(1.0, max(-1.0, cos))))
+
+
+def _attempt(method, y, x, *, rigid, w, seed):
+    warnings.simplefilter("ignore")
+    t0 = time.perf_counter()
+    try:
+        moved, info = run_method(method, y, x, rigid=rigid, w=w, seed=seed)
+        moved = np.asarray(moved, dtype=float)
+        if moved.shape != y.shape or not np.all(np.isfinite(moved)):
+            return None, {"status": f"bad output {moved.shape}"}, time.perf_counter() - t0
+    except Exception as exc:  # a peer that cannot run a case is reported, not fatal
+        return None, {"status": f"{type(exc).__name__}: {str(exc)[:80]}"}, time.perf_counter() - t0
+    return moved, info, time.perf_counter() - t0
+
+
+def synthetic_unit(family, shape, level, method, pairs, settings):
+    """All pairs of one (family, shape, level) for one method: per-pair error, time, status."""
+    out = []
+    for pair in range(pairs):
+        y, x, true = synthetic_pair(family, shape, level, pair)
+        moved, info, seconds = _attempt(method, y, x, rigid=False, w=FAMILY_W[family], seed=pair)
+        err = None if moved is None else float(np.mean(np.linalg.norm(moved - true, axis=1)))
+        out.append({"error": err, "seconds": seconds, "status": info.get("status", "ok")})
+    return out
+
+
+def rotation_unit(shape, degrees, method, trials, settings, bunny_points):
+    """All trials of one (shape, angle) for one method: rotation error, time, status."""
+    from centrality_vision.transforms import fit_similarity
+
+    out = []
+    for trial in range(trials):
+        y, x, r = rotation_pair(shape, degrees, trial, bunny_points)
+        moved, info, seconds = _attempt(method, y, x, rigid=True, w=ROTATION_SETTINGS["w"], seed=trial)
+        err = None if moved is None else _angle(fit_similarity(y, moved, scale=True).rotation, r)
+        out.append(
+            {"error": err, "seconds": seconds, "search_s": info.get("search_s"), "status": info.get("status", "ok")}
+        )
+    return out
+
+
+# ----------------------------------------------------------------------------- units
+def build_units(args):
+    from centrality_vision.experiments._runner import Unit
+
+    settings = {**SETTINGS, "success_error": SUCCESS_ERROR, "warp_width": WARP_WIDTH, "base_warp": BASE_WARP}
+    units = []
+    for family in args.families:
+        if family == "rotation":
+            continue
+        for shape in SHAPES_2D:
+            for level in FAMILIES[family]:
+                for method in args.methods_nonrigid:
+                    key = json.dumps(
+                        ["syn", family, shape, level, method, args.pairs, FAMILY_W[family], settings], sort_keys=True
+                    )
+                    units.append(
+                        Unit(
+                            key,
+                            synthetic_unit,
+                            dict(
+                                family=family,
+                                shape=shape,
+                                level=level,
+                                method=method,
+                                pairs=args.pairs,
+                                settings=settings,
+                            ),
+                        )
+                    )
+    if "rotation" in args.families:
+        rsettings = {**SETTINGS, **ROTATION_SETTINGS, "global_init": _has_global_init()}
+        for shape in ("fish", "bunny"):
+            for degrees in args.angles:
+                for method in args.methods_rotation:
+                    key = json.dumps(
+                        ["rot", shape, degrees, method, args.trials, args.bunny, rsettings], sort_keys=True
+                    )
+                    units.append(
+                        Unit(
+                            key,
+                            rotation_unit,
+                            dict(
+                                shape=shape,
+                                degrees=degrees,
+                                method=method,
+                                trials=args.trials,
+                                settings=rsettings,
+                                bunny_points=args.bunny,
+                            ),
+                        )
+                    )
+    return units
+
+
+# ----------------------------------------------------------------------------- report
+def _summ(rows, threshold):
+    errors = [r["error"] for r in rows if r["error"] is not None]
+    failed = [r["status"] for r in rows if r["error"] is None]
+    if not errors:
+        return {
+            "mean": None,
+            "success": None,
+            "seconds": None,
+            "failed": len(failed),
+            "status": failed[0] if failed else "none",
+        }
+    # a run that failed counts as unsuccessful
+    return {
+        "mean": float(np.mean(errors)),
+        "median": float(np.median(errors)),
+        "success": sum(e < threshold for e in errors) / len(rows),
+        "seconds": float(np.median([r["seconds"] for r in rows])),
+        "failed": len(failed),
+        "status": failed[0] if failed else "ok",
+    }
+
+
+def _cell(c, text):
+    """A table cell: the value, '-' for a unit not run, 'fail' when the library failed on every pair."""
+    if c["status"] == "not run":
+        return "-"
+    if c["mean"] is None and c.get("success") is None:
+        return "fail"
+    return text + ("!" if c["failed"] else "")
+
+
+def report(args, units, results):
+    lines = [
+        f"registration suite  |  {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}  |  "
+        + load_line("timings are inflated; compare ratios")
+    ]
+    lines.append(
+        f"pairs per synthetic level: {args.pairs}; trials per rotation angle: {args.trials}; "
+        f"bunny points: {args.bunny}; workers: {args.workers}"
+    )
+    lines.append(
+        f"settings: {SETTINGS}; w per family: {FAMILY_W}; success: mean error < {SUCCESS_ERROR} (synthetic), "
+        f"rotation error < {SUCCESS_DEGREES} deg"
+    )
+    lines.append(
+        "cells: '!' = the library raised on some pairs (its mean is over the others; not counted as best peer), "
+        "'fail' = on all, '-' = not run"
+    )
+    summary = {"synthetic": {}, "rotation": {}, "args": vars(args)}
+    syn_res, rot_res = {}, {}
+    for u in units:
+        if u.key not in results:
+            continue
+        k = u.kwargs
+        if "family" in k:
+            syn_res[(k["family"], k["shape"], k["level"], k["method"])] = results[u.key]
+        else:
+            rot_res[(k["shape"], k["degrees"], k["method"])] = results[u.key]
+    missing = {"mean": None, "success": None, "seconds": None, "failed": 0, "status": "not run"}
+    checks, exact_checks = [], []
+    for family in [f for f in args.families if f != "rotation"]:
+        for shape in SHAPES_2D:
+            rows = []
+            for level in FAMILIES[family]:
+                cells = {}
+                for method in args.methods_nonrigid:
+                    res = syn_res.get((family, shape, level, method))
+                    cells[method] = dict(missing) if res is None else _summ(res, SUCCESS_ERROR)
+                summary["synthetic"].setdefault(family, {}).setdefault(shape, {})[str(level)] = cells
+                peers = [
+                    cells[p]["mean"]
+                    for p in PEERS
+                    if p in cells and cells[p]["mean"] is not None and cells[p]["failed"] == 0
+                ]
+                best_peer = min(peers) if peers else None
+                ours = cells.get("cpd", {}).get("mean")
+                ratio = None if best_peer in (None, 0) or ours is None else ours / best_peer
+                if ratio is not None:
+                    checks.append((family, shape, level, ratio))
+                exact_peers = [
+                    cells[p]["mean"]
+                    for p in ("pycpd", "cycpd", "rustcpd")
+                    if p in cells and cells[p]["mean"] is not None and cells[p]["failed"] == 0
+                ]
+                if exact_peers and ours is not None and min(exact_peers) > 0:
+                    exact_checks.append((family, shape, level, ours / min(exact_peers)))
+                row = [level]
+                for method in args.methods_nonrigid:
+                    c = cells[method]
+                    row.append(
+                        _cell(c, f"{c['mean']:.4f}/{100 * (c['success'] or 0):.0f}%" if c["mean"] is not None else "")
+                    )
+                row.append("-" if ratio is None else f"{ratio:.3f}")
+                rows.append(row)
+            lines.append("")
+            lines.append(
+                f"[{family}] {shape}: mean error / success rate per level  "
+                "(cpd/best peer = ours' mean error over the best peer's)"
+            )
+            lines.append(table([family] + list(args.methods_nonrigid) + ["cpd/best peer"], rows))
+    if checks:
+        worst = max(checks, key=lambda c: c[3])
+        n_ok = sum(c[3] <= 1.05 for c in checks)
+        lines.append("")
+        lines.append(
+            f"check: our CPD's mean error within 5% of the best peer's on {n_ok} of {len(checks)} "
+            f"family/shape/levels; worst ratio {worst[3]:.3f} at {worst[:3]}"
+        )
+        exact = [c for c in exact_checks if c[3] is not None]
+        if exact:
+            worst_exact = max(exact, key=lambda c: c[3])
+            lines.append(
+                f"check: against the exact-CPD peers only (pycpd, cycpd, rustcpd) within 5% on "
+                f"{sum(c[3] <= 1.05 for c in exact)} of {len(exact)}; "
+                f"worst ratio {worst_exact[3]:.3f} at {worst_exact[:3]}"
+            )
+        summary["check_cpd_vs_best_peer"] = {"within_5pct": n_ok, "cases": len(checks), "worst": list(worst)}
+        gpd_rows = []
+        for family in summary["synthetic"]:
+            for shape in summary["synthetic"][family]:
+                cells_by_level = summary["synthetic"][family][shape]
+                cpd = np.mean([c["cpd"]["success"] or 0 for c in cells_by_level.values()])
+                row = [f"{family}/{shape}", f"{100 * cpd:.1f}%"]
+                for c in CENTRALITIES:
+                    m = f"gpd-{c}"
+                    if m in args.methods_nonrigid:
+                        row.append(f"{100 * np.mean([cl[m]['success'] or 0 for cl in cells_by_level.values()]):.1f}%")
+                gpd_rows.append(row)
+        lines.append("")
+        lines.append("success rate averaged over levels: CPD beside GPD with each centrality")
+        lines.append(
+            table(
+                ["family/shape", "cpd"] + [f"gpd-{c}" for c in CENTRALITIES if f"gpd-{c}" in args.methods_nonrigid],
+                gpd_rows,
+            )
+        )
+    if "rotation" in args.families:
+        for shape in ("fish", "bunny"):
+            rows, trows = [], []
+            for degrees in args.angles:
+                row, trow = [degrees], [degrees]
+                for method in args.methods_rotation:
+                    res = rot_res.get((shape, degrees, method))
+                    c = dict(missing) if res is None else _summ(res, SUCCESS_DEGREES)
+                    searches = [r["search_s"] for r in res or [] if r.get("search_s") is not None]
+                    c["search_s"] = float(np.median(searches)) if searches else None
+                    summary["rotation"].setdefault(shape, {}).setdefault(str(degrees), {})[method] = c
+                    row.append(_cell(c, f"{100 * c['success']:.0f}%" if c["success"] is not None else ""))
+                    trow.append("-" if c["seconds"] is None else f"{c['seconds']:.3f}")
+                rows.append(row)
+                trows.append(trow)
+            lines.append("")
+            lines.append(
+                f"[rotation] {shape}: success rate (rotation error < {SUCCESS_DEGREES} deg) per initial angle, "
+                f"noise {ROTATION_SETTINGS['noise']}, {int(100 * ROTATION_SETTINGS['missing'])}% missing, "
+                f"{int(100 * ROTATION_SETTINGS['outliers'])}% outliers, w = {ROTATION_SETTINGS['w']}"
+            )
+            lines.append(table(["angle"] + list(args.methods_rotation), rows))
+            lines.append(f"[rotation] {shape}: median seconds per registration (the machine is shared: compare ratios)")
+            lines.append(table(["angle"] + list(args.methods_rotation), trows))
+            cells = summary["rotation"][shape]
+            if "cpd" in args.methods_rotation and "cpd+global" in args.methods_rotation:
+                done = [str(a) for a in args.angles if cells[str(a)]["cpd+global"]["status"] != "not run"]
+                if not done:
+                    continue
+                plain = np.median([cells[a]["cpd"]["seconds"] or np.nan for a in done])
+                glob = np.median([cells[a]["cpd+global"]["seconds"] or np.nan for a in done])
+                worst = min(cells[a]["cpd+global"]["success"] or 0 for a in done)
+                lines.append(
+                    f"global search ({shape}): lowest success over angles {', '.join(done)}: {100 * worst:.1f}% of "
+                    f"{args.trials} trials; "
+                    f"median seconds search + CPD {glob:.3f} vs one plain CPD {plain:.3f} (ratio {glob / plain:.2f})"
+                )
+                summary["rotation"][shape]["global_check"] = {
+                    "lowest_success": worst,
+                    "seconds_global": glob,
+                    "seconds_plain": plain,
+                }
+    lines.append("")
+    lines.append(load_line("timings are inflated; compare ratios"))
+    return "\n".join(lines), summary
+
+
+def figures(args, summary, out):
+    import matplotlib
+
+    matplotlib.use("Agg")  # a script, not the library
+    import matplotlib.pyplot as plt
+
+    syn = summary["synthetic"]
+    if syn:
+        fams = list(syn)
+        fig, axes = plt.subplots(2 * len(SHAPES_2D), len(fams), figsize=(4 * len(fams), 12), squeeze=False)
+        for j, family in enumerate(fams):
+            for i, shape in enumerate(SHAPES_2D):
+                levels = list(syn[family][shape])
+                for method in args.methods_nonrigid:
+                    style = "-" if method in ("cpd", "icp") or method in PEERS else ":"
+                    err = [syn[family][shape][lv][method]["mean"] for lv in levels]
+                    suc = [syn[family][shape][lv][method]["success"] for lv in levels]
+                    xs = [float(lv) for lv in levels]
+                    axes[2 * i, j].plot(
+                        xs, [np.nan if e is None else e for e in err], style, marker="o", ms=3, label=method
+                    )
+                    axes[2 * i + 1, j].plot(
+                        xs, [np.nan if s is None else s for s in suc], style, marker="o", ms=3, label=method
+                    )
+                axes[2 * i, j].set_title(f"{family} / {shape}: mean error")
+                axes[2 * i, j].set_yscale("log")
+                axes[2 * i + 1, j].set_title(f"{family} / {shape}: success")
+                axes[2 * i + 1, j].set_ylim(-0.05, 1.05)
+        axes[0, -1].legend(fontsize=6, ncol=2)
+        fig.tight_layout()
+        fig.savefig(f"{out}-synthetic.png", dpi=90)
+        plt.close(fig)
+    rot = summary["rotation"]
+    if rot:
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+        for ax, shape in zip(axes, ("fish", "bunny")):
+            for method in args.methods_rotation:
+                suc = [rot[shape][str(a)][method]["success"] for a in args.angles]
+                ax.plot(
+                    args.angles,
+                    [np.nan if s is None else s for s in suc],
+                    "-" if "+global" in method else "--",
+                    marker="o",
+                    ms=3,
+                    label=method,
+                )
+            ax.set_title(f"{shape}: success (rotation error < {SUCCESS_DEGREES} deg)")
+            ax.set_xlabel("initial rotation (degrees)")
+            ax.set_ylim(-0.05, 1.05)
+        axes[1].legend(fontsize=6, ncol=2)
+        fig.tight_layout()
+        fig.savefig(f"{out}-rotation.png", dpi=90)
+        plt.close(fig)
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument(
+        "--pairs", type=int, default=20, help="seeded pairs per synthetic level (the protocol's 100 is --pairs 100)"
+    )
+    p.add_argument("--trials", type=int, default=20, help="seeded trials per rotation angle")
+    p.add_argument("--bunny", type=int, default=1000, help="bunny points (drawn once with seed 0)")
+    p.add_argument("--families", default="deformation,noise,outliers,occlusion,rotation")
+    p.add_argument("--methods", default=None, help="comma list; default: all")
+    p.add_argument("--angles", default=",".join(map(str, ANGLES)))
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--scheduler", default="processes")
+    p.add_argument("--out", default=str(ROOT / "results" / "benchmarks" / "registration-suite"))
+    p.add_argument("--quick", action="store_true", help="smoke run: 2 pairs, 2 trials, angles 0,90,180")
+    p.add_argument("--report-only", action="store_true", help="tables and figures from the finished units only")
+    args = p.parse_args(argv)
+    if args.quick:
+        args.pairs, args.trials, args.angles = 2, 2, "0,90,180"
+        args.out += "-quick"
+    args.families = [f.strip() for f in args.families.split(",") if f.strip()]
+    args.angles = [int(a) for a in args.angles.split(",")]
+    chosen = None if args.methods is None else {m.strip() for m in args.methods.split(",")}
+    args.methods_nonrigid = [m for m in NONRIGID_METHODS if chosen is None or m in chosen]
+    args.methods_rotation = [m for m in ROTATION_METHODS if chosen is None or m in chosen]
+
+    from centrality_vision.experiments._runner import load_results, run_units
+
+    units = build_units(args)
+    path = Path(args.out + ".jsonl")
+    print(load_line("timings are inflated; compare ratios"), flush=True)
+    print(f"{len(units)} units; {len(load_results(path))} finished lines in {path}", flush=True)
+    if args.report_only:
+        done = load_results(path)
+        units = [u for u in units if u.key in done]
+        results = {u.key: done[u.key] for u in units}
+        args.families = [
+            f
+            for f in args.families
+            if any((f == "rotation" and "degrees" in u.kwargs) or u.kwargs.get("family") == f for u in units)
+        ]
+    else:
+        results = run_units(units, path, scheduler=args.scheduler, workers=args.workers, desc="registration-suite")
+    text, summary = report(args, units, results)
+    print(text)
+    Path(args.out + ".txt").write_text(text + "\n")
+    Path(args.out + ".json").write_text(json.dumps(summary, indent=1, default=str) + "\n")
+    figures(args, summary, args.out)
+
+
+if __name__ == "__main__":
+    main()
