@@ -159,3 +159,79 @@ def test_fgt_refuses_an_expansion_that_does_not_fit_in_memory():
     # one box per point, 24^3 terms each: about 6.6 GiB of coefficients, refused before allocating
     with pytest.raises(MemoryError, match="GiB"):
         gauss_transform(points, np.ones(60_000), points, 1e-4, eps=1e-14)
+
+
+def test_fast_exp_is_within_its_stated_relative_error():
+    from centrality_vision.registration._kernels import exp_array
+
+    rng = np.random.default_rng(9)
+    x = np.concatenate([rng.uniform(-700, 0, 200_000), rng.uniform(-1, 1, 100_000), np.arange(-700, 1.0)])
+    out = np.empty_like(x)
+    exp_array(x, out)
+    assert np.max(np.abs(out - np.exp(x)) / np.exp(x)) < 4e-16
+    assert out[x == 0].tolist() == [1.0] * int(np.sum(x == 0))  # the row maximum maps to exactly 1
+    exp_array(np.array([-800.0, -1e300]), out[:2])  # clamped at -700: normal numbers, never 0 or NaN
+    assert np.all(out[:2] == out[:2]) and np.all(out[:2] > 0)
+
+
+@pytest.mark.parametrize("method", ["dense", "truncated", "fgt"])
+def test_statistics_are_bit_identical_for_any_thread_count(method):
+    import centrality_vision as cv
+
+    rng = np.random.default_rng(10)
+    moving, fixed = rng.random((1500, 2)), rng.random((1700, 2))
+    results = []
+    try:
+        for threads in (1, 2, 3):
+            cv.set_num_threads(threads)
+            post = _e_step(moving, fixed, 0.003, 0.1, method=method)
+            results.append((post.p1, post.px, post.pt1, post.n_p, post.neg_log_likelihood, post.best))
+    finally:
+        cv.set_num_threads(None)
+    for other in results[1:]:
+        for a, b in zip(results[0], other):
+            assert np.array_equal(a, b)
+
+
+def test_low_rank_nonrigid_fit_is_identical_for_any_thread_count():
+    # issue: 69 iterations on 1 thread, 71 on 2, from partial sums added in a thread-dependent order
+    import centrality_vision as cv
+    from centrality_vision.registration import NonRigidCPD
+
+    rng = np.random.default_rng(11)
+    y = rng.random((520, 2))  # above 500 points: the low-rank kernel
+    x = y + 0.05 * np.sin(3 * y[:, ::-1]) + 0.003 * rng.standard_normal(y.shape)
+    fits = []
+    try:
+        for threads in (1, 2):
+            cv.set_num_threads(threads)
+            fits.append(NonRigidCPD(beta=0.5, lam=1.0, tol=1e-6, max_iter=40, method="dense").fit(y, x))
+    finally:
+        cv.set_num_threads(None)
+    assert fits[0].n_iter_ == fits[1].n_iter_
+    assert np.array_equal(fits[0].moving_transformed_, fits[1].moving_transformed_)
+
+
+def test_planner_probes_once_per_sigma2_regime_and_matches_dense():
+    from centrality_vision.registration._estep import EStepPlanner
+
+    rng = np.random.default_rng(12)
+    moving, fixed = rng.random((1200, 2)), rng.random((1000, 2))
+    planner = EStepPlanner()
+    for sigma2 in (1e-3, 1.1e-3, 0.9e-3):
+        post = planner(moving, fixed, sigma2, 0.0)
+        dense = _e_step(moving, fixed, sigma2, 0.0, method="dense")
+        assert post.method == planner.winner
+        for name in ("p1", "pt1", "px"):
+            assert np.abs(getattr(post, name) - getattr(dense, name)).max() <= 1e-8 * np.abs(getattr(dense, name)).max()
+    assert planner.probes == 1 and planner.winner in planner.timings
+    planner(moving, fixed, 1e-5, 0.0)  # sigma2 moved 100x: the ranking may have changed
+    assert planner.probes == 2
+    small = EStepPlanner()
+    assert small(moving[:50], fixed[:50], 1e-3, 0.0).method == "dense" and small.probes == 0
+
+
+def test_auto_without_a_planner_considers_every_path_at_small_sizes():
+    rng = np.random.default_rng(13)
+    moving, fixed = rng.random((400, 2)), rng.random((400, 2))  # 160,000 pairs, formerly always dense
+    assert _e_step(moving, fixed, 1e-7, 0.0, method="auto").method == "truncated"

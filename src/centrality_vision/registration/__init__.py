@@ -15,11 +15,14 @@ from ._cpd import AffineCPD, IterationInfo, NonRigidCPD, RigidCPD, Snapshots, al
 from ._estep import CentralityPrior, Posteriors
 from ._gpd import GPD, GRAPHS, centrality_prior, normalize_centrality
 from ._icp import ICP, estimate_normals
+from ._multiscale import ComposedTransform, MultiscaleCPD
 
 __all__ = [
     "RigidCPD",
     "AffineCPD",
     "NonRigidCPD",
+    "MultiscaleCPD",
+    "ComposedTransform",
     "GPD",
     "ICP",
     "estimate_normals",

@@ -1,0 +1,225 @@
+"""Coarse-to-fine CPD for very large point sets (a million points and more).
+
+CPD's E-step touches every pair of points (or, truncated, every pair within a few sigma), so
+a full-resolution fit of N = 10^6 points costs far more than one of 10^4. The transform,
+however, has few parameters (rigid, affine) or is smooth at the scale ``beta`` (non-rigid),
+so a random subsample pins it down: :class:`MultiscaleCPD` registers a seeded subsample
+exactly, then refines on larger subsamples, each level starting from the previous level's
+transform and final sigma2 (a few EM iterations each), and finally applies the transform to
+every point.
+
+* Rigid, similarity and affine: each level passes the transform as ``init=`` to the next.
+* Non-rigid: each level registers the subsample as warped by the previous levels, so the
+  result is the composition of the levels' displacement fields. Each field
+  ``v(z) = sum_m g(z, c_m) w_m`` is first compressed onto the pivots of a pivoted Cholesky
+  factorisation of its kernel (the Nystrom form, :func:`._lowrank.nystrom_field`), so that
+  applying it to N points costs O(N K) with K in the tens or hundreds instead of O(N M).
+
+Memory is O(N) for the final application plus what the levels need (each is an ordinary
+CPD fit on its subsample).
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._validation import ANY_DIMS, as_points, check_int
+from ..exceptions import ConvergenceWarning, InputError
+from ..transforms import NonRigidTransform
+from ._lowrank import PivotedCholesky, nystrom_field
+
+__all__ = ["MultiscaleCPD", "ComposedTransform", "compress_field"]
+
+
+@dataclass(frozen=True)
+class ComposedTransform:
+    """``z -> transforms[-1](... transforms[0](z))``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from centrality_vision.transforms import RigidTransform
+    >>> t = ComposedTransform((RigidTransform(np.eye(2), np.array([1.0, 0.0])),) * 2)
+    >>> t(np.zeros((1, 2)))
+    array([[2., 0.]])
+    """
+
+    transforms: tuple
+
+    def __call__(self, points):
+        out = np.asarray(points, dtype=float)
+        for transform in self.transforms:
+            out = transform(out)
+        return out
+
+
+def compress_field(transform: NonRigidTransform, *, max_rank=1000, tol=1e-12) -> NonRigidTransform:
+    """The same displacement field on at most ``max_rank`` of its kernel centres.
+
+    ``G ~ L L^T`` on the centres by pivoted Cholesky (pivots S); the field's values at the
+    centres, ``G W``, become ``G[:, S] a`` with ``a = L[S]^-T L^T W``: equal up to the
+    residual trace of the factorisation (at most ``tol * M`` per unit of ``|W|``) there,
+    and a Gaussian-kernel field of the same width everywhere.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> rng = np.random.default_rng(0)
+    >>> c = rng.random((400, 2))
+    >>> t = NonRigidTransform(c, 0.01 * rng.standard_normal((400, 2)), beta=0.5)
+    >>> small = compress_field(t)
+    >>> small.control_points.shape[0] < 100, bool(np.abs(small(c) - t(c)).max() < 1e-8)
+    (True, True)
+    """
+    control = np.asarray(transform.control_points)
+    pc = PivotedCholesky(control, transform.beta, max_rank=max_rank, tol=tol)
+    centres, coefficients = nystrom_field(control, pc.pivots, pc.factor, np.asarray(transform.coefficients))
+    return NonRigidTransform(
+        centres, coefficients, transform.beta, linear=transform.linear, translation=transform.translation
+    )
+
+
+def _clone(estimator):
+    try:
+        from sklearn.base import clone
+
+        return clone(estimator)
+    except Exception:  # an estimator without scikit-learn's get_params(deep=...)
+        return type(estimator)(**estimator.get_params())
+
+
+class MultiscaleCPD:
+    """Coarse-to-fine registration of large sets with any CPD estimator (see the module docstring).
+
+    Parameters
+    ----------
+    estimator : RigidCPD, AffineCPD or NonRigidCPD
+        The registration to run at every level (cloned; its parameters are kept, except
+        ``init``, ``sigma2`` and, after the first level, ``max_iter``).
+    sizes : sequence of int, default=(20000, 100000)
+        Points per set at each level, increasing; a level at least as large as a set uses
+        all of it (the full-resolution fit). Levels above the sets' sizes are skipped.
+    refine_iter : int, default=20
+        ``max_iter`` of every level after the first.
+    random_state : int, default=0
+        Seed of the subsamples.
+
+    Attributes
+    ----------
+    transform_ : transform
+        The fitted transform, applicable to any points: the last level's for rigid and
+        affine, a :class:`ComposedTransform` of the levels' fields for non-rigid.
+    moving_transformed_ : ndarray of shape (M, D)
+        Every moving point transformed.
+    levels_ : list of dict
+        Per level: ``n_moving``, ``n_fixed``, ``n_iter``, ``sigma2`` and ``seconds``.
+    sigma2_ : float
+        The last level's final sigma2.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from centrality_vision.registration import RigidCPD
+    >>> y = np.random.default_rng(0).random((3000, 2))
+    >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+    >>> reg = MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(300, 1000)).fit(y, y @ r.T + 0.1)
+    >>> [level["n_moving"] for level in reg.levels_], bool(np.abs(reg.moving_transformed_ - (y @ r.T + 0.1)).max() < 1e-6)
+    ([300, 1000], True)
+    """
+
+    def __init__(self, estimator, *, sizes=(20_000, 100_000), refine_iter=20, random_state=0):
+        self.estimator = estimator
+        self.sizes = sizes
+        self.refine_iter = refine_iter
+        self.random_state = random_state
+
+    def get_params(self, deep=True):
+        return {"estimator": self.estimator, "sizes": self.sizes, "refine_iter": self.refine_iter,
+                "random_state": self.random_state}
+
+    def set_params(self, **params):
+        for key, value in params.items():
+            if key not in self.get_params():
+                raise InputError(f"MultiscaleCPD has no parameter {key!r}; it has {sorted(self.get_params())}.")
+            setattr(self, key, value)
+        return self
+
+    def _check(self):
+        from ._cpd import AffineCPD, NonRigidCPD, RigidCPD
+
+        if not isinstance(self.estimator, (RigidCPD, AffineCPD, NonRigidCPD)):
+            raise TypeError(
+                f"`MultiscaleCPD.estimator` must be a RigidCPD, AffineCPD or NonRigidCPD; got {self.estimator!r}."
+            )
+        try:
+            sizes = [check_int(s, name="MultiscaleCPD.sizes[i]", low=2) for s in self.sizes]
+        except TypeError:
+            raise TypeError(f"`MultiscaleCPD.sizes` must be a sequence of ints; got {self.sizes!r}.") from None
+        if not sizes or sorted(sizes) != sizes or len(set(sizes)) != len(sizes):
+            raise InputError(f"`MultiscaleCPD.sizes` must be non-empty and strictly increasing; got {self.sizes!r}.")
+        check_int(self.refine_iter, name="MultiscaleCPD.refine_iter", low=1)
+        check_int(self.random_state, name="MultiscaleCPD.random_state", low=0)
+        return sizes, isinstance(self.estimator, NonRigidCPD)
+
+    def fit(self, moving, fixed):
+        """Register ``moving`` (M x D) onto ``fixed`` (N x D); returns ``self``. Neither is modified."""
+        sizes, nonrigid = self._check()
+        moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
+        fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
+        rng = np.random.default_rng(self.random_state)
+        largest = max(moving.shape[0], fixed.shape[0])
+        # every level up to the first that covers both sets whole
+        levels = [s for s in sizes if s < largest] + [s for s in sizes if s >= largest][:1]
+        fields = []
+        transform = None
+        sigma2 = None
+        self.levels_ = []
+        for i, size in enumerate(levels):
+            start = time.perf_counter()
+            sub_moving = _subsample(moving, size, rng)
+            sub_fixed = _subsample(fixed, size, rng)
+            est = _clone(self.estimator)
+            if i > 0:
+                est.max_iter = self.refine_iter
+                est.sigma2 = sigma2
+                if not nonrigid:
+                    est.init = transform
+            if nonrigid and fields:
+                sub_moving = ComposedTransform(tuple(fields))(sub_moving)
+            with warnings.catch_warnings():
+                if i > 0:  # a refinement stopping at refine_iter is the plan, not a failure to converge
+                    warnings.filterwarnings("ignore", message=".*max_iter", category=ConvergenceWarning)
+                est.fit(sub_moving, sub_fixed)
+            sigma2 = float(est.sigma2_)
+            if nonrigid:
+                fields.append(compress_field(est.transform_))
+            else:
+                transform = est.transform_
+            self.levels_.append({
+                "n_moving": sub_moving.shape[0], "n_fixed": sub_fixed.shape[0], "n_iter": int(est.n_iter_),
+                "sigma2": sigma2, "seconds": time.perf_counter() - start,
+            })
+        self.transform_ = ComposedTransform(tuple(fields)) if nonrigid else transform
+        self.moving_transformed_ = self.transform_(moving)
+        self.sigma2_ = sigma2
+        return self
+
+    def transform(self, points):
+        """Apply the fitted transform to new points."""
+        if not hasattr(self, "transform_"):
+            raise InputError("This MultiscaleCPD is not fitted yet; call fit(moving, fixed) first.")
+        return self.transform_(as_points(points, name="points", n_dims=ANY_DIMS))
+
+    def __repr__(self):
+        return (f"MultiscaleCPD({self.estimator!r}, sizes={self.sizes!r}, refine_iter={self.refine_iter!r}, "
+                f"random_state={self.random_state!r})")
+
+
+def _subsample(points, size, rng):
+    if size >= points.shape[0]:
+        return points
+    return points[np.sort(rng.choice(points.shape[0], size, replace=False))]

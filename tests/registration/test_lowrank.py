@@ -1,0 +1,130 @@
+"""Pivoted Cholesky / Nystrom kernels and the coarse-to-fine registration built on them."""
+
+import numpy as np
+import pytest
+
+from centrality_vision.exceptions import InputError
+from centrality_vision.registration import AffineCPD, NonRigidCPD, RigidCPD
+from centrality_vision.registration._lowrank import PivotedCholesky, low_rank_eigh, nystrom_field
+from centrality_vision.registration._multiscale import ComposedTransform, MultiscaleCPD, compress_field
+from centrality_vision.transforms import NonRigidTransform
+
+
+def _kernel(a, b, beta):
+    return np.exp(-((a[:, None] - b[None]) ** 2).sum(-1) / (2 * beta**2))
+
+
+@pytest.mark.parametrize(("dim", "beta"), [(2, 0.3), (3, 0.8), (1, 0.05)])
+def test_pivoted_cholesky_error_is_within_its_residual_trace(dim, beta):
+    y = np.random.default_rng(dim).random((150, dim))
+    g = _kernel(y, y, beta)
+    for rank in (5, 40, 150):
+        pc = PivotedCholesky(y, beta, max_rank=rank, tol=0.0)
+        residual = g - pc.factor.T @ pc.factor
+        assert np.linalg.eigvalsh(residual).min() > -1e-10  # G - L L^T stays positive semi-definite
+        assert np.linalg.norm(residual, 2) <= pc.residual_trace + 1e-10
+        assert pc.residual_trace == pytest.approx(np.trace(residual), abs=1e-9)
+        assert len(set(pc.pivots.tolist())) == len(pc.pivots)
+
+
+def test_pivoted_cholesky_stops_at_its_tolerance():
+    y = np.random.default_rng(0).random((300, 2))
+    pc = PivotedCholesky(y, 1.0, max_rank=300, tol=1e-6)
+    assert pc.residual_trace <= 1e-6 * 300 and pc.factor.shape[0] < 40
+
+
+def test_low_rank_eigh_matches_the_exact_leading_eigenpairs():
+    y = np.random.default_rng(1).random((300, 2)) * 3
+    g = _kernel(y, y, 2.0)
+    exact_values, exact_vectors = np.linalg.eigh(g)
+    values, vectors = low_rank_eigh(y, 2.0, 60)
+    np.testing.assert_allclose(values[:8], exact_values[::-1][:8], rtol=1e-9)
+    np.testing.assert_allclose(vectors.T @ vectors, np.eye(values.size), atol=1e-6)
+    # residual trace (tol 1e-12 x 300) plus the dropped values (below 1e-10 of the largest, ~220)
+    assert np.linalg.norm(g - (vectors * values) @ vectors.T, 2) < 300e-12 + 220e-10
+
+
+def test_nystrom_field_reproduces_the_low_rank_displacement_everywhere_on_the_points():
+    rng = np.random.default_rng(2)
+    y = rng.random((400, 2))
+    w = rng.standard_normal((400, 2))
+    pc = PivotedCholesky(y, 0.4, max_rank=400, tol=1e-14)
+    centres, a = nystrom_field(y, pc.pivots, pc.factor, w)
+    np.testing.assert_allclose(_kernel(y, centres, 0.4) @ a, pc.factor.T @ (pc.factor @ w), atol=1e-7)
+    np.testing.assert_allclose(_kernel(y, centres, 0.4) @ a, _kernel(y, y, 0.4) @ w, atol=1e-6)
+
+
+def test_compress_field_keeps_the_field_and_the_pre_map():
+    rng = np.random.default_rng(3)
+    c = rng.random((500, 3))
+    t = NonRigidTransform(c, 0.02 * rng.standard_normal((500, 3)), 0.7, linear=2 * np.eye(3), translation=[1.0, 0, 0])
+    small = compress_field(t)
+    assert small.control_points.shape[0] < 300
+    z = rng.random((100, 3))  # u = 2 z + (1, 0, 0): partly outside the centres' cube
+    assert np.abs(small(z) - t(z)).max() < 1e-6
+    assert np.abs(small(c) - t(c)).max() < 1e-6
+
+
+@pytest.mark.parametrize("bad", [0, -1.0, np.nan])
+def test_pivoted_cholesky_rejects_a_bad_beta(bad):
+    with pytest.raises((InputError, ValueError), match="beta"):
+        PivotedCholesky(np.zeros((3, 2)), bad, max_rank=2)
+
+
+def _rotation(a):
+    return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+
+def test_multiscale_rigid_recovers_a_known_transform():
+    rng = np.random.default_rng(4)
+    y = rng.random((4000, 2))
+    x = 1.1 * y @ _rotation(0.4).T + [0.2, -0.3]
+    reg = MultiscaleCPD(RigidCPD(tol=1e-9), sizes=(400, 4000), refine_iter=30).fit(y, x[rng.permutation(4000)])
+    assert [level["n_moving"] for level in reg.levels_] == [400, 4000]
+    assert np.abs(reg.moving_transformed_ - x).max() < 1e-6
+    assert reg.transform_.scale == pytest.approx(1.1, rel=1e-8)
+
+
+def test_multiscale_affine_stops_at_the_first_level_covering_the_sets():
+    rng = np.random.default_rng(5)
+    y = rng.random((900, 3))
+    a = np.array([[1.1, 0.1, 0.0], [0.0, 0.9, 0.2], [0.1, 0.0, 1.0]])
+    reg = MultiscaleCPD(AffineCPD(tol=1e-10), sizes=(300, 2000, 5000)).fit(y, y @ a.T)
+    assert [level["n_moving"] for level in reg.levels_] == [300, 900]
+    np.testing.assert_allclose(reg.transform_.linear, a, atol=1e-6)
+
+
+@pytest.mark.slow
+def test_multiscale_nonrigid_composes_fields_and_the_refinement_gets_closer():
+    # at 200 points the subsample's spacing (~0.07) is the deformation's size: the coarse
+    # level alone barely helps; the full-resolution level on top of it must
+    rng = np.random.default_rng(6)
+    y = rng.random((800, 2))
+    truth = y + 0.08 * np.sin(2 * y[:, ::-1])
+    est = NonRigidCPD(beta=1.0, lam=3.0, tol=1e-5, max_iter=300)
+    coarse = MultiscaleCPD(est, sizes=(200,)).fit(y, truth)
+    fine = MultiscaleCPD(est, sizes=(200, 800), refine_iter=20).fit(y, truth)
+    assert isinstance(fine.transform_, ComposedTransform) and len(fine.transform_.transforms) == 2
+    err0 = np.sqrt(np.mean((y - truth) ** 2))
+    err_coarse = np.sqrt(np.mean((coarse.moving_transformed_ - truth) ** 2))
+    err_fine = np.sqrt(np.mean((fine.moving_transformed_ - truth) ** 2))
+    assert err_fine < err_coarse and err_fine < 0.8 * err0
+    np.testing.assert_allclose(fine.transform(y), fine.moving_transformed_)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [({"sizes": (100, 50)}, "sizes"), ({"sizes": ()}, "sizes"), ({"refine_iter": 0}, "refine_iter"),
+     ({"random_state": -1}, "random_state"), ({"sizes": (1.5,)}, "sizes")],
+)
+def test_multiscale_rejects_bad_parameters(kwargs, match):
+    y = np.random.default_rng(7).random((50, 2))
+    with pytest.raises((InputError, TypeError), match=match):
+        MultiscaleCPD(RigidCPD(), **kwargs).fit(y, y)
+
+
+def test_multiscale_rejects_a_non_cpd_estimator_and_unfitted_use():
+    with pytest.raises(TypeError, match="estimator"):
+        MultiscaleCPD(object()).fit(np.zeros((5, 2)), np.zeros((5, 2)))
+    with pytest.raises(InputError, match="not fitted"):
+        MultiscaleCPD(RigidCPD()).transform(np.zeros((2, 2)))
