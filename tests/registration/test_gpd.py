@@ -142,3 +142,37 @@ def test_bad_gpd_input(fish_pair):
         GPD().fit([[0.0, 0.0], [1, 0], [2, 0], [3, 0]], [[0.0, 1.0], [1, 2], [2, 0], [3, 1]])
     with pytest.raises(ValueError, match="normalised"):
         centrality_prior([0.0, 2.0], [0.0, 1.0])
+
+
+# ------------------------------------------------------------------ prior schedules (issue 10)
+@pytest.mark.parametrize("schedule", ["anneal", 0.1])
+def test_prior_schedules(fish_pair, schedule):
+    y, x = fish_pair.moving, fish_pair.fixed
+    base = RigidCPD(w=0.1, max_iter=30, tol=0)
+    # Theorem 1 holds for a scheduled prior too
+    _same_run(GPD(base, graph="complete", prior_schedule=schedule).fit(y, x), base.fit(y, x))
+    full = GPD(base, centrality="closeness").fit(y, x)
+    scheduled = GPD(base, centrality="closeness", prior_schedule=schedule).fit(y, x)
+    # the same first E-step (the prior at full weight while sigma2 = sigma2_0), then a different path
+    assert scheduled.history_["objective"][0] == full.history_["objective"][0]
+    assert not np.array_equal(scheduled.moving_transformed_, full.moving_transformed_)
+    np.testing.assert_allclose(scheduled.posterior().sum(0), scheduled.posteriors_.pt1, atol=1e-12)
+
+
+def test_prior_switched_off_below_the_sigma2_fraction(fish_pair):
+    y, x = fish_pair.moving, fish_pair.fixed
+    base = RigidCPD(max_iter=40, tol=0)
+    gpd = GPD(base, centrality="degree", prior_schedule=0.5).fit(y, x)
+    assert gpd.history_["sigma2"][-1] < 0.5 * gpd.history_["sigma2"][0]
+    # at the end the posterior is CPD's (no prior) at the final state
+    moving_t, fixed, sigma2, w, prior = gpd.estimator_._posterior_state
+    assert prior is None
+    np.testing.assert_array_equal(gpd.posterior(), dense_posterior(moving_t, fixed, sigma2, w, None))
+    full = GPD(base, centrality="degree").fit(y, x)
+    assert full.estimator_._posterior_state[4] is not None
+
+
+def test_bad_prior_schedule(fish_pair):
+    for bad in ("cosine", 0.0, 1.0):
+        with pytest.raises(ValueError, match="prior_schedule"):
+            GPD(prior_schedule=bad).fit(fish_pair.moving, fish_pair.fixed)
