@@ -193,3 +193,12 @@ def test_eigenvector_of_long_thin_graphs_is_fast_and_exact():
     k = np.arange(1, n + 1)
     exact = np.sin(np.pi * k / (n + 1))
     np.testing.assert_allclose(values, exact / np.linalg.norm(exact), atol=1e-9)
+
+
+def test_eccentricity_auto_falls_back_when_the_bounds_do_not_meet():
+    from centrality_vision.graphs import delaunay_graph
+
+    graph = delaunay_graph(np.random.default_rng(0).random((4200, 2)))  # hop eccentricities: few values
+    values, info = cen.eccentricity(graph, return_info=True)
+    np.testing.assert_array_equal(values, cen.eccentricity(graph, method="all"))
+    assert info["searches"] == 4200 // 32 + int(np.ceil(4200 / 64))  # the budget, then 64-source groups

@@ -864,3 +864,66 @@ def brandes_edges(indptr, indices, data, sources, rtol):
             dist[order[q]] = np.inf
             done[order[q]] = False
     return eb
+
+
+@njit(cache=True, nogil=True)
+def eccentricity_bounds(indptr, indices, data, kind, lengths, weighted, budget, rtol):
+    """Takes-Kosters: exact eccentricities from few searches; returns (values, searches, done).
+
+    After a search from ``v`` (eccentricity ``e``), every node ``w`` it reaches satisfies
+    ``max(d, e - d) <= ecc(w) <= e + d`` with ``d = d(v, w)``. Searches start alternately
+    from the open node of largest upper bound and of smallest lower bound (ties: largest
+    degree) until every node's bounds meet, or ``budget`` searches (``done`` False).
+    """
+    n = indptr.shape[0] - 1
+    lower = np.zeros(n)
+    upper = np.full(n, np.inf)
+    is_open = np.ones(n, dtype=np.bool_)
+    ecc = np.zeros(n)
+    n_open = n
+    searches = 0
+    pick_upper = True
+    while n_open > 0:
+        if budget >= 0 and searches >= budget:
+            return ecc, searches, False
+        v = -1
+        for w in range(n):
+            if not is_open[w]:
+                continue
+            if v < 0:
+                v = w
+                continue
+            if pick_upper:
+                better = upper[w] > upper[v] or (
+                    upper[w] == upper[v] and indptr[w + 1] - indptr[w] > indptr[v + 1] - indptr[v]
+                )
+            else:
+                better = lower[w] < lower[v] or (
+                    lower[w] == lower[v] and indptr[w + 1] - indptr[w] > indptr[v + 1] - indptr[v]
+                )
+            if better:
+                v = w
+        pick_upper = not pick_upper
+        d = distances_from(indptr, indices, data, kind, lengths, v, weighted)
+        searches += 1
+        e = 0.0
+        for w in range(n):
+            if d[w] < np.inf and d[w] > e:
+                e = d[w]
+        ecc[v] = e
+        is_open[v] = False
+        n_open -= 1
+        for w in range(n):
+            dw = d[w]
+            if dw == np.inf or not is_open[w]:
+                continue
+            lo = max(dw, e - dw)
+            if lo > lower[w]:
+                lower[w] = lo
+            if e + dw < upper[w]:
+                upper[w] = e + dw
+            if upper[w] - lower[w] <= rtol * upper[w]:
+                ecc[w] = lower[w] if weighted else upper[w]
+                is_open[w] = False
+                n_open -= 1
+    return ecc, searches, True
