@@ -335,7 +335,7 @@ def _read_npy(path: Path) -> _Table:
             if version not in reader:
                 raise ValueError(f"format version {version}")
             shape, fortran_order, dtype = reader[version](handle, max_header_size=10_000)
-        except (ValueError, OSError, EOFError, SyntaxError) as exc:
+        except Exception as exc:  # ValueError, EOFError, SyntaxError, tokenize.TokenError, ...
             raise InputError(f"{path}: not a readable .npy array ({_first_line(exc)}).") from None
         offset = handle.tell()
     if dtype.hasobject or not (np.issubdtype(dtype, np.number) or dtype.kind == "b"):
@@ -359,8 +359,25 @@ def _read_npy(path: Path) -> _Table:
 
 
 def _read_mat(path: Path, variable: str | None) -> _Table:
-    from scipy.io import loadmat
+    from scipy.io import loadmat, whosmat
 
+    # The variables' headers first: scipy's loadmat can crash the interpreter on a damaged
+    # file whose data run past its end, while whosmat reads the headers and raises.
+    try:
+        variables = whosmat(path)
+    except NotImplementedError:
+        raise InputError(
+            f"{path}: MATLAB v7.3 (HDF5) files are not supported; save with -v7 (or read it with h5py)."
+        ) from None
+    except Exception as exc:  # scipy raises ValueError, TypeError, OSError, MatReadError, ...
+        raise InputError(f"{path}: not a readable .mat file ({type(exc).__name__}: {_first_line(exc)}).") from None
+    size = path.stat().st_size
+    for name, shape, _ in variables:
+        # zlib compresses at most ~1032:1, so no real file holds more than this
+        if math.prod(shape) > 1032 * size + 1_000_000:
+            raise InputError(
+                f"{path}: variable {name!r} declares shape {shape}, more than a file of {size} bytes can hold."
+            )
     try:
         contents = loadmat(path)
     except NotImplementedError:
@@ -451,7 +468,8 @@ def _read_ply(path: Path) -> _Table:
     meshio = _meshio()
     count = _ply_vertex_count(path, path.read_bytes())
     try:
-        mesh = meshio.read(path, file_format="ply")
+        # meshio's PLY reader itself: meshio.read prints and calls sys.exit(1) on a ReadError
+        mesh = meshio.ply.read(str(path))
     except Exception as exc:  # meshio raises ValueError, KeyError, ReadError, struct errors, ...
         raise InputError(f"{path}: not a readable PLY file ({type(exc).__name__}: {_first_line(exc)}).") from None
     points = np.asarray(mesh.points, dtype=np.float64)
@@ -470,6 +488,7 @@ def _read_ply(path: Path) -> _Table:
 def _meshio():
     try:
         import meshio
+        import meshio.ply
     except ImportError:  # pragma: no cover - meshio is a dependency
         raise InputError("reading and writing PLY files needs the meshio package: pip install meshio") from None
     return meshio

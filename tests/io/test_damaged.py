@@ -1,0 +1,94 @@
+"""Damaged files: every reader answers with an InputError, never a crash, an exit or a huge allocation."""
+
+import io
+import random
+import warnings
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from centrality_vision.exceptions import InputError
+from centrality_vision.io import read_points, read_shape
+
+# A 238-byte MAT file (a fuzzed copy of a savemat output) on which scipy's loadmat crashed
+# the interpreter (segmentation fault) while reading its data past the end of the file.
+CRASHING_MAT = bytes.fromhex(
+    "4d41544c414220352e30204d41542d66696c6520506c6174666f726d3a20706f7369782c2043726561746564206f6e3a"
+    "2053756e204e6f762032322031323a32363a313320323032360000000000000000000000000000000000000000000000"
+    "000000000000000000000000000000000000000000000000000000000001494d0e000000600000000600000008000000"
+    "060000000000000005000000080000000300000002000000010001006100000009e9000030000000000000000000006e"
+    "616e0000000000000000400000000000001040000000000000f03f000000000000084000000000006e616e001440"
+)
+
+
+def test_a_mat_file_that_crashed_scipy_is_an_input_error(tmp_path):
+    path = tmp_path / "crash.mat"
+    path.write_bytes(CRASHING_MAT)
+    with pytest.raises(InputError, match="not a readable .mat file"):
+        read_points(path)
+
+
+def test_a_damaged_ply_header_is_an_input_error_not_an_exit(tmp_path):
+    path = tmp_path / "bad.ply"  # meshio.read prints and calls sys.exit(1) on this one
+    path.write_bytes(b"plyX\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n")
+    with pytest.raises(InputError, match="not a readable PLY file"):
+        read_points(path)
+
+
+def _seeds() -> dict:
+    from scipy.io import savemat
+
+    seeds = {
+        ".csv": b"x,y,z\n1,2,3\n4,5,6\n",
+        ".txt": b"1 2\n3 4\n",
+        ".ply": b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+        b"end_header\n1 2 3\n4 5 6\n",
+        ".pcd": b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n"
+        b"1 2 3\n4 5 6\n",
+        ".obj": b"v 1 2 3\nv 4 5 6\nf 1 2 1\n",
+    }
+    buffer = io.BytesIO()
+    np.save(buffer, np.arange(6.0).reshape(3, 2))
+    seeds[".npy"] = buffer.getvalue()
+    buffer = io.BytesIO()
+    savemat(buffer, {"a": np.arange(6.0).reshape(3, 2)})
+    seeds[".mat"] = buffer.getvalue()
+    image = np.full((8, 8), 255, np.uint8)
+    image[2:5, 2:6] = 0
+    for suffix in (".png", ".bmp", ".gif"):
+        seeds[suffix] = iio.imwrite("<bytes>", image, extension=suffix)
+    return seeds
+
+
+SEEDS = _seeds()
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(suffix=st.sampled_from(sorted(SEEDS)), seed=st.integers(0, 2**32 - 1))
+def test_mutated_files_give_points_or_an_input_error(tmp_path, suffix, seed):
+    rng = random.Random(seed)
+    data = bytearray(SEEDS[suffix])
+    for _ in range(rng.randint(1, 6)):
+        i = rng.randrange(len(data) + 1)
+        op = rng.random()
+        if op < 0.4 and data:
+            data[min(i, len(data) - 1)] = rng.randrange(256)
+        elif op < 0.7:
+            data[i:i] = bytes([rng.randrange(256)]) * rng.randint(1, 3)
+        elif op < 0.85:
+            del data[i : i + rng.randint(1, 10)]
+        else:
+            data[i:i] = rng.choice([b"nan", b"1e400", b"-", b",", b";", b"\n", b"999999999999", b"\xef\xbb\xbf"])
+    path = tmp_path / f"f{suffix}"
+    path.write_bytes(bytes(data))
+    reader = read_shape if suffix in (".png", ".bmp", ".gif") else read_points
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # an inverted-looking shape may warn
+            out = reader(path)
+    except InputError:
+        return
+    assert out.dtype == bool or np.isfinite(out).all()
