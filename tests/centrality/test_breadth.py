@@ -202,3 +202,34 @@ def test_eccentricity_auto_falls_back_when_the_bounds_do_not_meet():
     values, info = cen.eccentricity(graph, return_info=True)
     np.testing.assert_array_equal(values, cen.eccentricity(graph, method="all"))
     assert info["searches"] == 4200 // 32 + int(np.ceil(4200 / 64))  # the budget, then 64-source groups
+
+
+def test_fifo_kernel_property_random_masks():
+    """On random small masks the exact FIFO betweenness equals the exact-arithmetic reference."""
+    hypothesis = pytest.importorskip("hypothesis")
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+    from hypothesis.extra.numpy import arrays
+
+    from tests.centrality.test_centrality import _exact_weighted_betweenness
+
+    @settings(max_examples=20, deadline=None, derandomize=True)
+    @given(arrays(np.bool_, (7, 8), elements=st.booleans()))
+    def check(image):
+        if image.sum() < 2:
+            return
+        graph, _ = pixel_graph(image)
+        np.testing.assert_allclose(
+            cen.betweenness(graph, weights=True), _exact_weighted_betweenness(image), rtol=1e-9, atol=1e-9
+        )
+        prep = cen._api._prepare(graph, reorder=False)
+        classes = _kernels.length_classes(prep.data)
+        if classes is not None:
+            sources = np.arange(prep.n, dtype=np.int64)
+            fifo = _kernels.class_stats(prep.indptr, prep.indices, *classes, sources)
+            heap = _kernels.dijkstra_stats(prep.indptr, prep.indices, prep.data, sources)
+            for a, b in zip(fifo, heap):
+                np.testing.assert_allclose(a, b, rtol=1e-12)
+
+    assert hypothesis is not None
+    check()
