@@ -55,7 +55,7 @@ import traceback
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 CENTRALITIES = ("betweenness", "closeness", "eigenvector", "eccentricity")
 LIBRARIES = ("ours", "networkx", "networkit", "rustworkx", "igraph", "scipy")
@@ -134,15 +134,15 @@ if _ARGS is not None:
     os.environ["NUMBA_NUM_THREADS"] = str(_ARGS.threads)
 
 import numpy as np  # noqa: E402
-from _common import fmt_s, load_line, table  # noqa: E402
 import scipy  # noqa: E402
 import scipy.sparse as sp  # noqa: E402
+from _common import fmt_s, load_line, table  # noqa: E402
 
 
 def _try_import(name):
     try:
         return __import__(name), None
-    except Exception as exc:  # noqa: BLE001 - any failure means "not available"
+    except Exception as exc:
         return None, "%s: %s" % (type(exc).__name__, exc)
 
 
@@ -164,13 +164,13 @@ def _import_ours():
             for f in CENTRALITIES:
                 getattr(cen_mod, f)
             cen = cen_mod
-        except Exception as exc:  # noqa: BLE001
+        except Exception as exc:
             msgs.append("centrality: %s: %s" % (type(exc).__name__, exc))
         try:
             from centrality_vision.graphs import delaunay_graph, pixel_graph
 
             pix, dela = pixel_graph, delaunay_graph
-        except Exception as exc:  # noqa: BLE001
+        except Exception as exc:
             msgs.append("graphs: %s: %s" % (type(exc).__name__, exc))
         return cen, pix, dela, msgs
 
@@ -253,7 +253,7 @@ def build_graph(name, ours_pix, ours_dela):
             try:
                 csr, _ = ours_pix(mask, connectivity=8)
                 builder = "centrality_vision.graphs.pixel_graph(connectivity=8)"
-            except Exception as exc:  # noqa: BLE001
+            except Exception as exc:
                 print("  ! our pixel_graph failed (%s: %s); using skimage" % (type(exc).__name__, exc))
                 csr = None
         if csr is None:
@@ -267,7 +267,7 @@ def build_graph(name, ours_pix, ours_dela):
             try:
                 csr = ours_dela(pts)
                 builder = "centrality_vision.graphs.delaunay_graph"
-            except Exception as exc:  # noqa: BLE001
+            except Exception as exc:
                 print("  ! our delaunay_graph failed (%s: %s); using scipy" % (type(exc).__name__, exc))
                 csr = None
         if csr is None:
@@ -286,7 +286,7 @@ def tiny_graph(ours_pix):
     if ours_pix is not None:
         try:
             return build_graph_from_mask(mask, ours_pix)
-        except Exception:  # noqa: BLE001
+        except Exception:
             pass
     return build_graph_from_mask(mask, None)
 
@@ -480,7 +480,7 @@ def run_cell(lib, centrality, g, conv, cen, repeat, with_slow_nx):
     fn, to_array = spec
     try:
         times, result, caught = measure(fn, conv, repeat)
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         status = "no-conv" if _is_nonconvergence(exc) else "error"
         return Cell(status, note="%s: %s" % (type(exc).__name__, str(exc).strip().splitlines()[0]
                                               if str(exc).strip() else ""))
@@ -494,7 +494,7 @@ def compare(cells, ref_lib):
         return
     r = ref.values
     scale = np.nanmax(np.abs(r)) if np.isfinite(r).any() else np.nan
-    for lib, c in cells.items():
+    for c in cells.values():
         if c.status != "ok" or c.values is None:
             continue
         v = c.values
@@ -532,7 +532,7 @@ def machine_info(threads):
         import centrality_vision
 
         info["centrality_vision"] = centrality_vision.__version__
-    except Exception:  # noqa: BLE001
+    except Exception:
         info["centrality_vision"] = "not importable"
     return info
 
@@ -611,7 +611,7 @@ def main(args):
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")
                     spec[0](G)
-            except Exception as exc:  # noqa: BLE001
+            except Exception as exc:
                 if lib == "ours":
                     warm_msgs.append("%s: %s: %s" % (c, type(exc).__name__, exc))
     print("\nwarm-up: every function called once on a tiny %d-node pixel disk before timing "
@@ -736,7 +736,7 @@ def _our_threads():
         import centrality_vision
 
         return centrality_vision.get_num_threads()
-    except Exception:  # noqa: BLE001
+    except Exception:
         return "?"
 
 
@@ -762,9 +762,9 @@ def silhouette_mask(name, target):
     return np.pad(mask, 1)
 
 
-def _timed(fn):
+def _timed(fn, *args, **kwargs):
     start = time.perf_counter()
-    out = fn()
+    out = fn(*args, **kwargs)
     return out, time.perf_counter() - start
 
 
@@ -790,7 +790,7 @@ def scale_main(args):
     graphs["mask-1M"] = silhouette_mask("elephant-1", 1_000_000)
     built = {}
     for name, mask in graphs.items():
-        (g, _), t = _timed(lambda: pixel_graph(mask))
+        (g, _), t = _timed(pixel_graph, mask)
         built[name] = g
         print("  %-16s n = %8d  edges = %8d  mask %dx%d  (pixel_graph, 8-neighbour, %.2f s)"
               % (name, g.shape[0], g.nnz // 2, *mask.shape, t))
@@ -830,12 +830,12 @@ def _scale_exact(args, built, cen, eps):
     for name in names:
         g = built[name]
         n, m = g.shape[0], g.nnz // 2
-        ours, t_ours = _timed(lambda: cen.betweenness(g))
+        ours, t_ours = _timed(cen.betweenness, g)
         row = [name, n, m, "%.2f" % t_ours, eps(n * m, t_ours)]
         if ig is not None and name == "disk-10000":
             upper = sp.triu(g, k=1).tocoo()
             G = ig.Graph(n=n, edges=np.column_stack([upper.row, upper.col]).tolist())
-            ref, t_ig = _timed(lambda: G.betweenness(directed=False))
+            ref, t_ig = _timed(G.betweenness, directed=False)
             row += ["%.2f" % t_ig, "%.2f" % (t_ig / t_ours), "%.1e" % np.abs(np.asarray(ref) - ours).max()]
         else:
             row += ["-", "-", "-"]
@@ -851,11 +851,11 @@ def _scale_closeness(built, cen, _kernels):
     for name in ("disk-10000",):
         g = built[name]
         n, m = g.shape[0], g.nnz // 2
-        hop, t_hop = _timed(lambda: cen.closeness(g))
-        fifo, t_fifo = _timed(lambda: cen.closeness(g, weights=True))
+        hop, t_hop = _timed(cen.closeness, g)
+        fifo, t_fifo = _timed(cen.closeness, g, weights=True)
         prep = cen._api._prepare(g)
         sources = np.arange(n, dtype=np.int64)
-        heap, t_heap = _timed(lambda: _kernels.dijkstra_stats(prep.indptr, prep.indices, prep.data, sources))
+        heap, t_heap = _timed(_kernels.dijkstra_stats, prep.indptr, prep.indices, prep.data, sources)
         heap_close = prep.unpermute((n - 1) / heap[0])
         rows.append([name, n, m, "%.2f" % t_hop, "%.2f" % t_fifo, "%.2f" % t_heap, "%.1f" % (t_fifo / t_hop),
                      "%.1f" % (t_heap / t_fifo), "%.1e" % np.abs(fifo - heap_close).max()])
@@ -872,7 +872,9 @@ def _scale_approx(built, cen, eps):
     for name in ("disk-10000", "silhouette-100k", "mask-1M"):
         g = built[name]
         n, m = g.shape[0], g.nnz // 2
-        (approx, infod), t = _timed(lambda: cen.betweenness(g, normalized=True, epsilon=0.01, seed=0, return_info=True))
+        (approx, infod), t = _timed(
+            cen.betweenness, g, normalized=True, epsilon=0.01, seed=0, return_info=True
+        )
         err = "-"
         if name == "disk-10000":
             err = "%.4f" % np.abs(approx - cen.betweenness(g, normalized=True)).max()
@@ -890,9 +892,9 @@ def _scale_eccentricity(built, cen):
     for name, weighted in (("disk-10000", False), ("disk-10000", True), ("silhouette-100k", False),
                            ("silhouette-100k", True)):
         g = built[name]
-        (b, ib), t_b = _timed(lambda: cen.eccentricity(g, weights=weighted, method="bounds", return_info=True))
+        (b, ib), t_b = _timed(cen.eccentricity, g, weights=weighted, method="bounds", return_info=True)
         if name == "disk-10000" or not weighted:
-            (a, ia), t_a = _timed(lambda: cen.eccentricity(g, weights=weighted, method="all", return_info=True))
+            (a, ia), t_a = _timed(cen.eccentricity, g, weights=weighted, method="all", return_info=True)
             diff = "%.1e" % np.abs(a - b).max()
             row_a = ["%.2f" % t_a, ia["searches"]]
         else:
@@ -910,7 +912,7 @@ def _scale_eigenvector(built, cen, pixel_graph):
     path = sp.diags_array([np.ones(9999), np.ones(9999)], offsets=[-1, 1], format="csr")
     strip, _ = pixel_graph(np.ones((3, 10000), dtype=bool))
     for name, g in (("path-10000", path), ("strip-3x10000", strip), ("disk-10000", built["disk-10000"])):
-        v, t = _timed(lambda: cen.eigenvector(g))
+        v, t = _timed(cen.eigenvector, g)
         rows.append([name, g.shape[0], "%.3f" % t])
     print(table(["graph", "n", "ours [s]"], rows))
 
@@ -920,6 +922,6 @@ if __name__ == "__main__":
         sys.exit(scale_main(_ARGS) if _ARGS.scale else main(_ARGS))
     except KeyboardInterrupt:
         sys.exit(130)
-    except Exception:  # noqa: BLE001
+    except Exception:
         traceback.print_exc()
         sys.exit(1)
