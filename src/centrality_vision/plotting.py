@@ -484,7 +484,9 @@ def plot_matching(
     ----------
     moving, fixed : array_like of shape (n, 2)
     correspondence : array_like of int, shape (n,)
-        ``moving[i]`` matches ``fixed[correspondence[i]]``.
+        ``moving[i]`` matches ``fixed[correspondence[i]]``; -1 marks a moving point
+        without partner (drawn grey, no line). Fixed points no moving point matches are
+        drawn white.
     moving_graph, fixed_graph : sparse array of shape (n, n), optional
     ax : matplotlib Axes, optional
     title : str, optional
@@ -520,9 +522,10 @@ def plot_matching(
             f"`correspondence` must be an integer array of shape ({n},); got {correspondence.shape} "
             f"of dtype {correspondence.dtype}."
         )
-    if correspondence.size and (correspondence.min() < 0 or correspondence.max() >= fixed.shape[0]):
+    if correspondence.size and (correspondence.min() < -1 or correspondence.max() >= fixed.shape[0]):
         raise InputError(
-            f"`correspondence` must index into `fixed` (0 .. {fixed.shape[0] - 1}); got out-of-range values."
+            f"`correspondence` must index into `fixed` (0 .. {fixed.shape[0] - 1}) or be -1 (unmatched); "
+            f"got values from {correspondence.min()} to {correspondence.max()}."
         )
     max_lines = int(max_lines)
     max_edges = 3 * n if max_edges is None else int(max_edges)
@@ -531,7 +534,14 @@ def plot_matching(
     span = np.ptp(np.vstack([moving, fixed]), axis=0)
     right = fixed + np.array([moving[:, 0].max() - fixed[:, 0].min() + 0.3 * max(span[0], 1e-12), 0.0])
     colours = plt.get_cmap("hsv")(np.linspace(0, 0.9, n)) if n else np.empty((0, 4))
-    shown = np.unique(np.linspace(0, n - 1, min(max_lines, n)).round().astype(int)) if n and max_lines > 0 else []
+    matched = np.flatnonzero(correspondence >= 0)
+    colours[correspondence < 0] = (0.6, 0.6, 0.6, 1.0)  # unmatched moving points in grey
+    n_matched = len(matched)
+    shown = (
+        matched[np.unique(np.linspace(0, n_matched - 1, min(max_lines, n_matched)).round().astype(int))]
+        if n_matched and max_lines > 0
+        else []
+    )
     ax.add_collection(
         LineCollection(
             np.stack([moving[shown], right[correspondence[shown]]], axis=1) if len(shown) else np.empty((0, 2, 2)),
@@ -551,8 +561,8 @@ def plot_matching(
         ax.add_collection(
             LineCollection(np.stack([pts[coo.row], pts[coo.col]], axis=1), colors="0.8", linewidths=0.4, zorder=1)
         )
-    fixed_colours = np.empty_like(colours)
-    fixed_colours[correspondence] = colours
+    fixed_colours = np.full((fixed.shape[0], 4), (1.0, 1.0, 1.0, 1.0))  # fixed points without partner in white
+    fixed_colours[correspondence[matched]] = colours[matched]
     ax.scatter(moving[:, 0], moving[:, 1], s=14, c=colours, edgecolors="k", linewidths=0.3, zorder=3, label="moving")
     ax.scatter(
         right[:, 0],

@@ -364,6 +364,8 @@ def test_match_recovers_a_permutation(tmp_path):
         str(tmp_path / "m.txt"),
         str(tmp_path / "f.txt"),
         "--method",
+        "mwme",
+        "--mwme-method",
         "greedy",
         "--out",
         str(tmp_path / "m.json"),
@@ -374,7 +376,7 @@ def test_match_recovers_a_permutation(tmp_path):
     record = json.loads((tmp_path / "m.json").read_text())
     assert record["correspondence"] == perm.tolist()
     assert abs(record["transform"]["scale"] - 2.0) < 1e-9 and record["rms_residual"] < 1e-9
-    assert record["parameters"]["method"] == "greedy" and (tmp_path / "m.png").stat().st_size > 0
+    assert record["parameters"]["mwme_method"] == "greedy" and (tmp_path / "m.png").stat().st_size > 0
 
 
 def _shapes_folder(folder, *, extra=()):
@@ -464,7 +466,8 @@ def test_other_input_errors_are_one_line(tmp_path, capsys):
     np.savetxt(tmp_path / "q.txt", _points(6))
     assert main(["graph", str(tmp_path / "p.txt"), "--kind", "knn", "--k", "5", "--out", str(tmp_path / "g.json")]) == 2
     assert "--k must be smaller" in _one_line_error(capsys)
-    assert main(["match", str(tmp_path / "p.txt"), str(tmp_path / "q.txt"), "--out", str(tmp_path / "m.json")]) == 2
+    argv = ["match", str(tmp_path / "p.txt"), str(tmp_path / "q.txt"), "--method", "mwme", "--out", str(tmp_path / "m.json")]
+    assert main(argv) == 2
     assert "same size" in _one_line_error(capsys)
     assert main(["classify", str(tmp_path / "nowhere"), "--out", str(tmp_path / "c.json")]) == 2
     assert "no such folder" in _one_line_error(capsys)

@@ -1,4 +1,4 @@
-"""``centrality-vision match``: MWME matching of two point sets of the same size (thesis ch. 6)."""
+"""``centrality-vision match``: point-set matching through :func:`centrality_vision.matching.match`."""
 
 from __future__ import annotations
 
@@ -22,33 +22,49 @@ from ._output import parameters_block, write_output
 
 NAME = "match"
 
+#: The methods of :func:`centrality_vision.matching.match` (checked against ``matching.METHODS`` in the tests).
+METHODS = ("robust", "mwme", "shape-context")
+
 
 def add_parser(sub) -> argparse.ArgumentParser:
     parser = subparser(
         sub,
         NAME,
-        summary="Match two point sets of the same size through their MWME graphs (thesis ch. 6).",
-        description=f"MOVING and FIXED are point-set files ({POINT_FILES}) of the same size.\n"
-        "Each set gets its minimum-weight maximum-entropy graph, whose nodes have distinct\n"
-        "degrees (but two); points of equal degree correspond. Writes the correspondence\n"
-        "(moving[i] -> fixed[correspondence[i]]) and the least-squares transform fitted to it.\n"
-        "The cost grows as n^3: meant for tens to a few hundred points.",
-        example="centrality-vision match moving.txt fixed.txt --method local --out matching.json --plot matching.png",
+        summary="Match two point sets: local MWME signatures + consensus, global MWME, or shape contexts.",
+        description=f"MOVING and FIXED are point-set files ({POINT_FILES}).\n"
+        "robust (default, 2D): every point's neighbourhood gets its MWME graph as a rotation- and\n"
+        "  scale-invariant signature; alike pairs propose similarity transforms, the one most points\n"
+        "  agree with wins and is refined. Sets may differ in size, have outliers or missing parts.\n"
+        "mwme (2D or 3D): the thesis' global MWME matching (ch. 6): sets of the same size; exact on\n"
+        "  copies, fragile under noise. Its cost grows as n^3.\n"
+        "shape-context (2D): shape contexts with a one-to-one Hungarian assignment (the baseline).\n"
+        "Writes the correspondence (moving[i] -> fixed[correspondence[i]], -1 for a moving point\n"
+        "without partner) and the transform taking MOVING onto FIXED.",
+        example="centrality-vision match moving.txt fixed.txt --method robust --out matching.json --plot matching.png",
     )
     parser.add_argument("moving", metavar="MOVING", help="point-set file")
-    parser.add_argument("fixed", metavar="FIXED", help="point-set file of the same size")
+    parser.add_argument("fixed", metavar="FIXED", help="point-set file (same size for --method mwme)")
     add_point_options(parser)
     parser.add_argument(
-        "--method",
+        "--method", choices=METHODS, default="robust", help="matching method (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--mwme-method",
         choices=("local", "greedy", "exact"),
         default="local",
-        help="MWME solver; exact only up to 20 points (default: %(default)s)",
+        help="MWME solver for --method mwme; exact only up to 20 points (default: %(default)s)",
     )
     parser.add_argument(
         "--transform",
         choices=("similarity", "rigid"),
         default="similarity",
         help="transform fitted to the matched points (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--refine",
+        choices=("icp", "cpd"),
+        default="icp",
+        help="refinement of --method robust; cpd suits whole sets only (default: %(default)s)",
     )
     add_out(parser, ".json", ".npz")
     add_plot(parser, "the matching (2D sets)")
@@ -60,45 +76,82 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from ..exceptions import InputError
-    from ..matching import mwme_match
+    from ..matching import match
 
     started = time.perf_counter()
     moving = read_point_file(args.moving, args)
     fixed = read_point_file(args.fixed, args)
-    if moving.shape != fixed.shape:
+    if args.method == "mwme" and moving.shape != fixed.shape:
         raise InputError(
-            f"{args.moving} and {args.fixed}: MWME matching needs two sets of the same size and dimension; "
-            f"got shapes {moving.shape} and {fixed.shape}."
+            f"{args.moving} and {args.fixed}: --method mwme needs two sets of the same size and dimension; "
+            f"got shapes {moving.shape} and {fixed.shape} (--method robust or shape-context take sets of "
+            "different sizes)."
+        )
+    if moving.shape[1] != fixed.shape[1]:
+        raise InputError(
+            f"{args.moving} and {args.fixed}: the sets must have the same dimension; "
+            f"got {moving.shape[1]}D and {fixed.shape[1]}D points."
+        )
+    if args.method != "mwme" and moving.shape[1] != 2:
+        raise InputError(
+            f"--method {args.method} matches 2D point sets only; got {moving.shape[1]}D points (--method mwme takes 3D)."
         )
     if args.plot and moving.shape[1] != 2:
         raise InputError(f"--plot draws 2D point sets only; got {moving.shape[1]}D points.")
-    say(f"MWME matching ({args.method}) of {moving.shape[0]} points in {moving.shape[1]}D")
-    correspondence, transform = mwme_match(moving, fixed, method=args.method, scale=args.transform == "similarity")
-    correspondence = np.asarray(correspondence, dtype=np.int64)
+    say(f"{args.method} matching of {moving.shape[0]} onto {fixed.shape[0]} points in {moving.shape[1]}D")
+    result = match(
+        moving,
+        fixed,
+        method=args.method,
+        scale=args.transform == "similarity",
+        refine=args.refine,
+        mwme_method=args.mwme_method,
+    )
+    correspondence = np.asarray(result.correspondence, dtype=np.int64)
+    transform = result.transform
     moved = transform(moving)
-    rms = float(np.sqrt(np.mean(np.sum((moved - fixed[correspondence]) ** 2, axis=1))))
+    matched = correspondence >= 0
+    rms = (
+        float(np.sqrt(np.mean(np.sum((moved[matched] - fixed[correspondence[matched]]) ** 2, axis=1))))
+        if matched.any()
+        else float("nan")
+    )
     seconds = time.perf_counter() - started
-    say(f"matched in {seconds:.2f} s; RMS residual of the fitted {args.transform} transform: {rms:.6g}")
+    say(
+        f"matched {int(matched.sum())} of {len(correspondence)} points in {seconds:.2f} s; "
+        f"RMS residual of the matched points under the fitted {args.transform} transform: {rms:.6g}"
+    )
     transform_parts = transform_record(transform)
     record = {
         "command": NAME,
         "parameters": parameters_block(options(args)),
+        "method": args.method,
         "correspondence": correspondence,
-        "correspondence_meaning": "moving[i] matches fixed[correspondence[i]]",
+        "correspondence_meaning": "moving[i] matches fixed[correspondence[i]]; -1: no partner",
+        "n_matched": int(matched.sum()),
         "transform": transform_parts,
         "moving_transformed": moved,
-        "rms_residual": rms,
+        "rms_residual": rms if matched.any() else None,
         "seconds": round(seconds, 3),
     }
     arrays = {f"transform_{key}": value for key, value in transform_parts.items()}
-    arrays.update(correspondence=correspondence, moving_transformed=moved, rms_residual=rms, seconds=record["seconds"])
+    arrays.update(
+        correspondence=correspondence,
+        n_matched=int(matched.sum()),
+        moving_transformed=moved,
+        rms_residual=rms,
+        seconds=record["seconds"],
+    )
     written = write_output(args.out, record, arrays=arrays)
     if args.plot:
         from ..plotting import plot_matching, save_figure
 
         pyplot()
         ax = plot_matching(
-            moving, fixed, correspondence, title=f"MWME matching ({args.method}), RMS residual {rms:.3g}"
+            moving,
+            fixed,
+            correspondence,
+            title=f"{args.method} matching: {int(matched.sum())} of {len(correspondence)} matched, RMS residual {rms:.3g}",
         )
         save_figure(ax.figure, args.plot)
         written.append(Path(args.plot))

@@ -6,6 +6,7 @@ import numpy as np
 
 from .._validation import as_points, check_choice, check_float, check_int
 from ..exceptions import InputError
+from ..transforms import RigidTransform, SimilarityTransform
 from ._common import MatchResult, fit_pairs, normalise, similarity_to_units
 
 __all__ = ["METHODS", "match"]
@@ -26,6 +27,13 @@ def _check_resolution(points, name: str) -> None:
             f"(closest pair {spacing:.3g} of it): float64 cannot tell them apart at this dynamic range; "
             "rescale or deduplicate the points."
         )
+
+
+def _rigid_if_unscaled(transform, scale) -> SimilarityTransform:
+    """A :class:`RigidTransform` when ``scale`` is False (the fitted scale is then exactly 1)."""
+    if scale or isinstance(transform, RigidTransform) or transform.scale != 1.0:
+        return transform
+    return RigidTransform(transform.rotation, transform.translation)
 
 
 #: The methods :func:`match` offers.
@@ -67,7 +75,8 @@ def match(
         assignment (:func:`scipy.optimize.linear_sum_assignment`) with dummy partners
         of cost 0.25 for unmatched points; the transform is fitted to the pairs.
     scale : bool, default=True
-        Fit a similarity (True) or a rigid transform (False).
+        Fit a similarity (True) or a rigid transform (False; the result's ``transform`` is
+        then a :class:`~centrality_vision.transforms.RigidTransform`).
     n_neighbours : int in [3, 19], default=8
         ``"robust"``: neighbours in each local MWME graph.
     n_candidates : int >= 1, default=6
@@ -118,6 +127,7 @@ def match(
 
         moving_arr = as_points(moving, name="moving", n_dims=(2, 3), min_points=3, allow_duplicates=False)
         correspondence, transform = mwme_match(moving_arr, fixed, method=mwme_method, scale=bool(scale))
+        transform = _rigid_if_unscaled(transform, scale)
         return MatchResult(correspondence, transform, method, int(moving_arr.shape[0]), {"mwme_method": mwme_method})
     n_neighbours = check_int(n_neighbours, name="n_neighbours", low=3, high=19)
     n_candidates = check_int(n_candidates, name="n_candidates", low=1)
@@ -157,5 +167,5 @@ def match(
             s = unit_ratio
             if pairs.sum() >= 2:
                 t = norm_f.points[correspondence[pairs]].mean(axis=0) - s * rot @ norm_m.points[pairs].mean(axis=0)
-    transform = similarity_to_units(rot, t, s, norm_m, norm_f)
+    transform = _rigid_if_unscaled(similarity_to_units(rot, t, s, norm_m, norm_f), scale)
     return MatchResult(correspondence, transform, method, int(np.sum(correspondence >= 0)), info)
