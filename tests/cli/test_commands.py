@@ -466,7 +466,8 @@ def test_other_input_errors_are_one_line(tmp_path, capsys):
     np.savetxt(tmp_path / "q.txt", _points(6))
     assert main(["graph", str(tmp_path / "p.txt"), "--kind", "knn", "--k", "5", "--out", str(tmp_path / "g.json")]) == 2
     assert "--k must be smaller" in _one_line_error(capsys)
-    argv = ["match", str(tmp_path / "p.txt"), str(tmp_path / "q.txt"), "--method", "mwme", "--out", str(tmp_path / "m.json")]
+    argv = ["match", str(tmp_path / "p.txt"), str(tmp_path / "q.txt"), "--method", "mwme"]
+    argv += ["--out", str(tmp_path / "m.json")]
     assert main(argv) == 2
     assert "same size" in _one_line_error(capsys)
     assert main(["classify", str(tmp_path / "nowhere"), "--out", str(tmp_path / "c.json")]) == 2

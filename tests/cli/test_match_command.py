@@ -63,7 +63,8 @@ def test_shape_context_writes_minus_one_for_points_without_partner(partial_pair,
 
 def test_mwme_refuses_sets_of_different_sizes_but_robust_refuses_3d(partial_pair, tmp_path, capsys):
     folder, moving, fixed = partial_pair
-    argv = ["match", str(folder / "m.txt"), str(folder / "f.txt"), "--method", "mwme", "--out", str(tmp_path / "m.json")]
+    argv = ["match", str(folder / "m.txt"), str(folder / "f.txt"), "--method", "mwme"]
+    argv += ["--out", str(tmp_path / "m.json")]
     assert main(argv) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "same size" in err and "robust" in err

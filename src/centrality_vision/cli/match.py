@@ -45,9 +45,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     parser.add_argument("moving", metavar="MOVING", help="point-set file")
     parser.add_argument("fixed", metavar="FIXED", help="point-set file (same size for --method mwme)")
     add_point_options(parser)
-    parser.add_argument(
-        "--method", choices=METHODS, default="robust", help="matching method (default: %(default)s)"
-    )
+    parser.add_argument("--method", choices=METHODS, default="robust", help="matching method (default: %(default)s)")
     parser.add_argument(
         "--mwme-method",
         choices=("local", "greedy", "exact"),
@@ -94,7 +92,8 @@ def run(args: argparse.Namespace) -> int:
         )
     if args.method != "mwme" and moving.shape[1] != 2:
         raise InputError(
-            f"--method {args.method} matches 2D point sets only; got {moving.shape[1]}D points (--method mwme takes 3D)."
+            f"--method {args.method} matches 2D point sets only; got {moving.shape[1]}D points "
+            "(--method mwme takes 3D)."
         )
     if args.plot and moving.shape[1] != 2:
         raise InputError(f"--plot draws 2D point sets only; got {moving.shape[1]}D points.")
@@ -151,7 +150,8 @@ def run(args: argparse.Namespace) -> int:
             moving,
             fixed,
             correspondence,
-            title=f"{args.method} matching: {int(matched.sum())} of {len(correspondence)} matched, RMS residual {rms:.3g}",
+            title=f"{args.method} matching: {int(matched.sum())} of {len(correspondence)} matched, "
+            f"RMS residual {rms:.3g}",
         )
         save_figure(ax.figure, args.plot)
         written.append(Path(args.plot))
