@@ -29,8 +29,40 @@ def test_quick_run_shapes_and_ranges(quick_result):
 
 
 def test_quick_run_is_reproducible(quick_result):
-    again = table_4_1.run(quick=True, seed=0, progress=False)
-    assert again.accuracy == quick_result.accuracy and again.cv_accuracy == quick_result.cv_accuracy
+    again = table_4_1.run(quick=True, seed=0, progress=False, forest=False)
+    for row, values in again.accuracy.items():
+        assert values == quick_result.accuracy[row] and again.cv_accuracy[row] == quick_result.cv_accuracy[row]
+
+
+def _table(acc, cv):
+    levels = table_4_1.NOISE_LEVELS
+    r = table_4_1.Table41(seed=0, n_images=9, noise_levels=levels, n_folds=3, classes=list("abcdefghi"))
+    r.accuracy, r.cv_accuracy = acc, cv
+    return r
+
+
+def test_claims_are_checked_where_they_belong():
+    """The thesis' columns are training images and their noisy copies; the forest claim is held-out only."""
+    nb = {
+        "NB all": [0.98, 0.5, 0.4, 0.3],
+        "NB betweenness": [0.8, 0.6, 0.4, 0.3],
+        "NB closeness": [0.9, 0.9, 0.9, 0.9],
+        "NB eigenvector": [0.9, 0.1, 0.1, 0.1],
+        "NB degree": [0.8, 0.2, 0.1, 0.05],
+    }
+    cv = {row: [v - 0.2 for v in values] for row, values in nb.items()}
+    forests = {"forest closeness": [1.0, 1.0, 1.0, 1.0]}
+    claims = table_4_1.check_claims(_table(nb | forests, cv | {"forest closeness": [0.5, 0.5, 0.5, 0.5]}))
+    assert claims[table_4_1.ALL_TRAIN] and claims[table_4_1.CLOSENESS_NOISY] and claims[table_4_1.DEGREE_WORST]
+    assert claims[table_4_1.DEGREE_COLLAPSE] and claims[table_4_1.CLOSENESS_HELD_OUT]
+    # perfect on the training copies, below NB closeness (0.7) on held-out images: the forest claim fails
+    assert not claims[table_4_1.FOREST_HELD_OUT]
+    claims = table_4_1.check_claims(_table(nb | forests, cv | {"forest closeness": [0.9, 0.9, 0.9, 0.8]}))
+    assert claims[table_4_1.FOREST_HELD_OUT]
+    nb["NB degree"][-1] = 0.5  # no longer below half of 0.8, and no longer the worst at 10%
+    claims = table_4_1.check_claims(_table(nb, cv))
+    assert not claims[table_4_1.DEGREE_COLLAPSE] and not claims[table_4_1.DEGREE_WORST]
+    assert table_4_1.FOREST_HELD_OUT not in claims
 
 
 def test_noise_is_seeded_and_exact():
@@ -55,9 +87,14 @@ def test_table_and_figure_output(quick_result, tmp_path):
 
 
 def test_main_writes_files(tmp_path, capsys):
-    assert table_4_1.main(["--quick", "--no-forest", "--out", str(tmp_path)]) == 0
+    assert (
+        table_4_1.main(["--quick", "--no-forest", "--out", str(tmp_path), "--seeds", "1", "--scheduler", "serial"]) == 0
+    )
     assert {p.name for p in tmp_path.iterdir()} == {"table-4.1.txt", "table-4.1.json", "fig-4.8.png", "cache"}
-    assert "NB closeness" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "NB closeness" in out and "held-out 10%" in out and "train 10%" in out
+    record = json.loads((tmp_path / "table-4.1.json").read_text())
+    assert record["seeds"] == [0] and all(cell["n"] == 1 for cell in record["odds"].values())
 
 
 def test_runner_unit_caches_exactly_the_centralities_of_the_noisy_copy(tmp_path):

@@ -112,14 +112,24 @@ def odds_sentences(odds: dict, n_label: str = "seeds") -> list[str]:
     return out
 
 
-def comparison_main(argv, *, module: str, doc: str, name: str, run, seed_unit, format_table, plot) -> int:
+def comparison_main(
+    argv, *, module: str, doc: str, name: str, run, seed_unit, format_table, plot, add_options=None, options=None
+) -> int:
     """``main`` of a comparison experiment: the run of ``--seed`` (tables, figures) and the claims
-    over ``--seeds`` seeds, each seed a unit of the shared runner (``OUT/<name>-seeds.jsonl``)."""
+    over ``--seeds`` seeds, each seed a unit of the shared runner (``OUT/<name>-seeds.jsonl``).
+
+    ``add_options(parser)`` adds the experiment's own options; ``options(args)`` turns them
+    into keyword arguments of ``run`` and ``seed_unit`` (it may raise before anything is written).
+    """
     from ._common import experiment_parser, prepare_out, run_seed_units, save_outputs, seed_list, tally
 
-    args = experiment_parser(module, doc, name).parse_args(argv)
+    parser = experiment_parser(module, doc, name)
+    if add_options is not None:
+        add_options(parser)
+    args = parser.parse_args(argv)
+    kwargs = options(args) if options is not None else {}
     out = prepare_out(args)
-    result = run(quick=args.quick, seed=args.seed)
+    result = run(quick=args.quick, seed=args.seed, **kwargs)
     seeds = seed_list(args.seed, args.seeds, args.quick)
     records = run_seed_units(
         seed_unit,
@@ -129,10 +139,9 @@ def comparison_main(argv, *, module: str, doc: str, name: str, run, seed_unit, f
         scheduler=args.scheduler,
         workers=args.workers,
         desc=f"{name} seeds",
+        **kwargs,
     )
-    result["seeds"] = seeds
-    result["per_seed"] = records
-    result["odds"] = tally([r["claims"] for r in records])
+    result.update(seeds=seeds, per_seed=records, odds=tally([r["claims"] for r in records]))
     save_outputs(out, name, format_table(result), result)
     plot(result, out)
     return 0

@@ -17,7 +17,6 @@ The noisy copies are those of Table 4.1 (same seed, 5% level), so both share one
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -249,21 +248,18 @@ def plot(result: dict, folder, *, cache_dir=None) -> list[Path]:
 
 
 def main(argv=None) -> int:
-    from ._common import SCHEDULER_HELP, save_outputs
+    from ._common import experiment_parser, prepare_out, save_outputs
 
-    parser = argparse.ArgumentParser(
-        prog="python -m centrality_vision.experiments.fig_4_2", description=__doc__.splitlines()[0]
+    parser = experiment_parser(
+        "fig_4_2",
+        __doc__,
+        "fig-4.2",
+        quick_help="3 images per class for the distances",
+        seed_help="seed of the noise (default: %(default)s); the claims are checked on every image",
     )
-    parser.add_argument("--quick", action="store_true", help="3 images per class for the distances")
-    parser.add_argument("--seed", type=int, default=0, help="seed of the noise (default: %(default)s)")
-    parser.add_argument("--seeds", type=int, default=None, help="unused: the claims are checked on every image")
-    parser.add_argument("--out", default="results/fig-4.2")
     parser.add_argument("--cache", default=None, help="folder for computed centralities (default: OUT/cache)")
-    parser.add_argument("--scheduler", default="processes", help=SCHEDULER_HELP)
-    parser.add_argument("--workers", type=int, default=None)
     args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = prepare_out(args)
     cache = str(Path(args.cache or out / "cache").resolve())
     result = run(
         quick=args.quick, seed=args.seed, cache_dir=cache, scheduler=args.scheduler, workers=args.workers, out=out

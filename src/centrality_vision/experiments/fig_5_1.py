@@ -19,7 +19,6 @@ true partner more mass than CPD's.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -219,18 +218,16 @@ def plot(result: dict, folder) -> list[Path]:
 
 
 def main(argv=None) -> int:
-    from ._common import save_outputs
+    from ._common import experiment_parser, prepare_out, save_outputs
 
-    parser = argparse.ArgumentParser(
-        prog="python -m centrality_vision.experiments.fig_5_1", description=__doc__.splitlines()[0]
-    )
-    parser.add_argument("--quick", action="store_true", help="the same (the experiment is instant)")
-    parser.add_argument("--seed", type=int, default=0, help="the transform of fig-5.3's seed (default: %(default)s)")
-    parser.add_argument("--seeds", type=int, default=None, help="unused: the claims are checked on every fixed point")
-    parser.add_argument("--out", default="results/fig-5.1")
-    args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args = experiment_parser(
+        "fig_5_1",
+        __doc__,
+        "fig-5.1",
+        quick_help="the same (instant)",
+        seed_help="the transform of fig-5.3's seed (default: %(default)s); the claims are checked on every fixed point",
+    ).parse_args(argv)
+    out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
     save_outputs(out, "fig-5.1", format_table(result), result)
     plot(result, out)

@@ -7,7 +7,6 @@ Delaunay graph, the data-graph GPD uses.
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
 
@@ -60,19 +59,18 @@ def plot(result: dict, path) -> Path:
 
 
 def main(argv=None) -> int:
-    from ._common import save_outputs
+    from ._common import experiment_parser, prepare_out, save_outputs
 
-    parser = argparse.ArgumentParser(
-        prog="python -m centrality_vision.experiments.fig_5_10", description=__doc__.splitlines()[0]
+    parser = experiment_parser(
+        "fig_5_10",
+        __doc__,
+        "fig-5.10",
+        quick_help="40 points per set, as table-5.1 --quick",
+        seed_help="Table 5.1's seed (default: %(default)s); a picture, nothing to check over seeds",
     )
-    parser.add_argument("--quick", action="store_true", help="40 points per set, as table-5.1 --quick")
-    parser.add_argument("--seed", type=int, default=0, help="Table 5.1's seed (default: %(default)s)")
-    parser.add_argument("--seeds", type=int, default=None, help="unused: a picture")
     parser.add_argument("--index", type=int, default=0, help="which set of each class, 0-98 (default: %(default)s)")
-    parser.add_argument("--out", default="results/fig-5.10")
     args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed, index=args.index)
     save_outputs(out, "fig-5.10", format_table(result), result)
     plot(result, out / "fig-5.10.png")

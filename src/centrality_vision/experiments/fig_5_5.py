@@ -12,6 +12,7 @@ package's wheel: the experiment reads them with :func:`centrality_vision.dataset
 from ``--face-dir`` or, by default, ``$CENTRALITY_VISION_DATA/cpd`` or the ``shared/data/cpd``
 folder beside a source checkout (``../shared/data/cpd``), and stops with a message that says
 where it looked when it finds none.
+Every CPD here uses the exact E-step (``method='dense'``: every pair of points; the sets are small).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import numpy as np
 from ._compare import (
     METHODS,
     compare_methods,
+    comparison_main,
     comparison_text,
     error_at,
     odds_sentences,
@@ -102,7 +104,11 @@ def run(*, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int 
     moving, fixed, true_moving, linear, shift = problem(seed, face_dir)
     cap = 30 if quick else max_iter
     methods = compare_methods(
-        moving, fixed, true_moving, lambda cb: AffineCPD(w=W, tol=tol, max_iter=cap, callback=cb), snapshots=SNAPSHOTS
+        moving,
+        fixed,
+        true_moving,
+        lambda cb: AffineCPD(w=W, tol=tol, max_iter=cap, callback=cb, method="dense"),
+        snapshots=SNAPSHOTS,
     )
     return {
         "transform": {"linear": linear.tolist(), "translation": shift.tolist()},
@@ -173,31 +179,29 @@ def plot(result: dict, folder) -> list[Path]:
     )
 
 
-def main(argv=None) -> int:
-    from ._common import experiment_parser, prepare_out, run_seed_units, save_outputs, seed_list, tally
-
-    parser = experiment_parser("fig_5_5", __doc__, "fig-5.5")
+def _add_options(parser) -> None:
     parser.add_argument("--face-dir", default=None, help="folder holding the CPD face (face_source.txt)")
-    args = parser.parse_args(argv)
+
+
+def _options(args) -> dict:
     face_dir = None if args.face_dir is None else str(Path(args.face_dir).resolve())
     face_points(face_dir)  # fail before anything is written when the data are missing
-    out = prepare_out(args)
-    result = run(quick=args.quick, seed=args.seed, face_dir=face_dir)
-    seeds = seed_list(args.seed, args.seeds, args.quick)
-    records = run_seed_units(
-        seed_unit,
-        seeds,
-        out / f"fig-5.5-seeds{'-quick' if args.quick else ''}.jsonl",
-        quick=args.quick,
-        face_dir=face_dir,
-        scheduler=args.scheduler,
-        workers=args.workers,
-        desc="fig-5.5 seeds",
+    return {"face_dir": face_dir}
+
+
+def main(argv=None) -> int:
+    return comparison_main(
+        argv,
+        module="fig_5_5",
+        doc=__doc__,
+        name="fig-5.5",
+        run=run,
+        seed_unit=seed_unit,
+        format_table=format_table,
+        plot=plot,
+        add_options=_add_options,
+        options=_options,
     )
-    result.update(seeds=seeds, per_seed=records, odds=tally([r["claims"] for r in records]))
-    save_outputs(out, "fig-5.5", format_table(result), result)
-    plot(result, out)
-    return 0
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -70,9 +70,9 @@ THESIS_FIGURES = {
         "a hand-drawn six-point example; fig. 7.4 measures Delaunay's stability",
     ),
     "fig. 5.10": ("Sample point-sets of 495 database used", None),
-    "fig. 6.1": ("Data graphs of a point-set", "six-vertex example graphs with their entropies, drawn by hand"),
+    "fig. 6.1": ("Data graphs of a point-set", None),
     "fig. 6.2": ("The Near Homogeneous Degree Distribution (NHDD) condition", _DIAGRAM),
-    "fig. 6.3": ("N1graph Optimization", "a trace of the algorithm on a toy example"),
+    "fig. 6.3": ("N1graph Optimization", None),
     "fig. 6.4": ("Registration of point-sets under Similarity Transformation", None),
     "fig. 7.1": ("Minimum Spanning Tree of Maximum Entropy", None),
     "fig. 7.2": ("Data graphs connected using the MSTME", None),
@@ -84,21 +84,27 @@ THESIS_FIGURES = {
     "Table 5.1": ("Average on the registration of 495 datasets", None),
     "Table 5.2": ("Standard Deviation of the registration of 495 datasets", None),
     "Table 5.3": ("Percentage of convergence on 495 point-sets under Rigid transformation", None),
-    "Table 6.1": ("The table storing the cost during optimization", "a trace of the algorithm on a toy example"),
+    "Table 6.1": ("The table storing the cost during optimization", None),
 }
-# Where a thesis figure is drawn in another file than fig-<n>.png (fig. 2.12 is Table 2.1's graph).
-_ALIASES = {"fig. 2.12": "table-2.1"}
+
+
+def _owner(label: str):
+    return next((e.name for e in REGISTRY.values() if label in e.reproduces), None)
 
 
 def _files_for(out: Path, label: str) -> list[Path]:
-    if label.startswith("Table"):
-        stem = "table-" + label.split()[1]
-        owner = next((e.name for e in REGISTRY.values() if label in e.reproduces), None)
-        found = sorted((out / owner).glob(f"{'table-5.1' if owner == 'table-5.1' else stem}*.txt")) if owner else []
-        return found
-    number = label.split()[1]
-    stem = _ALIASES.get(label, f"fig-{number}")
-    return sorted(p for p in out.glob(f"*/{stem}*.png") if p.stem == stem or p.stem.startswith(stem + "-"))
+    """Our files for a thesis figure or table: ``fig-<n>.png`` (or ``fig-<n>-*.png``) anywhere
+    under ``out``; otherwise the figures (tables: text files) of the experiment that reproduces it."""
+    kind, number = label.split()
+    if kind == "fig.":
+        stem = f"fig-{number}"
+        exact = sorted(p for p in out.glob(f"*/{stem}*.png") if p.stem == stem or p.stem.startswith(stem + "-"))
+        if exact:
+            return exact
+    owner = _owner(label)
+    if owner is None:
+        return []
+    return sorted((out / owner).glob("*.png" if kind == "fig." else "*.txt"))
 
 
 def figure_index(out) -> list[str]:
@@ -131,8 +137,9 @@ def run_all(
     """Run the experiments (``only``: a subset of names) and write ``out/report.md``.
 
     ``seeds``: how many seeds each experiment checks its claims over (default 20, or 3 with
-    ``quick``). An experiment that cannot run here (fig-5.5 without the GPL face data) is
-    reported as not run, with its reason, and the others go on.
+    ``quick``); an int for all, or ``{name: n}`` per experiment (missing names: the default).
+    An experiment that cannot run here (fig-5.5 without the GPL face data) is reported as not
+    run, with its reason, and the others go on.
     """
     out = Path(out)
     names = list(REGISTRY) if only is None else list(only)
@@ -184,9 +191,17 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
     skipped = skipped or {}
     from .. import __version__
 
-    command = f"centrality-vision reproduce all{' --quick' if quick else ''} --seed {seed}" + (
-        f" --seeds {seeds}" if seeds else ""
-    )
+    if isinstance(seeds, dict):
+        command = f"run_all(quick={quick}, seed={seed}, seeds={seeds})"
+    else:
+        command = f"centrality-vision reproduce all{' --quick' if quick else ''} --seed {seed}" + (
+            f" --seeds {seeds}" if seeds else ""
+        )
+    checked = []
+    for name in names:
+        result = _result(out / name, name)
+        if isinstance(result, dict) and result.get("seeds"):
+            checked.append(f"{name} {len(result['seeds'])}")
     lines = [
         "# centrality-vision: the thesis' experiments",
         "",
@@ -196,6 +211,8 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
         'of a data set) and printed as "holds in k of n" with a 95% Wilson interval, beside the thesis\' words. The '
         "paragraph under each heading is written by the experiment from the numbers of this run."
         + (" **Quick mode**: small sizes and few seeds, for a first look and for the tests." if quick else ""),
+        "",
+        "Seeds over which the claims were checked: " + (", ".join(checked) if checked else "none") + ".",
         "",
         "## Index of the thesis' figures and tables",
         "",
