@@ -278,6 +278,18 @@ def test_fuzz_cases_from_the_report(factor):
     assert exact.cost == pytest.approx(mwme_graph(points, method="exact").cost * factor, rel=1e-12)
 
 
+@pytest.mark.parametrize("offset", [1.0, 1e6])
+def test_mstme_of_a_set_small_beside_its_distance_from_the_origin(offset):
+    """Fuzz finding: points 1e-8 apart near (1, 1) made scipy's MST (dense input) drop every
+    edge, so the greedy kernel saw only NaN weights. The tree must be the one at the origin."""
+    points = np.array([[1e-8, 0.0], [0.0, 0.0], [1e-8, 1e-8], [3e-8, 2e-8]])
+    reference = mstme_graph(points / 1e-8)
+    for tree in (mstme_graph(points + offset), mstme_graph(points + offset, normalize="edge")):
+        assert tree.graph.nnz == 6 and np.all(np.isfinite(tree.graph.data))
+        if offset == 1.0:  # at 1e6 the offset rounds the coordinates: only the tree's shape is checked
+            assert _edge_set(tree.graph) == _edge_set(reference.graph)
+
+
 def test_overflowing_and_degenerate_ranges_are_refused():
     with pytest.raises(ValueError, match="overflows"):
         mwme_graph(np.array([[-1.7e308, 0.0], [1.7e308, 0.0], [0.0, 1.0e308]]))

@@ -453,7 +453,9 @@ def mstme_graph(
     distances = _distance_matrix(points)
     dist = distances.scaled
     n = dist.shape[0]
-    mst = sparse.coo_array(minimum_spanning_tree(dist))
+    # A sparse input: scipy turns a dense one into a graph with numpy.ma.masked_values, which
+    # drops every distance within 1e-8 of zero (points 1e-8 apart lost their edges).
+    mst = sparse.coo_array(minimum_spanning_tree(sparse.csr_array(dist)))
     mst_edges = np.stack([mst.row, mst.col], axis=1).astype(np.int64)
     scaled_scale = {"tree": float(mst.data.sum()), "edge": float(mst.data.sum()) / (n - 1), "none": 1.0}[normalize]
     if normalize == "none":
