@@ -64,12 +64,17 @@ def _perron(adjacency: sparse.csr_array) -> tuple[float, np.ndarray]:
         lam, vec = vals[-1], vecs[:, -1]
     else:
         from scipy.sparse.linalg import ArpackNoConvergence, eigsh
+        from threadpoolctl import threadpool_limits
 
-        try:
-            vals, vecs = eigsh(adjacency, k=1, which="LA", v0=np.ones(n), tol=0, ncv=min(n, 32), maxiter=40)
-            lam, vec = vals[0], vecs[:, 0]
-        except ArpackNoConvergence:
-            lam, vec = _collatz_wielandt(adjacency, np.full(n, 1.0 / np.sqrt(n)))
+        # One BLAS thread: ARPACK's small dense steps gain nothing from more, and with
+        # OpenBLAS threads on a loaded machine they spin (measured 25x slower), and the
+        # result then would not depend on the core count either.
+        with threadpool_limits(limits=1):
+            try:
+                vals, vecs = eigsh(adjacency, k=1, which="LA", v0=np.ones(n), tol=0, ncv=min(n, 32), maxiter=40)
+                lam, vec = vals[0], vecs[:, 0]
+            except ArpackNoConvergence:
+                lam, vec = _collatz_wielandt(adjacency, np.full(n, 1.0 / np.sqrt(n)))
     vec = np.abs(vec)  # the Perron vector of a connected graph is positive
     return float(lam), vec / np.linalg.norm(vec)
 
