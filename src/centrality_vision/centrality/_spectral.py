@@ -150,12 +150,14 @@ def eigenvector(graph, /, *, strengths: bool = False, normalized: bool = True, a
 
 def _spectral_radius(adjacency: sparse.csr_array) -> float:
     """Largest absolute eigenvalue (LAPACK up to 512 nodes, else ARPACK)."""
-    n = adjacency.shape[0]
-    if n <= 512:
-        return float(np.abs(np.linalg.eigvals(adjacency.toarray())).max())
     from scipy.sparse.linalg import eigs
+    from threadpoolctl import threadpool_limits
 
-    return float(np.abs(eigs(adjacency, k=1, which="LM", return_eigenvectors=False, maxiter=100 * n)).max())
+    n = adjacency.shape[0]
+    with threadpool_limits(limits=1):  # as in _perron
+        if n <= 512:
+            return float(np.abs(np.linalg.eigvals(adjacency.toarray())).max())
+        return float(np.abs(eigs(adjacency, k=1, which="LM", return_eigenvectors=False, maxiter=100 * n)).max())
 
 
 def _strength_matrix(graph, strengths, weights, function):
