@@ -134,8 +134,13 @@ def honest(call, *args, **kwargs):
 # --------------------------------------------------------------------------- graphs
 @pytest.mark.parametrize(
     "builder",
-    [graphs.delaunay_graph, graphs.gabriel_graph, graphs.emst_graph, graphs.complete_graph,
-     lambda points: graphs.knn_graph(points, k=3)],
+    [
+        graphs.delaunay_graph,
+        graphs.gabriel_graph,
+        graphs.emst_graph,
+        graphs.complete_graph,
+        lambda points: graphs.knn_graph(points, k=3),
+    ],
     ids=["delaunay", "gabriel", "emst", "complete", "knn"],
 )
 @FUZZ
@@ -181,8 +186,13 @@ def test_degree_entropy(graph):
 # --------------------------------------------------------------------------- registration
 @pytest.mark.parametrize(
     "make",
-    [lambda: RigidCPD(max_iter=20), lambda: RigidCPD(scale=True, max_iter=20), lambda: AffineCPD(max_iter=20),
-     lambda: NonRigidCPD(max_iter=10), lambda: ICP(max_iter=20)],
+    [
+        lambda: RigidCPD(max_iter=20),
+        lambda: RigidCPD(scale=True, max_iter=20),
+        lambda: AffineCPD(max_iter=20),
+        lambda: NonRigidCPD(max_iter=10),
+        lambda: ICP(max_iter=20),
+    ],
     ids=["rigid", "similarity", "affine", "nonrigid", "icp"],
 )
 @FUZZ
@@ -200,3 +210,110 @@ def test_registration(make, moving, data):
 def test_fit_similarity(source, data):
     target = data.draw(point_sets(dims=(source.shape[1],), min_points=source.shape[0], max_points=source.shape[0]))
     honest(lambda s, t: fit_similarity(s, t).matrix, source, target)
+
+
+# --------------------------------------------------------------------------- matching
+@pytest.mark.parametrize("method", ["robust", "shape-context", "mwme"])
+@settings(FUZZ, max_examples=12)
+@given(moving=point_sets(dims=(2,), max_points=16), data=st.data(), scale=st.booleans())
+def test_match(method, moving, data, scale):
+    from centrality_vision.matching import match
+
+    if method == "mwme":  # the global matching pairs sets of one size (3D allowed)
+        moving = data.draw(point_sets(max_points=10))
+        size = {"min_points": moving.shape[0], "max_points": moving.shape[0]}
+    else:
+        size = {"max_points": 16}
+    fixed = data.draw(point_sets(dims=(moving.shape[1],), **size))
+    result = honest(
+        lambda m, f: (lambda r: (r.correspondence, r.transform.matrix))(match(m, f, method=method, scale=scale)),
+        moving,
+        fixed,
+    )
+    if result is not None:
+        correspondence, matrix = result
+        assert correspondence.shape == (moving.shape[0],) and np.issubdtype(correspondence.dtype, np.integer)
+        assert correspondence.min() >= -1 and correspondence.max() < fixed.shape[0]
+        assert matrix.shape == (moving.shape[1] + 1, moving.shape[1] + 1)
+
+
+# --------------------------------------------------------------------------- io
+_FLOATS = st.floats(allow_nan=False, allow_infinity=False, width=64)
+
+
+@settings(FUZZ, max_examples=20)
+@given(
+    suffix=st.sampled_from([".csv", ".txt", ".xyz", ".npy", ".mat", ".ply", ".pcd", ".obj"]),
+    n_dims=st.sampled_from([2, 3]),
+    rows=st.lists(st.lists(_FLOATS, min_size=3, max_size=3), min_size=1, max_size=12),
+)
+def test_io_round_trip(suffix, n_dims, rows):
+    """Every finite array written is read back bit for bit, or refused with a named error."""
+    import tempfile
+    from pathlib import Path
+
+    from centrality_vision.io import read_points, write_points
+
+    points = np.array(rows, dtype=float)[:, :n_dims]
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / f"points{suffix}"
+        written = honest(lambda p: write_points(path, p), points)
+        if written is None and not path.exists():  # refused (e.g. 2D points for a 3D format)
+            assert suffix in {".ply", ".pcd", ".obj"} and n_dims == 2
+            return
+        back = read_points(path)
+    np.testing.assert_array_equal(back, points)
+
+
+@settings(FUZZ, max_examples=20)
+@given(data=st.binary(max_size=200), suffix=st.sampled_from([".csv", ".npy", ".mat", ".ply", ".pcd", ".obj"]))
+def test_read_points_of_random_bytes(data, suffix):
+    """Any bytes: points or an InputError naming `path` (never another exception)."""
+    import tempfile
+    from pathlib import Path
+
+    from centrality_vision.io import read_points
+
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / f"random{suffix}"
+        path.write_bytes(data)
+        try:
+            points = read_points(path)
+        except InputError as exc:
+            assert str(path) in str(exc) or _NAMED.search(str(exc)), str(exc)
+        else:
+            assert points.ndim == 2 and points.shape[1] in (2, 3)
+
+
+# --------------------------------------------------------------------------- plotting
+@settings(FUZZ, max_examples=15)
+@given(points=point_sets(max_points=12), data=st.data())
+def test_plotting(points, data):
+    """The plotting functions on random inputs, each on an Agg canvas (no pyplot, no backend switch)."""
+    from matplotlib.figure import Figure
+
+    from centrality_vision import plotting
+
+    n, n_dims = points.shape
+    rng = np.random.default_rng(data.draw(st.integers(0, 2**32 - 1)))
+    upper = sparse.triu(sparse.random_array((n, n), density=0.3, rng=rng), 1)
+    graph = sparse.csr_array(upper + upper.T)
+    values = data.draw(st.sampled_from([None, rng.random(n), np.full(n, 1e300), np.zeros(n), rng.random(n + 1)]))
+    norm = data.draw(st.sampled_from([None, "linear", "log", "power"]))
+
+    def canvas():
+        return Figure().add_subplot(projection="3d" if n_dims == 3 else None)
+
+    honest(lambda p: plotting.plot_graph(p, graph, values, ax=canvas(), norm=norm) and None, points)
+    honest(lambda p: plotting.plot_registration(p, p[::-1] * 2.0, ax=canvas()) and None, points)
+    if n_dims == 2:
+        correspondence = rng.integers(-1, n, size=n)
+        honest(lambda p: plotting.plot_matching(p, p[::-1], correspondence, ax=canvas()) and None, points)
+    image = data.draw(images())
+    nodes = np.argwhere(image)
+    honest(
+        lambda v: plotting.plot_centrality_image(v, nodes, image.shape, ax=Figure().add_subplot(), norm=norm) and None,
+        rng.random(len(nodes)),
+    )
+    errors = {"a": data.draw(st.lists(st.floats(0, 1e300), min_size=0, max_size=6)), "b": [1.0, 0.0, -0.0]}
+    honest(lambda e: plotting.plot_alignment_errors(e, ax=Figure().add_subplot()) and None, errors)

@@ -281,7 +281,7 @@ def test_nan_rows_round_trip_in_text_and_are_refused_by_3d_formats(tmp_path):
     points[2] = np.nan
     got = read_points(write_points(tmp_path / "p.csv", points), nan_rows=True)
     assert np.array_equal(got, points, equal_nan=True)
-    with pytest.raises(InputError, match="3D points; got 2D"):
+    with pytest.raises(InputError, match="`points` must be 3D"):
         write_points(tmp_path / "p.ply", FLAT)
     with pytest.raises(InputError, match="cannot mark missing points"):
         write_points(tmp_path / "p.pcd", np.vstack([CLOUD, np.full(3, np.nan)]))

@@ -671,11 +671,13 @@ def write_points(path, points, /) -> Path:
     if suffix in _THREE_D_ONLY:
         if arr.shape[1] != 3:
             raise InputError(
-                f"{path}: {suffix} files hold 3D points; got {arr.shape[1]}D points (write .csv, .txt, .npy or .mat)."
+                f"`points` must be 3D for {path} ({suffix} files hold 3D points); got {arr.shape[1]}D points "
+                "(write .csv, .txt, .npy or .mat)."
             )
         if np.isnan(arr).any():
             raise InputError(
-                f"{path}: {suffix} files cannot mark missing points with NaN rows; write .csv, .txt, .npy or .mat."
+                f"`points` must not have NaN rows for {path} ({suffix} files cannot mark missing points); "
+                "write .csv, .txt, .npy or .mat."
             )
     if path.parent != Path("."):
         path.parent.mkdir(parents=True, exist_ok=True)
