@@ -39,7 +39,8 @@ convention is handled alike).
 Methods. Ours: ``NonRigidCPD`` / ``RigidCPD(scale=False)`` (``cpd``), ``GPD`` over it with
 each centrality on Delaunay graphs (``gpd-<centrality>``; only closeness in the rotation
 family), rigid ``ICP``, and on the rotation family each of those started from
-``global_pose_search`` (``+global``; through ``RigidCPD(init="global")`` once that exists).
+``global_pose_search`` (``+global``: the function ``RigidCPD(init="global")`` calls, applied
+to Y here and followed by the plain fit, so that ICP and GPD get the same start).
 Peers: pycpd 2.0 (its rigid registration always estimates a scale), cycpd 0.28 (deformable:
 low-rank with ``num_eig`` = M - 1), probreg 0.3.8 (``registration_cpd``; its kernel is
 ``exp(-|d|^2 / beta^2)``, so it gets ``beta * sqrt(2)`` for the same kernel), rustcpd 4.0
@@ -59,7 +60,6 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "NUMB
     os.environ.setdefault(_var, "1")  # one thread per worker: 2 workers share 2 cores
 
 import argparse  # noqa: E402
-import inspect  # noqa: E402
 import json  # noqa: E402
 import math  # noqa: E402
 import sys  # noqa: E402
@@ -188,12 +188,6 @@ def _preload_libusb():
         ctypes.CDLL(str(libusb_package.get_library_path()), mode=ctypes.RTLD_GLOBAL)
     except Exception:
         pass
-
-
-def _has_global_init():
-    from centrality_vision.registration import RigidCPD
-
-    return "random_state" in inspect.signature(RigidCPD.__init__).parameters
 
 
 def run_method(method, y, x, *, rigid, w, seed):
@@ -369,7 +363,7 @@ def build_units(args):
                         )
                     )
     if "rotation" in args.families:
-        rsettings = {**SETTINGS, **ROTATION_SETTINGS, "global_init": _has_global_init()}
+        rsettings = {**SETTINGS, **ROTATION_SETTINGS}
         for shape in ("fish", "bunny"):
             for degrees in args.angles:
                 for method in args.methods_rotation:
@@ -583,6 +577,8 @@ def figures(args, summary, out):
     matplotlib.use("Agg")  # a script, not the library
     import matplotlib.pyplot as plt
 
+    palette = plt.get_cmap("tab20").colors
+    colour = {m: palette[k % len(palette)] for k, m in enumerate(dict.fromkeys(NONRIGID_METHODS + ROTATION_METHODS))}
     syn = summary["synthetic"]
     if syn:
         fams = list(syn)
@@ -596,10 +592,22 @@ def figures(args, summary, out):
                     suc = [syn[family][shape][lv][method]["success"] for lv in levels]
                     xs = [float(lv) for lv in levels]
                     axes[2 * i, j].plot(
-                        xs, [np.nan if e is None else e for e in err], style, marker="o", ms=3, label=method
+                        xs,
+                        [np.nan if e is None else e for e in err],
+                        style,
+                        color=colour[method],
+                        marker="o",
+                        ms=3,
+                        label=method,
                     )
                     axes[2 * i + 1, j].plot(
-                        xs, [np.nan if s is None else s for s in suc], style, marker="o", ms=3, label=method
+                        xs,
+                        [np.nan if s is None else s for s in suc],
+                        style,
+                        color=colour[method],
+                        marker="o",
+                        ms=3,
+                        label=method,
                     )
                 axes[2 * i, j].set_title(f"{family} / {shape}: mean error")
                 axes[2 * i, j].set_yscale("log")
@@ -619,6 +627,7 @@ def figures(args, summary, out):
                     args.angles,
                     [np.nan if s is None else s for s in suc],
                     "-" if "+global" in method else "--",
+                    color=colour[method.partition("+")[0]] if "+global" not in method else colour[method],
                     marker="o",
                     ms=3,
                     label=method,
