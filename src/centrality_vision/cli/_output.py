@@ -139,5 +139,5 @@ def write_output(
         write_points(path, points)
         side = {"file": path.name, **record}
     else:  # pragma: no cover - the parsers only offer the suffixes a command writes
-        raise ValueError(f"no table or points to write to {path}")
+        raise RuntimeError(f"internal error: no table or points to write to {path}")  # a bug: exit status 1
     return [path, write_json(sidecar_path(path), side)]

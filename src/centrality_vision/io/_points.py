@@ -281,7 +281,7 @@ def _read_text(path: Path) -> _Table:
         for j, cell in enumerate(cells):
             try:
                 values[k, j] = _to_float(cell, decimal_comma)
-            except ValueError:
+            except (_NotANumber, ValueError):
                 raise InputError(
                     f"{path}: line {number}, column {j + 1}: {_clip(cell.strip())!r} is not a number."
                 ) from None
@@ -306,19 +306,23 @@ def _sniff(sample: list[str]):
     return split, decimal_comma, delimiter
 
 
+class _NotANumber(Exception):
+    """Internal: a text cell is not a number; the readers turn it into an InputError naming the cell."""
+
+
 def _to_float(cell: str, decimal_comma: bool) -> float:
     cell = cell.strip().strip('"')
     if decimal_comma:
         cell = cell.replace(",", ".")
     if not _NUMBER.fullmatch(cell):
-        raise ValueError(cell)
+        raise _NotANumber(cell)
     return float(cell)
 
 
 def _is_number(cell: str, decimal_comma: bool) -> bool:
     try:
         _to_float(cell, decimal_comma)
-    except ValueError:
+    except _NotANumber:
         return False
     return True
 
@@ -333,7 +337,7 @@ def _read_npy(path: Path) -> _Table:
             version = np.lib.format.read_magic(handle)
             reader = {(1, 0): np.lib.format.read_array_header_1_0, (2, 0): np.lib.format.read_array_header_2_0}
             if version not in reader:
-                raise ValueError(f"format version {version}")
+                raise InputError(f"format version {version}")  # re-raised below with the file's name
             shape, fortran_order, dtype = reader[version](handle, max_header_size=10_000)
         except Exception as exc:  # ValueError, EOFError, SyntaxError, tokenize.TokenError, ...
             raise InputError(f"{path}: not a readable .npy array ({_first_line(exc)}).") from None

@@ -1,0 +1,80 @@
+"""The error contract, checked on the source: no bare ``raise ValueError`` or ``raise Exception``.
+
+Every bad input raises :class:`~centrality_vision.exceptions.InputError` (a ValueError) or a
+TypeError naming the parameter; a state that cannot happen raises a documented internal error
+(e.g. ``RuntimeError("internal error: ...")``, which the command line shows as a bug with its
+traceback). Numba kernel modules (files named ``*_kernels.py``) may raise builtin errors: numba
+cannot raise the package's exceptions, and their callers validate the inputs first.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+import centrality_vision
+
+PACKAGE = Path(centrality_vision.__file__).parent
+FORBIDDEN = {"ValueError", "Exception"}
+
+
+def _bare_raises(path: Path, root: Path = PACKAGE.parent) -> list[str]:
+    found = []
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"), filename=str(path))):
+        if not isinstance(node, ast.Raise) or node.exc is None:
+            continue
+        raised = node.exc.func if isinstance(node.exc, ast.Call) else node.exc
+        if isinstance(raised, ast.Name) and raised.id in FORBIDDEN:
+            found.append((node.lineno, f"{path.relative_to(root)}:{node.lineno}: raise {raised.id}"))
+    return [text for _, text in sorted(found)]
+
+
+def _offenders() -> list[str]:
+    return [
+        hit
+        for path in sorted(PACKAGE.rglob("*.py"))
+        if not path.name.endswith("_kernels.py")
+        for hit in _bare_raises(path)
+    ]
+
+
+def test_the_scan_finds_a_bare_raise(tmp_path):
+    sample = tmp_path / "sample.py"
+    sample.write_text(
+        "def f(x):\n    if x:\n        raise ValueError('no')\n    raise Exception\n    raise TypeError\n"
+    )
+    assert _bare_raises(sample, tmp_path) == ["sample.py:3: raise ValueError", "sample.py:4: raise Exception"]
+
+
+#: Bare raises in files of other work in progress (registration, shapes, experiments, graph
+#: conversion, the parallel helper), left for their owners; the coordinator removes this list
+#: and the xfail once they are gone. Locations are file:line at the time of writing.
+KNOWN = (
+    "centrality_vision/_parallel.py",
+    "centrality_vision/experiments/_runner.py",
+    "centrality_vision/experiments/fig_5_1.py",
+    "centrality_vision/experiments/table_5_1.py",
+    "centrality_vision/graphs/_convert.py",
+    "centrality_vision/registration/_estep.py",
+    "centrality_vision/registration/_lowrank.py",
+    "centrality_vision/shapes/_comparisons.py",
+    "centrality_vision/shapes/_histogram.py",
+)
+
+
+def test_no_new_bare_raise_outside_the_known_files():
+    new = [hit for hit in _offenders() if not hit.startswith(KNOWN)]
+    assert not new, "bare raises (use InputError naming the parameter):\n" + "\n".join(new)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="bare raises left in other helpers' files: _parallel.py:32, experiments/_runner.py:167, 198, "
+    "experiments/fig_5_1.py:55, experiments/table_5_1.py:103, graphs/_convert.py:49, registration/_estep.py:557, "
+    "registration/_lowrank.py:98, shapes/_comparisons.py:329, 334, shapes/_histogram.py:54, 173",
+)
+def test_no_bare_value_error_or_exception_outside_kernel_modules():
+    offenders = _offenders()
+    assert not offenders, "bare raises (use InputError naming the parameter):\n" + "\n".join(offenders)
