@@ -106,7 +106,7 @@ from pathlib import Path
 import numpy as np
 from _common import fmt_s, load_line, table
 
-LIBRARIES = ("ours", "pycpd", "cycpd")
+LIBRARIES = ("ours", "rustcpd", "biocpd", "probreg", "pycpd", "cycpd")
 CASES = ("rigid", "nonrigid")
 DEFAULT_SIZES = (1000, 5000)
 QUICK_SIZES = (500,)
@@ -177,6 +177,22 @@ def parse_args(argv=None):
     p.add_argument("--max-gib", type=float, default=8.0,
                    help="skip a run whose estimated dense arrays exceed this many GiB (default: %(default)g)")
     p.add_argument("--json", metavar="PATH", default=None, help="also write all raw rows as JSON")
+    p.add_argument("--estep", action="store_true",
+                   help="instead: time each E-step path and 'auto' (the planner) against sigma2 (--estep-sizes)")
+    p.add_argument("--estep-sizes", type=int, nargs="+", default=[3000, 20000])
+    p.add_argument("--million", action="store_true",
+                   help="instead: ours (MultiscaleCPD) at --million-n points, 2D and 3D, rigid/affine/non-rigid, "
+                        "plus plain and multiscale at --compare-n against each other")
+    p.add_argument("--million-n", type=int, default=1_000_000)
+    p.add_argument("--compare-n", type=int, default=100_000)
+    p.add_argument("--compare-nonrigid-n", type=int, default=20_000)
+    p.add_argument("--million-sizes", type=int, nargs="+", default=[20_000, 100_000],
+                   help="MultiscaleCPD levels (default: %(default)s)")
+    p.add_argument("--repeat-estep", type=int, default=5)
+    p.add_argument("--figure", metavar="PATH", default=None,
+                   help="log-log figure of seconds against n per library (from this run's rows, or --from-json)")
+    p.add_argument("--from-json", metavar="PATH", nargs="+", default=None,
+                   help="with --figure: read rows from these JSON files instead of running")
     args = p.parse_args(argv)
 
     def split(s, allowed, what):
@@ -229,7 +245,9 @@ def _try_import(name):
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # pycpd: SyntaxWarning "is not" with a literal
-            return __import__(name), None
+            import importlib
+
+            return importlib.import_module(name), None
     except Exception as exc:  # noqa: BLE001 - any failure means "not installed"
         return None, "%s: %s" % (type(exc).__name__, exc)
 
@@ -262,8 +280,13 @@ def _import_ours():
 OURS, _ours_err = _import_ours()
 pycpd, _pycpd_err = _try_import("pycpd")
 cycpd, _cycpd_err = _try_import("cycpd")
-IMPORT_ERRORS = {"ours": _ours_err, "pycpd": _pycpd_err, "cycpd": _cycpd_err}
-AVAILABLE = {"ours": OURS is not None, "pycpd": pycpd is not None, "cycpd": cycpd is not None}
+rustcpd, _rustcpd_err = _try_import("rustcpd")
+biocpd, _biocpd_err = _try_import("biocpd")
+probreg_cpd, _probreg_err = _try_import("probreg.cpd")
+IMPORT_ERRORS = {"ours": _ours_err, "pycpd": _pycpd_err, "cycpd": _cycpd_err, "rustcpd": _rustcpd_err,
+                 "biocpd": _biocpd_err, "probreg": _probreg_err}
+AVAILABLE = {"ours": OURS is not None, "pycpd": pycpd is not None, "cycpd": cycpd is not None,
+             "rustcpd": rustcpd is not None, "biocpd": biocpd is not None, "probreg": probreg_cpd is not None}
 
 
 # --------------------------------------------------------------------------- data
@@ -410,6 +433,59 @@ def make_runner(lib, case, n, args, method="auto"):
 
         return run, params
 
+    if lib == "rustcpd":
+        k = _cycpd_num_eig(n, args)
+        if case == "rigid":
+            def call(y, x):
+                return rustcpd.register_rigid(x, y, scale=True, tolerance=tol, max_iterations=max_iter)
+            params = {"scale": True, "tolerance": tol, "max_iterations": max_iter}
+        else:
+            low = None if n <= OURS_EXACT_MAX else k
+
+            def call(y, x):
+                return rustcpd.register_deformable(x, y, alpha=args.lam, beta=args.beta, low_rank=low,
+                                                   low_rank_method="pivoted_cholesky", tolerance=tol,
+                                                   max_iterations=max_iter)
+            params = {"alpha": args.lam, "beta": args.beta, "low_rank": low, "low_rank_method": "pivoted_cholesky",
+                      "tolerance": tol, "max_iterations": max_iter}
+
+        def run(y, x):
+            res = call(y, x)
+            return np.asarray(res.points), int(res.iterations), "tol" if res.iterations < max_iter else "max_iter"
+
+        return run, params
+
+    if lib == "biocpd":
+        k = _cycpd_num_eig(n, args)
+        if case == "rigid":
+            def make(y, x):
+                return biocpd.RigidRegistration(X=x, Y=y, scale=True, tolerance=tol, max_iterations=max_iter, w=0.0)
+            params = {"scale": True, "tolerance": tol, "max_iterations": max_iter, "use_kdtree": "default (True, k=10)"}
+        else:
+            def make(y, x):
+                return biocpd.DeformableRegistration(X=x, Y=y, alpha=args.lam, beta=args.beta, num_eig=k,
+                                                     tolerance=tol, max_iterations=max_iter, w=0.0)
+            params = {"alpha": args.lam, "beta": args.beta, "num_eig": k, "tolerance": tol,
+                      "max_iterations": max_iter, "use_kdtree": "default (True, k=10)"}
+
+        def run(y, x):
+            reg = make(y, x)
+            ty = reg.register()[0]
+            it = int(getattr(reg, "iteration", -1))
+            return ty, it, "tol" if it < max_iter else "max_iter"
+
+        return run, params
+
+    if lib == "probreg":
+        kind = "rigid" if case == "rigid" else "nonrigid"
+        extra = {} if case == "rigid" else {"beta": args.beta, "lmd": args.lam}
+
+        def run(y, x):
+            res = probreg_cpd.registration_cpd(y, x, tf_type_name=kind, w=0.0, maxiter=max_iter, tol=tol, **extra)
+            return np.asarray(res.transformation.transform(y)), -1, "?"
+
+        return run, {"tf_type_name": kind, "w": 0.0, "maxiter": max_iter, "tol": tol, **extra}
+
     if lib == "pycpd":
         if case == "rigid":
             def make(y, x):
@@ -473,6 +549,8 @@ def estimated_gib(lib, case, n, args):
         b = 8.0 * n * n * (2 * d + 3)
         if case == "nonrigid":  # G via tiled M x M x D arrays, diag(P1), A
             b += 8.0 * n * n * (3 * d + 4)
+    elif lib == "probreg":  # dense M x N posterior and distance arrays
+        b = 8.0 * n * n * 4
     elif lib == "cycpd":
         b = 64.0 * n * d
         if case == "nonrigid":  # G via M x M x D differences, eigh
@@ -622,6 +700,9 @@ def machine_info(args):
         "numba": numba_v,
         "centrality_vision": OURS[0].__version__ if OURS is not None else "not importable",
         "pycpd": ver(pycpd, "pycpd"),
+        "rustcpd": ver(rustcpd, "rustcpd"),
+        "biocpd": ver(biocpd, "biocpd"),
+        "probreg": ver(probreg_cpd, "probreg"),
         "cycpd": ver(cycpd, "cycpd"),
         "ours_threads": OURS[0].get_num_threads() if OURS is not None else None,
         "blas": _blas_info(),
@@ -653,8 +734,9 @@ def main(args):
           % (info["platform"], info["processor"], info["cpu_count"], info["cores_available"], info["memory"]))
     print("python %s | numpy %s | scipy %s | numba %s" % (info["python"], info["numpy"], info["scipy"],
                                                          info["numba"]))
-    print("centrality_vision %s | pycpd %s | cycpd %s" % (info["centrality_vision"], info["pycpd"],
-                                                           info["cycpd"]))
+    print("centrality_vision %s | pycpd %s | cycpd %s | rustcpd %s | biocpd %s | probreg %s"
+          % (info["centrality_vision"], info["pycpd"], info["cycpd"], info["rustcpd"], info["biocpd"],
+             info["probreg"]))
     print("threads: ours %s (centrality_vision.set_num_threads); numpy/BLAS (pycpd, cycpd and our "
           "non-rigid M-step) %s: %s" % (info["ours_threads"],
                                         "at their defaults" if args.blas_threads is None
@@ -762,12 +844,208 @@ def main(args):
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(out, indent=2, default=str))
         print("results written to %s" % args.json)
+    if args.figure:
+        figure([{"case": r.case, "n": r.n, "library": r.library, "median_s": r.median if r.status == "ok" else None}
+                for r in rows], args.figure)
     return 0
+
+
+# --------------------------------------------------------------------------- E-step paths
+
+
+def _median_time(fn, repeat):
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def run_estep(args):
+    """Each E-step path and 'auto' (a planner, after its probe) per sigma2, in one process."""
+    from centrality_vision.registration._estep import EStepPlanner, _e_step
+
+    print("E-step paths against sigma2: uniform 2D points in the unit square, moving = fixed + N(0, 1e-3^2),")
+    print("w = 0; milliseconds, median of %d calls; auto = one EStepPlanner probed once at that sigma2, then"
+          " timed like the others (its probe cost is amortised over the iterations of a fit)" % args.repeat_estep)
+    print(load_line())
+    rows = []
+    for n in args.estep_sizes:
+        rng = np.random.default_rng([args.seed, n])
+        fixed = rng.random((n, 2))
+        moving = fixed[rng.permutation(n)] + rng.normal(0, 1e-3, (n, 2))
+        _e_step(moving[:200], fixed[:200], 0.01, 0.0, method="truncated")
+        _e_step(moving[:200], fixed[:200], 0.01, 0.0, method="fgt")
+        for sigma2 in [10.0 ** -k for k in range(0, 13)]:
+            ms = {}
+            for method in ("dense", "truncated", "fgt"):
+                try:
+                    ms[method] = 1e3 * _median_time(lambda: _e_step(moving, fixed, sigma2, 0.0, method=method),
+                                                    args.repeat_estep)
+                except MemoryError:
+                    ms[method] = math.inf
+            planner = EStepPlanner()
+            planner(moving, fixed, sigma2, 0.0)
+            ms["auto"] = 1e3 * _median_time(lambda: planner(moving, fixed, sigma2, 0.0), args.repeat_estep)
+            fastest = min(ms[m] for m in ("dense", "truncated", "fgt"))
+            rows.append({"n": n, "sigma2": sigma2, **ms, "winner": planner.winner, "auto_over_fastest": ms["auto"] / fastest})
+            print("  n=%d sigma2=%.0e  %s  auto picked %s: %.2fx the fastest" % (
+                n, sigma2, "  ".join("%s %.1f" % (m, ms[m]) for m in ("dense", "truncated", "fgt", "auto")),
+                planner.winner, ms["auto"] / fastest), flush=True)
+    body = [[r["n"], "%.0e" % r["sigma2"], "%.1f" % r["dense"], "%.1f" % r["truncated"], "%.1f" % r["fgt"],
+             "%.1f" % r["auto"], r["winner"], "%.2f" % r["auto_over_fastest"]] for r in rows]
+    print()
+    print(table(["n", "sigma2", "dense ms", "truncated ms", "fgt ms", "auto ms", "auto took", "auto/fastest"], body))
+    print("worst auto/fastest: %.2f" % max(r["auto_over_fastest"] for r in rows))
+    print(load_line())
+    return rows
+
+
+# --------------------------------------------------------------------------- a million points
+
+
+def _peak_mib():
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+def _scaled_problem(n, dim, case, seed):
+    """Points uniform in a 3-unit cube; rigid: 30 degrees about (1, 1, 1) (2D: the plane's),
+    scale 1.2, shift; affine: a fixed shear; non-rigid: 0.15 (sin y2, sin y1[, sin y1])."""
+    rng = np.random.default_rng([seed, n, dim])
+    y = rng.random((n, dim)) * 3.0 - 1.5
+    a = math.radians(ANGLE_DEG)
+    if dim == 2:
+        rot = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+    else:
+        k = np.ones(3) / math.sqrt(3)
+        kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+        rot = np.eye(3) + math.sin(a) * kx + (1 - math.cos(a)) * kx @ kx
+    if case == "rigid":
+        true = SCALE * y @ rot.T + 0.2
+    elif case == "affine":
+        lin = np.eye(dim) + 0.15 * np.triu(np.ones((dim, dim)), 1) + 0.05 * np.eye(dim)
+        true = y @ lin.T - 0.1
+    else:
+        field = np.column_stack([np.sin(y[:, 1]), np.sin(y[:, 0])] + ([np.sin(y[:, 0] + y[:, 1])] if dim == 3 else []))
+        true = y + 0.15 * field
+    fixed = true + rng.normal(0.0, NOISE * 3.0, true.shape)
+    return np.ascontiguousarray(y), np.ascontiguousarray(fixed[rng.permutation(n)]), true
+
+
+def run_million(args):
+    import tracemalloc
+
+    from centrality_vision.registration import AffineCPD, MultiscaleCPD, NonRigidCPD, RigidCPD
+
+    print("ours at scale (uniform points in a 3-unit square/cube, noise sigma %.3g, rows of X shuffled)" % (NOISE * 3))
+    print(load_line())
+    rows = []
+
+    def one(label, n, dim, case, make, full=False):
+        y, x, true = _scaled_problem(n, dim, case, args.seed)
+        tracemalloc.start()
+        t0 = time.perf_counter()
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            est = make().fit(y, x)
+        sec = time.perf_counter() - t0
+        _, peak = tracemalloc.get_traced_memory()
+        tracemalloc.stop()
+        err = rms(true, est.moving_transformed_)
+        levels = getattr(est, "levels_", None)
+        row = {"label": label, "n": n, "dim": dim, "case": case, "seconds": sec, "rms": err,
+               "traced_peak_mib": peak / 2**20, "maxrss_mib": _peak_mib(),
+               "levels": levels, "n_iter": getattr(est, "n_iter_", None), "moving_transformed": est.moving_transformed_}
+        rows.append(row)
+        print("  %-34s n=%8d D=%d  %7.2f s  RMS %.3e  traced peak %7.1f MiB  (levels: %s)" % (
+            label, n, dim, sec, err, row["traced_peak_mib"],
+            ", ".join("%d pts %d it %.1fs" % (lv["n_moving"], lv["n_iter"], lv["seconds"]) for lv in levels)
+            if levels else "full, %s iterations" % row["n_iter"]), flush=True)
+        return row
+
+    tol = args.ours_tol
+    sizes = tuple(args.million_sizes)
+    m = args.compare_n
+    # full resolution against coarse-to-fine where a full run fits
+    full = one("RigidCPD full resolution", m, 2, "rigid", lambda: RigidCPD(tol=tol, max_iter=args.max_iter))
+    ms = one("MultiscaleCPD(RigidCPD)", m, 2, "rigid", lambda: MultiscaleCPD(RigidCPD(tol=tol), sizes=sizes))
+    print("    multiscale vs full at n=%d: max |difference| of T(Y) %.3e" % (
+        m, np.abs(full["moving_transformed"] - ms["moving_transformed"]).max()))
+    nfull = one("NonRigidCPD full resolution", args.compare_nonrigid_n, 2, "nonrigid",
+                lambda: NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol, max_iter=args.max_iter))
+    nms = one("MultiscaleCPD(NonRigidCPD)", args.compare_nonrigid_n, 2, "nonrigid",
+              lambda: MultiscaleCPD(NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol), sizes=sizes))
+    print("    multiscale vs full at n=%d: max |difference| of T(Y) %.3e" % (
+        args.compare_nonrigid_n, np.abs(nfull["moving_transformed"] - nms["moving_transformed"]).max()))
+    big = args.million_n
+    for dim in (2, 3):
+        one("MultiscaleCPD(RigidCPD)", big, dim, "rigid", lambda: MultiscaleCPD(RigidCPD(tol=tol), sizes=sizes))
+        one("MultiscaleCPD(AffineCPD)", big, dim, "affine", lambda: MultiscaleCPD(AffineCPD(tol=tol), sizes=sizes))
+    one("MultiscaleCPD(NonRigidCPD)", big, 2, "nonrigid",
+        lambda: MultiscaleCPD(NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol), sizes=sizes))
+    print(load_line())
+    for r in rows:
+        r.pop("moving_transformed")
+    return rows
+
+
+# --------------------------------------------------------------------------- figure
+
+
+def figure(rows, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cases = sorted({r["case"] for r in rows})
+    fig, axes = plt.subplots(1, len(cases), figsize=(5.5 * len(cases), 4.2), squeeze=False)
+    for ax, case in zip(axes[0], cases):
+        libs = sorted({r["library"] for r in rows if r["case"] == case})
+        for lib in libs:
+            pts = sorted((r["n"], r["median_s"]) for r in rows
+                         if r["case"] == case and r["library"] == lib and r.get("median_s"))
+            if pts:
+                ax.loglog(*zip(*pts), "o-", label=lib, lw=2.2 if lib.startswith("ours") else 1.2)
+        ax.set_title(case)
+        ax.set_xlabel("points per set n")
+        ax.set_ylabel("seconds (median)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=120)
+    print("figure written to %s" % path)
+
+
+def entry(args):
+    if OURS is not None:
+        OURS[0].set_num_threads(args.threads)
+    if args.from_json:
+        rows = [r for path in args.from_json for r in json.loads(Path(path).read_text())["rows"]]
+        figure(rows, args.figure or "results/benchmarks/registration-scaling.png")
+        return 0
+    if args.estep or args.million:
+        blas_limit, _ = _limit_blas(args.blas_threads)  # noqa: F841 - held until exit
+        out = {"machine": machine_info(args), "args": vars(args)}
+        if args.estep:
+            out["estep"] = run_estep(args)
+        if args.million:
+            out["million"] = run_million(args)
+        if args.json:
+            Path(args.json).parent.mkdir(parents=True, exist_ok=True)
+            Path(args.json).write_text(json.dumps(out, indent=2, default=str))
+            print("results written to %s" % args.json)
+        return 0
+    return main(args)
 
 
 if __name__ == "__main__":
     try:
-        sys.exit(main(parse_args()))
+        sys.exit(entry(parse_args()))
     except KeyboardInterrupt:
         sys.exit(130)
     except Exception:  # noqa: BLE001

@@ -40,6 +40,10 @@ _BLOCK = 1 << 17
 # Chunks of fixed points whose partial sums are added in order (see _reduce_rows): enough
 # to balance 16 threads, few enough that the partials cost nothing to add.
 _CHUNKS = 16
+# Below this many pairs an E-step runs on the calling thread: handing chunks of a
+# sub-millisecond job to the pool costs more than it saves, badly so on a busy machine
+# (measured: 500 points, load 20 on 2 cores, 1.7 s per fit with 2 threads, 1.0 s with 1).
+_SERIAL_PAIRS = 1 << 20
 
 
 @dataclass(frozen=True)
@@ -146,7 +150,10 @@ def _reduce_rows(work, n_rows, n_moving, n_dims):
                     np.add(total_pxt, b, out=total_pxt)
                     state["next"] += 1
 
-    run_chunks(task, n_chunks)
+    if n_rows * n_moving < _SERIAL_PAIRS:
+        task(0, n_chunks)  # the same chunks in the same order, on this thread
+    else:
+        run_chunks(task, n_chunks)
     return total_p1, total_pxt
 
 
@@ -188,7 +195,8 @@ def _nearest(moving_t, fixed):
     """Squared distance from each fixed point to its nearest moving point, and that point."""
     from scipy.spatial import cKDTree
 
-    dist, index = cKDTree(moving_t).query(fixed, k=1, workers=get_num_threads())
+    workers = get_num_threads() if fixed.shape[0] * max(1, int(math.log2(max(moving_t.shape[0], 2)))) > _SERIAL_PAIRS else 1
+    dist, index = cKDTree(moving_t).query(fixed, k=1, workers=workers)
     return dist * dist, index
 
 
@@ -367,8 +375,9 @@ _FGT_MAX_BYTES = 2**32
 # visits, one FGT term for one right-hand side. They only order the paths before a planner
 # has timed them (and choose when there is no planner); every path is correct.
 _COST_DENSE, _COST_TRUNCATED, _COST_FGT = 0.8, 4.5, 1.0
-# Below this many pairs the dense path takes microseconds: nothing else is considered.
-_PLAN_PAIRS = 1 << 16
+# Below this many pairs the dense path takes under a millisecond: nothing else is considered
+# by the planner (its probe would cost more than it could save over a whole fit).
+_PLAN_PAIRS = 1 << 20
 
 
 def _fgt_cost(moving_t, fixed, sigma2, eps):
@@ -457,7 +466,7 @@ class EStepPlanner:
     A probe skips a path predicted slower than ``skip_factor`` times the fastest time
     measured in it: the prediction is the cost model scaled by that path's last measured
     time over its modelled cost, so a path measured slow once is not retried while the model
-    says so. Below 65,536 pairs only 'dense' is run (it takes microseconds there).
+    says so. Below 2^20 pairs only 'dense' is run (under a millisecond there).
 
     Timings decide, so two runs of one fit may take different paths; every path equals the
     dense one to its bound ('truncated' to rounding, 'fgt' to about ``eps`` of the total
@@ -473,7 +482,7 @@ class EStepPlanner:
     (True, True)
     """
 
-    def __init__(self, *, reprobe_factor=4.0, reprobe_calls=25, skip_factor=3.0):
+    def __init__(self, *, reprobe_factor=10.0, reprobe_calls=50, skip_factor=2.0):
         self.reprobe_factor = reprobe_factor
         self.reprobe_calls = reprobe_calls
         self.skip_factor = skip_factor
@@ -534,7 +543,7 @@ def _e_step(
     exponent; exact to rounding with the default ``tau = 36.8 + log M``), 'fgt' (fast Gauss
     transform, absolute error about ``eps`` times the total weight; CPD only) or 'auto': the
     fastest by timing when a ``planner`` (one :class:`EStepPlanner` per fit) is given, else
-    the cheapest by a cost model (dense below 65,536 pairs).
+    the cheapest by a cost model (dense below 2^20 pairs).
     """
     if tau is None:
         tau = _default_tau(moving_t.shape[0])

@@ -103,7 +103,7 @@ class MultiscaleCPD:
     sizes : sequence of int, default=(20000, 100000)
         Points per set at each level, increasing; a level at least as large as a set uses
         all of it (the full-resolution fit). Levels above the sets' sizes are skipped.
-    refine_iter : int, default=20
+    refine_iter : int, default=100
         ``max_iter`` of every level after the first.
     random_state : int, default=0
         Seed of the subsamples.
@@ -131,7 +131,7 @@ class MultiscaleCPD:
     ([300, 1000], True)
     """
 
-    def __init__(self, estimator, *, sizes=(20_000, 100_000), refine_iter=20, random_state=0):
+    def __init__(self, estimator, *, sizes=(20_000, 100_000), refine_iter=100, random_state=0):
         self.estimator = estimator
         self.sizes = sizes
         self.refine_iter = refine_iter
