@@ -629,6 +629,9 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         most 0.9 (the estimate is ``w_``). It is the maximum-likelihood fraction for the
         chosen transform model: exact on rigid data with clutter, high when the model cannot
         fit the data (a similarity on a bent shape reads the bent parts as outliers).
+        Measured on the bunny (1,000 points, 20% missing, clutter 10%; 5 seeds): rotation
+        error 1.66 degrees with w=0, 0.000 with 0.1, 0.3 and 'auto' (estimate 0.111, the true
+        clutter fraction; ``benchmarks/outlier_weight.py``).
     max_iter : int, default=150
         Maximum number of M-steps.
     tol : float, default=1e-5
