@@ -11,7 +11,7 @@ import csv
 import io
 import os
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache, lru_cache
 from importlib import resources
 from pathlib import Path
 from typing import NamedTuple
@@ -47,7 +47,7 @@ class PointSetPair(NamedTuple):
     fixed: np.ndarray
 
 
-@lru_cache(maxsize=None)
+@cache
 def _read_point_text(name: str) -> str:
     return _data_dir().joinpath("cpd", name).read_text(encoding="ascii")
 
