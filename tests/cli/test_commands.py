@@ -20,8 +20,9 @@ def test_demo_writes_figures_and_results(tmp_path, capsys):
     } <= names
     record = json.loads((tmp_path / "demo.json").read_text())
     assert record["graph"]["n_nodes"] == 91
-    saved = np.load(tmp_path / "fish_delaunay_centralities.npz")
-    assert saved["closeness"].shape == (91,) and np.all(saved["closeness"] > 0)
+    with np.load(tmp_path / "fish_delaunay_centralities.npz") as saved:
+        closeness_values = saved["closeness"]
+    assert closeness_values.shape == (91,) and np.all(closeness_values > 0)
     assert "most central points by closeness" in capsys.readouterr().out
     rms = record["registration"]["final_rms"]
     assert rms["CPD"] < 1e-6 and rms["GPD (closeness)"] < 1e-6  # both recover the similarity

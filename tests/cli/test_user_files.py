@@ -22,6 +22,36 @@ def _fish_pair():
     return moving, 1.3 * moving @ _rotation(0.4).T + [0.5, -0.2]
 
 
+@pytest.fixture(scope="module")
+def fish_files(tmp_path_factory):
+    """The fish pair as m.npy / f.npy (2D) and m3.npy / f3.npy (lifted into 3D), written once."""
+    folder = tmp_path_factory.mktemp("fish")
+    moving, fixed = _fish_pair()
+    np.save(folder / "m.npy", moving)
+    np.save(folder / "f.npy", fixed)
+    np.save(folder / "m3.npy", np.column_stack([moving, 0.1 * moving[:, 0] * moving[:, 1]]))
+    np.save(folder / "f3.npy", np.column_stack([fixed, 0.1 * fixed[:, 0] * fixed[:, 1]]))
+    return folder
+
+
+@pytest.fixture(scope="module")
+def shapes_folder(tmp_path_factory):
+    """Four disks and four bars as PNG silhouettes; names with '-', '_' and no separator before the number."""
+    import imageio.v3 as iio
+
+    folder = tmp_path_factory.mktemp("shapes")
+    yy, xx = np.mgrid[:24, :24]
+    for k in range(4):
+        iio.imwrite(
+            folder / f"disk-{k + 1}.png",
+            np.where((yy - 12) ** 2 + (xx - 12) ** 2 <= (5 + k) ** 2, 0, 255).astype(np.uint8),
+        )
+        bar = np.full((24, 24), 255, np.uint8)
+        bar[11 - k // 2 : 13 + k // 2, 2:22] = 0
+        iio.imwrite(folder / (f"bar_{k + 1}.png" if k % 2 else f"bar{k + 1}.png"), bar)
+    return folder
+
+
 def test_reads_ply_with_intensity_and_mat_with_a_variable(tmp_path):
     plyfile = pytest.importorskip("plyfile")
     from scipy.io import savemat
@@ -57,19 +87,16 @@ def test_reads_a_semicolon_csv_with_an_index_column_written_by_pandas(tmp_path):
 @pytest.mark.parametrize(
     "out", ["aligned.ply", "aligned.csv", "aligned.txt", "aligned.npy", "aligned.mat", "aligned.pcd"]
 )
-def test_register_writes_the_aligned_points_and_a_sidecar(tmp_path, out):
+def test_register_writes_the_aligned_points_and_a_sidecar(tmp_path, fish_files, out):
     from centrality_vision.io import read_points
 
-    moving, fixed = _fish_pair()
-    if out.endswith((".ply", ".pcd")):  # 3D formats: lift the fish into 3D
-        moving, fixed = (np.column_stack([p, 0.1 * p[:, 0] * p[:, 1]]) for p in (moving, fixed * [1, 1]))
-        fixed = np.column_stack([fixed[:, :2], 0.1 * fixed[:, 0] * fixed[:, 1]])
-    np.save(tmp_path / "m.npy", moving)
-    np.save(tmp_path / "f.npy", fixed)
+    three_d = out.endswith((".ply", ".pcd"))  # 3D formats: the fish lifted into 3D
+    moving_path, fixed_path = (fish_files / f"{name}{'3' if three_d else ''}.npy" for name in ("m", "f"))
+    moving, fixed = np.load(moving_path), np.load(fixed_path)
     argv = [
         "register",
-        str(tmp_path / "m.npy"),
-        str(tmp_path / "f.npy"),
+        str(moving_path),
+        str(fixed_path),
         "--transform",
         "affine",
         "--tol",
@@ -88,27 +115,24 @@ def test_register_writes_the_aligned_points_and_a_sidecar(tmp_path, out):
     assert np.sqrt(np.mean(np.sum((aligned - fixed) ** 2, axis=1))) < 0.05 * np.ptp(fixed)
 
 
-def test_register_ply_of_2d_sets_is_a_one_line_error(tmp_path, capsys):
-    moving, fixed = _fish_pair()
-    np.save(tmp_path / "m.npy", moving)
-    np.save(tmp_path / "f.npy", fixed)
-    assert main(["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--out", str(tmp_path / "a.ply")]) == 2
+def test_register_ply_of_2d_sets_is_a_one_line_error(tmp_path, fish_files, capsys):
+    argv = ["register", str(fish_files / "m.npy"), str(fish_files / "f.npy"), "--out", str(tmp_path / "a.ply")]
+    assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "hold 3D points" in err[0]
 
 
-def test_true_moving_with_nan_rows_marks_outliers(tmp_path):
+def test_true_moving_with_nan_rows_marks_outliers(tmp_path, fish_files):
     moving, fixed = _fish_pair()
     outliers = RNG.random((10, 2)) * 4 - 2
     moving_all = np.vstack([moving, outliers])
     truth = np.vstack([fixed, np.full((10, 2), np.nan)])
     np.savetxt(tmp_path / "m.txt", moving_all)
-    np.save(tmp_path / "f.npy", fixed)
     np.savetxt(tmp_path / "t.csv", truth, delimiter=",", header="x,y", comments="")
     argv = [
         "register",
         str(tmp_path / "m.txt"),
-        str(tmp_path / "f.npy"),
+        str(fish_files / "f.npy"),
         "--w",
         "0.2",
         "--tol",
@@ -130,27 +154,13 @@ def test_true_moving_with_nan_rows_marks_outliers(tmp_path):
     assert (tmp_path / "r.png").stat().st_size > 0
 
 
-def test_every_csv_output_is_read_by_pandas_with_default_arguments(tmp_path):
+def test_every_csv_output_is_read_by_pandas_with_default_arguments(tmp_path, fish_files, shapes_folder):
     pandas = pytest.importorskip("pandas")
-    moving, fixed = _fish_pair()
-    np.save(tmp_path / "m.npy", moving)
-    np.save(tmp_path / "f.npy", fixed)
-    folder = tmp_path / "shapes"
-    folder.mkdir()
-    import imageio.v3 as iio
-
-    yy, xx = np.mgrid[:20, :20]
-    for k in range(2):
-        iio.imwrite(
-            folder / f"disk-{k}.png", np.where((yy - 10) ** 2 + (xx - 10) ** 2 <= 30 + 10 * k, 0, 255).astype(np.uint8)
-        )
-        bar = np.full((20, 20), 255, np.uint8)
-        bar[9 - k : 11 + k, 2:18] = 0
-        iio.imwrite(folder / f"bar_{k}.png", bar)
+    moving_path, fixed_path, folder = fish_files / "m.npy", fish_files / "f.npy", shapes_folder
     runs = {
-        "graph.csv": ["graph", str(tmp_path / "m.npy"), "--out"],
-        "centrality.csv": ["centrality", str(tmp_path / "m.npy"), "--measure", "all", "--out"],
-        "register.csv": ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--out"],
+        "graph.csv": ["graph", str(moving_path), "--out"],
+        "centrality.csv": ["centrality", str(moving_path), "--measure", "all", "--out"],
+        "register.csv": ["register", str(moving_path), str(fixed_path), "--out"],
         "classify.csv": ["classify", str(folder), "--centrality", "degree", "--bins", "4", "--out"],
     }
     expected = {
@@ -165,23 +175,11 @@ def test_every_csv_output_is_read_by_pandas_with_default_arguments(tmp_path):
         if name in expected:
             assert list(frame.columns) == expected[name]
     labels = pandas.read_csv(tmp_path / "classify.csv")["label"]
-    assert sorted(set(labels)) == ["bar", "disk"]  # no "disk-" residue
+    assert sorted(set(labels)) == ["bar", "disk"]  # no "disk-" or "bar_" residue
 
 
-def test_classify_classifiers_and_the_confusion_matrix_figure(tmp_path):
-    import imageio.v3 as iio
-
-    folder = tmp_path / "shapes"
-    folder.mkdir()
-    yy, xx = np.mgrid[:24, :24]
-    for k in range(4):
-        iio.imwrite(
-            folder / f"disk-{k + 1}.png",
-            np.where((yy - 12) ** 2 + (xx - 12) ** 2 <= (5 + k) ** 2, 0, 255).astype(np.uint8),
-        )
-        bar = np.full((24, 24), 255, np.uint8)
-        bar[11 - k // 2 : 13 + k // 2, 2:22] = 0
-        iio.imwrite(folder / f"bar{k + 1}.png", bar)
+def test_classify_classifiers_and_the_confusion_matrix_figure(tmp_path, shapes_folder):
+    folder = shapes_folder
     for classifier in ("nb", "svm", "forest"):
         out = tmp_path / f"{classifier}.json"
         argv = [
@@ -197,11 +195,12 @@ def test_classify_classifiers_and_the_confusion_matrix_figure(tmp_path):
             classifier,
             "--out",
             str(out),
-        ] + (["--plot", str(tmp_path / "nb.png")] if classifier == "nb" else [])
+        ] + (["--plot", str(tmp_path / "nb.png")] if classifier == "nb" else ["--trees", "25"])
         assert main(argv) == 0
         record = json.loads(out.read_text())
         assert record["classes"] == ["bar", "disk"] and np.sum(record["confusion"]) == 8
         assert record["parameters"]["classifier"] == classifier
+        assert record["parameters"]["trees"] == (300 if classifier == "nb" else 25)
         assert record["accuracy"] == pytest.approx(np.mean(record["fold_accuracy"]))
     assert (tmp_path / "nb.png").stat().st_size > 0
 

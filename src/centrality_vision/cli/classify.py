@@ -60,6 +60,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="nb: Gaussian naive Bayes, svm: RBF SVM, forest: random forest (default: %(default)s)",
     )
     parser.add_argument(
+        "--trees",
+        type=number(int, low=1),
+        default=300,
+        help="trees of --classifier forest (default: %(default)s)",
+    )
+    parser.add_argument(
         "--folds", type=number(int, low=2), default=5, help="cross-validation folds (default: %(default)s)"
     )
     parser.add_argument(
@@ -100,7 +106,7 @@ def _read_labels(path) -> dict:
         return {row["file"]: row["label"] for row in reader}
 
 
-def _classifier(name: str, seed: int):
+def _classifier(name: str, seed: int, trees: int = 300):
     from sklearn.ensemble import RandomForestClassifier
     from sklearn.naive_bayes import GaussianNB
     from sklearn.pipeline import make_pipeline
@@ -110,7 +116,7 @@ def _classifier(name: str, seed: int):
     if name == "svm":
         return make_pipeline(StandardScaler(), SVC(kernel="rbf", random_state=seed))
     if name == "forest":
-        return RandomForestClassifier(n_estimators=300, random_state=seed, n_jobs=1)
+        return RandomForestClassifier(n_estimators=trees, random_state=seed, n_jobs=1)
     return GaussianNB()
 
 
@@ -167,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
     tic = time.perf_counter()
     features = histogram.fit_transform(images)
     say(f"features: {features.shape[1]} per image in {time.perf_counter() - tic:.1f} s")
-    model = _classifier(args.classifier, args.seed)
+    model = _classifier(args.classifier, args.seed, args.trees)
     splitter = StratifiedKFold(n_splits=n_splits, shuffle=True, random_state=args.seed)
     folds = cross_validate(model, features, labels, cv=splitter, return_estimator=True, return_indices=True)
     scores = folds["test_score"]
