@@ -143,22 +143,21 @@ def tally(draws) -> dict:
 
 
 def verdict(cell: dict) -> str:
-    """How a tallied claim fares: 'holds' (95% interval above one half), 'fails' (below
-    one half) or 'undecided'; 'holds always' / 'never holds' at k = n / k = 0.
+    """How a tallied claim fares: 'holds' (95% interval above one half), 'fails' (below one
+    half) or 'undecided' (too few draws, or about as often as not); 'holds always' / 'never
+    holds' when, besides, every draw agrees.
 
     Examples
     --------
     >>> verdict({"k": 20, "n": 20, "low": 0.84, "high": 1.0}), verdict({"k": 9, "n": 20, "low": 0.26, "high": 0.66})
     ('holds always', 'undecided')
+    >>> verdict({"k": 1, "n": 1, "low": 0.21, "high": 1.0})
+    'undecided'
     """
-    if cell["n"] and cell["k"] == cell["n"]:
-        return "holds always"
-    if cell["k"] == 0:
-        return "never holds"
     if cell["low"] > 0.5:
-        return "holds"
+        return "holds always" if cell["k"] == cell["n"] else "holds"
     if cell["high"] < 0.5:
-        return "fails"
+        return "never holds" if cell["k"] == 0 else "fails"
     return "undecided"
 
 

@@ -23,6 +23,7 @@ __all__ = [
     "seed_summary",
     "comparison_main",
     "odds_sentences",
+    "unreached",
 ]
 
 METHODS = ("betweenness", "closeness", "degree", "eigenvector", "CPD")
@@ -95,6 +96,19 @@ def seed_summary(result: dict) -> dict:
         "final_error": {name: m["final_error"] for name, m in result["methods"].items()},
         "error_at_10": error_at(result["methods"], 10),
     }
+
+
+def unreached(per_seed: list, level: str = "0.01") -> str:
+    """'' or ' (never reached within the iteration cap: betweenness in 3 of 20 seeds)'."""
+    missed = {m: sum(r["below"][m][level] is None for r in per_seed) for m in METHODS}
+    missed = {m: k for m, k in missed.items() if k}
+    if not missed:
+        return ""
+    return (
+        " (not reached within the iteration cap: "
+        + ", ".join(f"{m} in {k}" for m, k in missed.items())
+        + f" of {len(per_seed)} seeds)"
+    )
 
 
 def odds_sentences(odds: dict, n_label: str = "seeds") -> list[str]:

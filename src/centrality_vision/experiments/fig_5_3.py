@@ -28,6 +28,7 @@ from ._compare import (
     odds_sentences,
     plot_comparison,
     seed_summary,
+    unreached,
 )
 
 __all__ = ["METHODS", "CLAIMS", "problem", "run", "seed_unit", "format_table", "explain", "plot", "main"]
@@ -119,7 +120,7 @@ def explain(result: dict) -> str:
     per_seed = result.get("per_seed") or [seed_summary(result)]
     n = len(per_seed)
     med = {
-        m: np.median([r["below"][m]["0.01"] if r["below"][m]["0.01"] is not None else np.nan for r in per_seed])
+        m: np.nanmedian([r["below"][m]["0.01"] if r["below"][m]["0.01"] is not None else np.nan for r in per_seed])
         for m in METHODS
     }
     ratio = {m: med["CPD"] / med[m] for m in METHODS[:-1] if med[m] > 0}
@@ -127,6 +128,7 @@ def explain(result: dict) -> str:
         f"Over {n} seeds, each a new similarity transform (the thesis does not state its own), the median number of "
         "iterations to bring the alignment error to 1% of its initial value is "
         + ", ".join(f"{m} {med[m]:.0f}" for m in METHODS)
+        + unreached(per_seed)
         + "; CPD needs "
         + ", ".join(f"{ratio[m]:.2f}x" for m in ratio)
         + " the iterations of GPD with "

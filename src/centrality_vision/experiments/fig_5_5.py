@@ -32,6 +32,7 @@ from ._compare import (
     odds_sentences,
     plot_comparison,
     seed_summary,
+    unreached,
 )
 
 __all__ = ["METHODS", "CLAIMS", "face_points", "problem", "run", "seed_unit", "format_table", "explain", "plot", "main"]
@@ -149,7 +150,7 @@ def explain(result: dict) -> str:
     per_seed = result.get("per_seed") or [seed_summary(result)]
     at10 = {m: np.median([r["error_at_10"][m] for r in per_seed]) for m in METHODS}
     to1 = {
-        m: np.median([np.nan if r["below"][m]["0.01"] is None else r["below"][m]["0.01"] for r in per_seed])
+        m: np.nanmedian([np.nan if r["below"][m]["0.01"] is None else r["below"][m]["0.01"] for r in per_seed])
         for m in METHODS
     }
     parts = [
@@ -158,6 +159,7 @@ def explain(result: dict) -> str:
         + ", ".join(f"{m} {at10[m]:.3g}" for m in METHODS)
         + "; the median iterations to 1% of the initial error are "
         + ", ".join(f"{m} {to1[m]:.0f}" for m in METHODS)
+        + unreached(per_seed)
         + "."
     ]
     parts += odds_sentences(result.get("odds") or {})
