@@ -1002,6 +1002,7 @@ def figure(rows, path):
     import matplotlib.pyplot as plt
 
     cases = sorted({r["case"] for r in rows})
+    colours = {lib: "C%d" % i for i, lib in enumerate(sorted({r["library"] for r in rows}))}
     fig, axes = plt.subplots(1, len(cases), figsize=(5.5 * len(cases), 4.2), squeeze=False)
     for ax, case in zip(axes[0], cases):
         libs = sorted({r["library"] for r in rows if r["case"] == case})
@@ -1009,7 +1010,7 @@ def figure(rows, path):
             pts = sorted((r["n"], r["median_s"]) for r in rows
                          if r["case"] == case and r["library"] == lib and r.get("median_s"))
             if pts:
-                ax.loglog(*zip(*pts), "o-", label=lib, lw=2.2 if lib.startswith("ours") else 1.2)
+                ax.loglog(*zip(*pts), "o-", label=lib, color=colours[lib], lw=2.2 if lib.startswith("ours") else 1.2)
         ax.set_title(case)
         ax.set_xlabel("points per set n")
         ax.set_ylabel("seconds (median)")

@@ -195,7 +195,10 @@ def test_statistics_are_bit_identical_for_any_thread_count(method):
 
 def test_low_rank_nonrigid_fit_is_identical_for_any_thread_count():
     # issue: 69 iterations on 1 thread, 71 on 2, from partial sums added in a thread-dependent order
+    import warnings
+
     import centrality_vision as cv
+    from centrality_vision.exceptions import ConvergenceWarning
     from centrality_vision.registration import NonRigidCPD
 
     rng = np.random.default_rng(11)
@@ -205,7 +208,9 @@ def test_low_rank_nonrigid_fit_is_identical_for_any_thread_count():
     try:
         for threads in (1, 2):
             cv.set_num_threads(threads)
-            fits.append(NonRigidCPD(beta=0.5, lam=1.0, tol=1e-6, max_iter=40, method="dense").fit(y, x))
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", ConvergenceWarning)  # 40 iterations are enough to compare
+                fits.append(NonRigidCPD(beta=0.5, lam=1.0, tol=1e-6, max_iter=40, method="dense").fit(y, x))
     finally:
         cv.set_num_threads(None)
     assert fits[0].n_iter_ == fits[1].n_iter_
@@ -233,5 +238,5 @@ def test_planner_probes_once_per_sigma2_regime_and_matches_dense():
 
 def test_auto_without_a_planner_considers_every_path_at_small_sizes():
     rng = np.random.default_rng(13)
-    moving, fixed = rng.random((400, 2)), rng.random((400, 2))  # 160,000 pairs, formerly always dense
+    moving, fixed = rng.random((1100, 2)), rng.random((1100, 2))  # 1.2 million pairs, formerly always dense
     assert _e_step(moving, fixed, 1e-7, 0.0, method="auto").method == "truncated"

@@ -116,7 +116,7 @@ class MultiscaleCPD:
     moving_transformed_ : ndarray of shape (M, D)
         Every moving point transformed.
     levels_ : list of dict
-        Per level: ``n_moving``, ``n_fixed``, ``n_iter``, ``sigma2`` and ``seconds``.
+        Per level: ``n_moving``, ``n_fixed``, ``n_iter``, ``converged``, ``sigma2`` and ``seconds``.
     sigma2_ : float
         The last level's final sigma2.
 
@@ -126,9 +126,9 @@ class MultiscaleCPD:
     >>> from centrality_vision.registration import RigidCPD
     >>> y = np.random.default_rng(0).random((3000, 2))
     >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
-    >>> reg = MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(300, 1000)).fit(y, y @ r.T + 0.1)
+    >>> reg = MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(300, 3000)).fit(y, y @ r.T + 0.1)  # the last level: every point
     >>> [level["n_moving"] for level in reg.levels_], bool(np.abs(reg.moving_transformed_ - (y @ r.T + 0.1)).max() < 1e-6)
-    ([300, 1000], True)
+    ([300, 3000], True)
     """
 
     def __init__(self, estimator, *, sizes=(20_000, 100_000), refine_iter=100, random_state=0):
@@ -191,8 +191,9 @@ class MultiscaleCPD:
             if nonrigid and fields:
                 sub_moving = ComposedTransform(tuple(fields))(sub_moving)
             with warnings.catch_warnings():
-                if i > 0:  # a refinement stopping at refine_iter is the plan, not a failure to converge
-                    warnings.filterwarnings("ignore", message=".*max_iter", category=ConvergenceWarning)
+                # a level is a starting point or a bounded refinement: stopping at its max_iter is
+                # the plan, recorded in levels_ ("converged"), not a warning
+                warnings.filterwarnings("ignore", message=".*max_iter", category=ConvergenceWarning)
                 est.fit(sub_moving, sub_fixed)
             sigma2 = float(est.sigma2_)
             if nonrigid:
@@ -201,7 +202,7 @@ class MultiscaleCPD:
                 transform = est.transform_
             self.levels_.append({
                 "n_moving": sub_moving.shape[0], "n_fixed": sub_fixed.shape[0], "n_iter": int(est.n_iter_),
-                "sigma2": sigma2, "seconds": time.perf_counter() - start,
+                "converged": bool(est.converged_), "sigma2": sigma2, "seconds": time.perf_counter() - start,
             })
         self.transform_ = ComposedTransform(tuple(fields)) if nonrigid else transform
         self.moving_transformed_ = self.transform_(moving)
