@@ -48,7 +48,7 @@ def _norm(norm, values: np.ndarray):
     if norm == "log":
         positive = values[values > 0]
         if positive.size == 0:
-            raise InputError("`norm='log'` needs at least one value > 0; got none (use 'power' or 'linear').")
+            raise InputError("`norm` 'log' needs at least one value > 0; got none (use 'power' or 'linear').")
         return colors.LogNorm(vmin=float(positive.min()), vmax=float(values.max()), clip=True)
     if norm == "power":
         low, high = float(values.min()), float(values.max())
@@ -234,7 +234,8 @@ def plot_graph(
     if three_d:
         from mpl_toolkits.mplot3d.art3d import Line3DCollection
 
-        ax.add_collection3d(Line3DCollection(segments, **line_style))
+        if n_edges:  # matplotlib's 3D collection cannot be empty (it concatenates the segments)
+            ax.add_collection3d(Line3DCollection(segments, **line_style))
     else:
         from matplotlib.collections import LineCollection
 

@@ -187,3 +187,17 @@ def test_large_sets_use_the_prefiltered_candidates():
     perm = np.random.default_rng(1).permutation(u.size)
     result = match(_similar(fixed[perm], np.random.default_rng(2)), fixed)
     np.testing.assert_array_equal(result.correspondence, perm)
+
+
+def test_rigid_matching_of_sets_of_incomparable_extent_is_refused():
+    """Fuzz finding: with scale=False, moving at 1e149 and fixed at 1e-301 overflowed inside the
+    consensus scoring (a bare ValueError from scipy); it is an InputError naming `scale`."""
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.matching import match
+
+    points = np.random.default_rng(0).random((6, 2))
+    with pytest.raises(InputError, match="`scale=False` needs `moving` and `fixed` of comparable extent"):
+        match(points * 1e149, points * 1e-301, scale=False)
+    result = match(points * 1e40, points * 1e-40)  # a similarity brings one onto the other
+    assert result.correspondence.tolist() == list(range(6))
+    assert result.transform.scale == pytest.approx(1e-80, rel=1e-9)

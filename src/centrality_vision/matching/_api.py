@@ -36,6 +36,10 @@ def _rigid_if_unscaled(transform, scale) -> SimilarityTransform:
     return RigidTransform(transform.rotation, transform.translation)
 
 
+#: With ``scale=False``, the largest ratio (as a power of two) between the extents of the two
+#: sets: beyond it squared distances of the unscaled set overflow float64.
+MAX_RIGID_EXPONENT = 300
+
 #: The methods :func:`match` offers.
 METHODS = ("robust", "mwme", "shape-context")
 
@@ -140,6 +144,12 @@ def match(
     norm_m, norm_f = normalise(moving), normalise(fixed)
     for name, norm in (("moving", norm_m), ("fixed", norm_f)):
         _check_resolution(norm.points, name)
+    if not scale and abs(norm_m.exponent - norm_f.exponent) > MAX_RIGID_EXPONENT:
+        raise InputError(
+            f"`scale=False` needs `moving` and `fixed` of comparable extent; their extents differ by a factor "
+            f"2^{abs(norm_m.exponent - norm_f.exponent)} (more than 2^{MAX_RIGID_EXPONENT}), so a rigid transform "
+            "cannot bring one onto the other (and its squared distances overflow); use `scale=True`."
+        )
     unit_ratio = float(np.ldexp(1.0, norm_m.exponent - norm_f.exponent))  # scale 1 in the caller's units
     if method == "robust":
         from ._robust import robust_pose
