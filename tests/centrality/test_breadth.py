@@ -233,3 +233,12 @@ def test_fifo_kernel_property_random_masks():
 
     assert hypothesis is not None
     check()
+
+
+def test_katz_default_alpha_works_on_dense_graphs():
+    # lambda_max = 29 on K30: networkx's alpha = 0.1 diverges, the default falls back to 0.9 / 29
+    complete = sparse.csr_array(np.ones((30, 30)) - np.eye(30))
+    values = cen.katz(complete, normalized=False)
+    np.testing.assert_allclose(values, np.full(30, 1.0 / (1.0 - 0.9)), rtol=1e-10)
+    sparse_path = sparse.csr_array(np.diag(np.ones(4), 1) + np.diag(np.ones(4), -1))
+    np.testing.assert_allclose(cen.katz(sparse_path), cen.katz(sparse_path, alpha=0.1))

@@ -240,7 +240,7 @@ def katz(
     graph,
     /,
     *,
-    alpha: float = 0.1,
+    alpha: float | None = None,
     beta: float = 1.0,
     strengths: bool = False,
     normalized: bool = True,
@@ -258,8 +258,11 @@ def katz(
     Parameters
     ----------
     graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
-    alpha : float, default=0.1
-        Attenuation; must be below the inverse of the adjacency's largest eigenvalue.
+    alpha : float or None, default=None
+        Attenuation; must be below the inverse of the adjacency's largest eigenvalue
+        ``lambda_max``. None takes networkx's 0.1 where that converges and
+        ``0.9 / lambda_max`` on denser graphs (e.g. a complete graph on more than 11 nodes),
+        so the default works on every graph.
     beta : float, default=1.0
         Weight every node gets for itself (must be positive).
     strengths : bool, default=False
@@ -283,14 +286,19 @@ def katz(
     from scipy.sparse.linalg import splu
 
     info, adjacency = _strength_matrix(graph, strengths, None, "katz")
+    n = adjacency.shape[0]
+    rows = np.abs(adjacency).sum(axis=1)
+    cols = np.abs(adjacency).sum(axis=0)
+    if alpha is None:  # 0.1 unless 0.1 * lambda_max >= 0.9 (row/column sums bound lambda_max)
+        alpha = 0.1
+        if n and 0.1 * min(rows.max(), cols.max()) >= 0.9:
+            radius = _spectral_radius(adjacency)
+            alpha = 0.1 if 0.1 * radius < 0.9 else 0.9 / radius
     alpha = check_float(alpha, name="alpha", low=0.0)
     beta = check_float(beta, name="beta", low=0.0)
     if beta == 0.0:
         raise InputError("`beta` must be positive; got 0.0.")
     normalized = _check_flag(normalized, "normalized")
-    n = adjacency.shape[0]
-    rows = np.abs(adjacency).sum(axis=1)
-    cols = np.abs(adjacency).sum(axis=0)
     if n and alpha * min(rows.max(), cols.max()) >= 1.0 and alpha * _spectral_radius(adjacency) >= 1.0 - 1e-12:
         raise InputError(
             f"`alpha` must be below 1 / (largest eigenvalue of the adjacency) = "
