@@ -1,7 +1,6 @@
 """Graph inputs, directed graphs, PageRank/Katz/edge betweenness, eccentricity bounds,
 the FIFO-queue kernel of pixel graphs and the long-thin eigenvector solver."""
 
-import time
 import warnings
 
 import networkx as nx
@@ -184,12 +183,11 @@ def test_eccentricity_bounds_are_exact_with_few_searches(weights):
     )
 
 
-def test_eigenvector_of_long_thin_graphs_is_fast_and_exact():
+def test_eigenvector_of_long_thin_graphs_is_exact():
+    # (its speed, 27.7 s -> 0.2 s, is measured in benchmarks/centrality.py --scale, not here)
     n = 10_000
     path = sparse.diags_array([np.ones(n - 1), np.ones(n - 1)], offsets=[-1, 1], format="csr")
-    start = time.perf_counter()
     values = cen.eigenvector(path, normalized=False)
-    assert time.perf_counter() - start < 10  # Lanczos alone: over 25 s
     k = np.arange(1, n + 1)
     exact = np.sin(np.pi * k / (n + 1))
     np.testing.assert_allclose(values, exact / np.linalg.norm(exact), atol=1e-9)
