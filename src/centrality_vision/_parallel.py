@@ -15,6 +15,7 @@ import threading
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 
 from ._validation import check_int
+from .exceptions import InputError
 
 __all__ = ["get_num_threads", "set_num_threads", "run_chunks", "available_cores"]
 
@@ -29,7 +30,7 @@ def _default_threads() -> int:
         try:
             return max(1, int(env))
         except ValueError:
-            raise ValueError(f"The environment variable {_ENV} must be a positive int; got {env!r}.") from None
+            raise InputError(f"`{_ENV}` (environment variable) must be a positive int; got {env!r}.") from None
     return available_cores()
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 
 from .._validation import ANY_DIMS, as_graph, as_points
+from ..exceptions import InputError
 
 __all__ = ["to_networkx"]
 
@@ -46,6 +47,6 @@ def to_networkx(graph, /, points=None, *, weight: str = "weight"):
     if points is not None:
         pts = as_points(points, name="points", n_dims=ANY_DIMS)
         if pts.shape[0] != n:
-            raise ValueError(f"`points` must have one row per node ({n}); got {pts.shape[0]} rows.")
+            raise InputError(f"`points` must have one row per node ({n}); got {pts.shape[0]} rows.")
         nx.set_node_attributes(out, {i: tuple(p) for i, p in enumerate(pts.tolist())}, "pos")
     return out

@@ -1,7 +1,8 @@
 """The one E-step shared by every CPD variant and by GPD.
 
 ``_e_step(moving_t, fixed, sigma2, w, log_prior=None)`` returns the sufficient statistics of
-the posterior matrix ``P`` (M x N) of CPD [1]_ (or of GPD's, SPEC section 3) without ever
+the posterior matrix ``P`` (M x N) of CPD [1]_ (or of GPD's: CPD's posterior with the centrality prior added to every log-term
+before the rows are normalised) without ever
 forming it: ``P1 = P 1``, ``Pt1 = P^T 1``, ``PX = P X``, ``Np = 1^T P 1``, the negative
 log-likelihood and, for each fixed point, its most probable moving point. Everything is
 computed in log space (each row is shifted by its largest exponent before ``exp``), so a
@@ -23,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._parallel import get_num_threads, run_chunks
+from ..exceptions import InputError
 from . import _kernels as K
 
 __all__ = ["Posteriors", "CentralityPrior", "E_STEP_METHODS", "EStepPlanner", "_e_step", "dense_posterior"]
@@ -554,7 +556,7 @@ def _e_step(
     else:
         cached = {}
     if method == "fgt" and log_prior is not None and log_prior.scale != 0:
-        raise ValueError("`method='fgt'` computes CPD's posterior only; GPD's prior needs 'dense' or 'truncated'.")
+        raise InputError("`method='fgt'` computes CPD's posterior only; GPD's prior needs 'dense' or 'truncated'.")
     return _run(method, moving_t, fixed, sigma2, w, log_prior, tau, eps, cached)
 
 

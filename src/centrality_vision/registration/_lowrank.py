@@ -27,6 +27,7 @@ from numba import njit
 
 from .._parallel import run_chunks
 from .._validation import ANY_DIMS, as_points, check_float, check_int
+from ..exceptions import InputError
 from ._kernels import fast_exp
 
 __all__ = ["PivotedCholesky", "pivoted_cholesky", "low_rank_eigh", "nystrom_field"]
@@ -95,7 +96,7 @@ class PivotedCholesky:
         max_rank = min(max_rank, n)
         inv2b2 = 1.0 / (2.0 * beta * beta)
         if not math.isfinite(inv2b2):
-            raise ValueError(f"`beta` = {beta!r} is too small: 1 / (2 beta^2) overflows.")
+            raise InputError(f"`beta` = {beta!r} is too small: 1 / (2 beta^2) overflows.")
         factor = np.empty((max_rank, n))
         diag = np.ones(n)
         pivots = []

@@ -326,12 +326,12 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         from sklearn.utils.multiclass import check_classification_targets
 
         if y is None:
-            raise ValueError("CentralityComparisonForest requires y to be passed, but the target y is None.")
+            raise InputError("`y` is required: CentralityComparisonForest requires y to be passed, but the target y is None.")
         y = check_array(y, ensure_2d=False, dtype=None, input_name="y")  # NaN/inf: sklearn's message
         check_classification_targets(y)
         masks = self._masks(X)
         if y.ndim != 1 or y.shape[0] != len(masks):
-            raise ValueError(f"`y` must have one label per image ({len(masks)}); got shape {y.shape}.")
+            raise InputError(f"`y` must have one label per image ({len(masks)}); got shape {y.shape}.")
         check_int(self.n_estimators, name="n_estimators", low=1)
         comparison_seed, forest_seed = self._seeds()
         self.comparisons_ = CentralityComparisons(

@@ -6,6 +6,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .._validation import check_choice, check_int
+from ..exceptions import InputError
 from ..centrality import CENTRALITIES
 from ._cache import SHAPE_CENTRALITIES, as_shape_images, shape_centralities
 
@@ -51,7 +52,7 @@ def resolve_centralities(centrality, *, name: str = "centrality") -> tuple[str, 
     except TypeError:
         raise TypeError(f"`{name}` must be a centrality name, 'all' or a list of names; got {centrality!r}.") from None
     if not names:
-        raise ValueError(f"`{name}` must name at least one centrality; got an empty list.")
+        raise InputError(f"`{name}` must name at least one centrality; got an empty list.")
     return tuple(check_choice(n, CENTRALITIES, name=name) for n in names)
 
 
@@ -170,8 +171,8 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         check_int(self.bins, name="bins", low=1)
         check_choice(self.scaling, ("minmax", "max"), name="scaling")
         if self.connectivity not in (4, 8) or isinstance(self.connectivity, bool):
-            raise ValueError(
-                "The 'connectivity' parameter of CentralityHistogram must be 4 or 8. "
+            raise InputError(
+                "`connectivity`: the 'connectivity' parameter of CentralityHistogram must be 4 or 8. "
                 f"Got {self.connectivity!r} instead."
             )
         return names
