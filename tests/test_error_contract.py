@@ -48,19 +48,12 @@ def test_the_scan_finds_a_bare_raise(tmp_path):
     assert _bare_raises(sample, tmp_path) == ["sample.py:3: raise ValueError", "sample.py:4: raise Exception"]
 
 
-#: Bare raises in files of other work in progress (registration, shapes, experiments, graph
-#: conversion, the parallel helper), left for their owners; the coordinator removes this list
-#: and the xfail once they are gone. Locations are file:line at the time of writing.
+#: Bare raises left in the experiments (work in progress by another helper at the time of
+#: writing); the coordinator removes this list and the xfail once they are gone.
 KNOWN = (
-    "centrality_vision/_parallel.py",
     "centrality_vision/experiments/_runner.py",
     "centrality_vision/experiments/fig_5_1.py",
     "centrality_vision/experiments/table_5_1.py",
-    "centrality_vision/graphs/_convert.py",
-    "centrality_vision/registration/_estep.py",
-    "centrality_vision/registration/_lowrank.py",
-    "centrality_vision/shapes/_comparisons.py",
-    "centrality_vision/shapes/_histogram.py",
 )
 
 
@@ -71,9 +64,8 @@ def test_no_new_bare_raise_outside_the_known_files():
 
 @pytest.mark.xfail(
     strict=True,
-    reason="bare raises left in other helpers' files: _parallel.py:32, experiments/_runner.py:167, 198, "
-    "experiments/fig_5_1.py:55, experiments/table_5_1.py:103, graphs/_convert.py:49, registration/_estep.py:557, "
-    "registration/_lowrank.py:98, shapes/_comparisons.py:329, 334, shapes/_histogram.py:54, 173",
+    reason="bare raises left in the experiments helper's files: experiments/_runner.py:167, 198, "
+    "experiments/fig_5_1.py:55, experiments/table_5_1.py:103",
 )
 def test_no_bare_value_error_or_exception_outside_kernel_modules():
     offenders = _offenders()
