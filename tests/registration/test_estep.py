@@ -240,3 +240,19 @@ def test_auto_without_a_planner_considers_every_path_at_small_sizes():
     rng = np.random.default_rng(13)
     moving, fixed = rng.random((1100, 2)), rng.random((1100, 2))  # 1.2 million pairs, formerly always dense
     assert _e_step(moving, fixed, 1e-7, 0.0, method="auto").method == "truncated"
+
+
+def test_far_points_at_tiny_sigma2_do_not_walk_millions_of_empty_cells():
+    # 200 fixed points far from every moving point: at sigma2 = 1e-9 their search boxes span
+    # ~10^8 empty grid cells; the kernels scan the points instead (it used to hang here).
+    rng = np.random.default_rng(0)
+    fixed = rng.random((1200, 3))
+    moving = fixed[:1000] + 1e-7 * rng.standard_normal((1000, 3))
+    fixed[1000:] += 2.0
+    for sigma2 in (1e-9, 1e-12):
+        dense = _e_step(moving, fixed, sigma2, 0.1, method="dense")
+        truncated = _e_step(moving, fixed, sigma2, 0.1, method="truncated")
+        automatic = _e_step(moving, fixed, sigma2, 0.1, method="auto")  # its cost model counts candidates
+        np.testing.assert_allclose(truncated.p1, dense.p1, rtol=1e-12, atol=1e-300)
+        np.testing.assert_allclose(automatic.pt1, dense.pt1, rtol=1e-8, atol=1e-12)
+        assert truncated.neg_log_likelihood == pytest.approx(dense.neg_log_likelihood, rel=1e-12)
