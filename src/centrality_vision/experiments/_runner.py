@@ -34,6 +34,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ..exceptions import InputError
+
 __all__ = ["Unit", "unit_id", "run_units", "load_results", "SCHEDULERS"]
 
 SCHEDULERS = ("serial", "processes", "dask")
@@ -164,7 +166,7 @@ class _Appender:
 
 def _check_scheduler(scheduler: str) -> str:
     if not isinstance(scheduler, str) or not (scheduler in SCHEDULERS or scheduler.startswith("tcp://")):
-        raise ValueError(
+        raise InputError(
             f"`scheduler` must be one of {', '.join(map(repr, SCHEDULERS))} or 'tcp://host:port'; got {scheduler!r}."
         )
     return scheduler
@@ -195,7 +197,7 @@ def run_units(
     units = list(units)
     keys = [u.key for u in units]
     if len(set(keys)) != len(keys):
-        raise ValueError("`units` must have unique keys; got duplicates.")
+        raise InputError(f"`units` must have unique keys; got duplicates, e.g. {next(k for k in keys if keys.count(k) > 1)!r}.")
     path = Path(path)
     ids = {u.key: unit_id(u) for u in units}
     stored = load_results(path)

@@ -24,6 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..exceptions import InputError
+
 __all__ = ["CLAIMS", "prior_and_posterior", "run", "format_table", "explain", "plot", "main"]
 
 TOP = 10
@@ -52,7 +54,7 @@ def prior_and_posterior(moving, fixed, *, centrality: str = "closeness", graph: 
     from ..registration import centrality_prior, initial_sigma2, normalize_centrality
 
     if graph != "delaunay":
-        raise ValueError(f"`graph` must be 'delaunay'; got {graph!r}.")
+        raise InputError(f"`graph` must be 'delaunay'; got {graph!r}.")
     v_moving = normalize_centrality(compute(delaunay_graph(moving), centrality))
     v_fixed = normalize_centrality(compute(delaunay_graph(fixed), centrality))
     prior = centrality_prior(v_moving, v_fixed)

@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..exceptions import InputError
 from ._common import experiment_parser, prepare_out, save_outputs
 
 __all__ = ["CLASSES", "METHODS", "CLAIMS", "make_set", "register_set", "run", "format_table", "explain", "plot", "main"]
@@ -100,7 +101,7 @@ def make_set(kind: str, index: int, *, seed: int = 0, n_points: int = N_POINTS) 
         inside = mask[np.rint(rr).astype(int), np.rint(cc).astype(int)]
         pts = np.column_stack([cc[inside], -rr[inside]])
     else:
-        raise ValueError(f"`kind` must be one of {', '.join(map(repr, CLASSES))}; got {kind!r}.")
+        raise InputError(f"`kind` must be one of {', '.join(map(repr, CLASSES))}; got {kind!r}.")
     return _unit_extent(pts)
 
 
