@@ -528,3 +528,11 @@ def test_reproduce_scheduler_only_where_it_applies(tmp_path, capsys):
     assert main(["reproduce", "table-2.1", "--out", str(tmp_path), "--scheduler", "serial"]) == 2
     err = capsys.readouterr().err.strip()
     assert "--scheduler" in err and len(err.splitlines()) == 1
+
+
+def test_reproduce_seeds_reach_the_claims_and_are_checked(tmp_path, capsys):
+    assert main(["reproduce", "fig-5.3", "--quick", "--seeds", "2", "--out", str(tmp_path)]) == 0
+    assert "of 2 seeds" in capsys.readouterr().out
+    assert main(["reproduce", "fig-5.3", "--quick", "--seeds", "0", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "`--seeds`" in err and len(err.splitlines()) == 1

@@ -23,6 +23,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     parser.add_argument("--quick", action="store_true", help="a small version, for a first look or a test")
     parser.add_argument("--seed", type=int, default=0, help="seed of every random choice (default: %(default)s)")
+    parser.add_argument(
+        "--seeds",
+        type=int,
+        default=None,
+        help="how many seeds each thesis claim is checked over (default: 20, or 3 with --quick)",
+    )
     parser.add_argument("--out", default="results", help="output folder (default: %(default)s)")
     parser.add_argument(
         "--scheduler",
@@ -30,6 +36,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="where the units of the long experiments run: serial, processes (default), dask (a local "
         "cluster started for the run) or tcp://host:port (a running Dask scheduler); finished units are kept and "
         "skipped on a re-run",
+    )
+    parser.add_argument(
+        "--workers", type=int, default=None, help="processes or Dask workers to start (default: the usable cores)"
     )
     add_progress(parser)
     parser.set_defaults(run=run, _parser=parser)
@@ -45,13 +54,25 @@ def run(args: argparse.Namespace) -> int:
     if args.experiment == "all":
         from ..experiments.report import run_all
 
-        path = run_all(args.out, quick=args.quick, seed=args.seed, scheduler=args.scheduler)
+        if args.seeds is not None and args.seeds < 1:
+            raise InputError(f"`--seeds` must be a positive int; got {args.seeds}.")
+        path = run_all(
+            args.out, quick=args.quick, seed=args.seed, seeds=args.seeds, scheduler=args.scheduler, workers=args.workers
+        )
         print(f"wrote {path}")
         return 0
     if args.scheduler is not None and args.experiment not in RUNNER_EXPERIMENTS:
         raise InputError(
             f"`--scheduler` applies to {', '.join(RUNNER_EXPERIMENTS)} (and all); got it for {args.experiment}."
         )
+    if args.seeds is not None and args.seeds < 1:
+        raise InputError(f"`--seeds` must be a positive int; got {args.seeds}.")
     return run_experiment(
-        args.experiment, Path(args.out) / args.experiment, quick=args.quick, seed=args.seed, scheduler=args.scheduler
+        args.experiment,
+        Path(args.out) / args.experiment,
+        quick=args.quick,
+        seed=args.seed,
+        seeds=args.seeds,
+        scheduler=args.scheduler,
+        workers=args.workers,
     )
