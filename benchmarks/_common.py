@@ -12,7 +12,10 @@ def table(headers, rows, align=None):
     cols = list(zip(*([headers] + rows))) if rows else [[h] for h in headers]
     widths = [max(len(str(x)) for x in col) for col in cols]
     align = align or ["<"] + [">"] * (len(headers) - 1)
-    line = lambda r: "  ".join(("{:%s%d}" % (a, w)).format(str(x)) for x, w, a in zip(r, widths, align))
+
+    def line(r):
+        return "  ".join(("{:%s%d}" % (a, w)).format(str(x)) for x, w, a in zip(r, widths, align))
+
     out = [line(headers), "  ".join("-" * w for w in widths)]
     out += [line(r) for r in rows]
     return "\n".join(out)

@@ -79,31 +79,47 @@ RX_DENSE_MAX_BYTES = 2 * 1024**3  # rustworkx eccentricity needs the dense n x n
 
 
 def parse_args(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--only", default=",".join(CENTRALITIES),
-                   help="comma list of centralities (default: %(default)s)")
-    p.add_argument("--graphs", default=None,
-                   help="comma list of graphs among %s (default: %s)"
-                        % (", ".join(GRAPHS), ",".join(DEFAULT_GRAPHS)))
-    p.add_argument("--libs", default=",".join(LIBRARIES),
-                   help="comma list of libraries (default: %(default)s)")
+    p = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    p.add_argument("--only", default=",".join(CENTRALITIES), help="comma list of centralities (default: %(default)s)")
+    p.add_argument(
+        "--graphs",
+        default=None,
+        help="comma list of graphs among %s (default: %s)" % (", ".join(GRAPHS), ",".join(DEFAULT_GRAPHS)),
+    )
+    p.add_argument("--libs", default=",".join(LIBRARIES), help="comma list of libraries (default: %(default)s)")
     p.add_argument("--repeat", type=int, default=3, help="runs per measurement, median reported")
-    p.add_argument("--quick", action="store_true",
-                   help="smoke run: only %s" % ",".join(QUICK_GRAPHS))
-    p.add_argument("--with-slow-networkx", action="store_true",
-                   help="also run networkx betweenness/closeness/eccentricity on graphs with "
-                        "n > %d (many minutes)" % SLOW_NETWORKX_N)
-    p.add_argument("--threads", type=int, default=2,
-                   help="threads for networkit, rustworkx (RAYON_NUM_THREADS) and ours "
-                        "(default: %(default)s; igraph and networkx are single-threaded)")
+    p.add_argument("--quick", action="store_true", help="smoke run: only %s" % ",".join(QUICK_GRAPHS))
+    p.add_argument(
+        "--with-slow-networkx",
+        action="store_true",
+        help="also run networkx betweenness/closeness/eccentricity on graphs with "
+        "n > %d (many minutes)" % SLOW_NETWORKX_N,
+    )
+    p.add_argument(
+        "--threads",
+        type=int,
+        default=2,
+        help="threads for networkit, rustworkx (RAYON_NUM_THREADS) and ours "
+        "(default: %(default)s; igraph and networkx are single-threaded)",
+    )
     p.add_argument("--json", metavar="PATH", default=None, help="also write the results as JSON")
-    p.add_argument("--scale", action="store_true",
-                   help="run the image-scale section instead (ours, with igraph for exact betweenness)")
-    p.add_argument("--scale-exact", action="store_true",
-                   help="with --scale: also exact betweenness of the 100,000-pixel silhouette (minutes)")
-    p.add_argument("--scale-sections", default="exact,closeness,approx,eccentricity,eigenvector",
-                   help="with --scale: comma list of sections (default: %(default)s)")
+    p.add_argument(
+        "--scale",
+        action="store_true",
+        help="run the image-scale section instead (ours, with igraph for exact betweenness)",
+    )
+    p.add_argument(
+        "--scale-exact",
+        action="store_true",
+        help="with --scale: also exact betweenness of the 100,000-pixel silhouette (minutes)",
+    )
+    p.add_argument(
+        "--scale-sections",
+        default="exact,closeness,approx,eccentricity,eigenvector",
+        help="with --scale: comma list of sections (default: %(default)s)",
+    )
     args = p.parse_args(argv)
 
     def split(s, allowed, what):
@@ -189,7 +205,7 @@ def _import_ours():
 def disk_mask(target):
     """Boolean disk whose pixel count is the closest achievable to ``target``."""
     r = int(math.ceil(math.sqrt(target / math.pi))) + 2
-    y, x = np.mgrid[-r:r + 1, -r:r + 1]
+    y, x = np.mgrid[-r : r + 1, -r : r + 1]
     d2 = (x * x + y * y).ravel()
     vals, counts = np.unique(d2, return_counts=True)
     cum = np.cumsum(counts)
@@ -197,7 +213,7 @@ def disk_mask(target):
     mask = (x * x + y * y) <= vals[k]
     rows = np.flatnonzero(mask.any(axis=1))
     cols = np.flatnonzero(mask.any(axis=0))
-    mask = mask[rows[0] - 1:rows[-1] + 2, cols[0] - 1:cols[-1] + 2]  # one background pixel border
+    mask = mask[rows[0] - 1 : rows[-1] + 2, cols[0] - 1 : cols[-1] + 2]  # one background pixel border
     return mask, math.sqrt(vals[k])
 
 
@@ -220,8 +236,7 @@ def ref_delaunay_graph(points):
     e = np.unique(np.sort(e, axis=1), axis=0)
     w = np.linalg.norm(points[e[:, 0]] - points[e[:, 1]], axis=1)
     n = len(points)
-    return sp.csr_array((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])),
-                        shape=(n, n))
+    return sp.csr_array((np.r_[w, w], (np.r_[e[:, 0], e[:, 1]], np.r_[e[:, 1], e[:, 0]])), shape=(n, n))
 
 
 @dataclass
@@ -388,8 +403,10 @@ def calls_for(lib, centrality, cen, n):
     if lib == "networkit":
         return {
             "betweenness": (lambda G: nk.centrality.Betweenness(G, normalized=False).run().scores(), l2a),
-            "closeness": (lambda G: nk.centrality.Closeness(
-                G, False, nk.centrality.ClosenessVariant.STANDARD).run().scores(), l2a),
+            "closeness": (
+                lambda G: nk.centrality.Closeness(G, False, nk.centrality.ClosenessVariant.STANDARD).run().scores(),
+                l2a,
+            ),
             "eigenvector": (lambda G: nk.centrality.EigenvectorCentrality(G).run().scores(), l2a),
             "eccentricity": (_nk_ecc, l2a),
         }[centrality]
@@ -472,8 +489,9 @@ def run_cell(lib, centrality, g, conv, cen, repeat, with_slow_nx):
     if lib == "networkx" and centrality != "eigenvector" and g.n > SLOW_NETWORKX_N and not with_slow_nx:
         return Cell("skipped", note="n > %d (pass --with-slow-networkx)" % SLOW_NETWORKX_N)
     if lib == "rustworkx" and centrality == "eccentricity" and 8 * g.n * g.n > RX_DENSE_MAX_BYTES:
-        return Cell("n/a", note="needs a dense %d x %d distance matrix (%.1f GiB)"
-                    % (g.n, g.n, 8 * g.n * g.n / 1024**3))
+        return Cell(
+            "n/a", note="needs a dense %d x %d distance matrix (%.1f GiB)" % (g.n, g.n, 8 * g.n * g.n / 1024**3)
+        )
     spec = calls_for(lib, centrality, cen, g.n)
     if spec is None:
         return Cell("n/a", note="no such function")
@@ -482,8 +500,9 @@ def run_cell(lib, centrality, g, conv, cen, repeat, with_slow_nx):
         times, result, caught = measure(fn, conv, repeat)
     except Exception as exc:
         status = "no-conv" if _is_nonconvergence(exc) else "error"
-        return Cell(status, note="%s: %s" % (type(exc).__name__, str(exc).strip().splitlines()[0]
-                                              if str(exc).strip() else ""))
+        return Cell(
+            status, note="%s: %s" % (type(exc).__name__, str(exc).strip().splitlines()[0] if str(exc).strip() else "")
+        )
     vals = to_our_convention(lib, centrality, to_array(result), g.n)
     return Cell("ok", times=times, values=vals, nan=int(np.isnan(vals).sum()), warnings=caught)
 
@@ -539,8 +558,14 @@ def machine_info(threads):
 
 def main(args):
     cen, ours_pix, ours_dela, ours_msg = _import_ours()
-    avail = {"ours": cen is not None, "networkx": nx is not None, "networkit": nk is not None,
-             "rustworkx": rx is not None, "igraph": ig is not None, "scipy": True}
+    avail = {
+        "ours": cen is not None,
+        "networkx": nx is not None,
+        "networkit": nk is not None,
+        "rustworkx": rx is not None,
+        "igraph": ig is not None,
+        "scipy": True,
+    }
     libs = [lib for lib in args.libs if avail[lib]]
     if nk is not None:
         nk.setNumberOfThreads(args.threads)
@@ -553,14 +578,15 @@ def main(args):
     print("=" * 78)
     print("centrality benchmark (unweighted / hop distances)")
     print("machine: %s, %s, os.cpu_count() = %s" % (info["platform"], info["processor"], info["cpu_count"]))
-    print("python %s | numpy %s | scipy %s | numba %s" % (info["python"], info["numpy"],
-                                                         info["scipy"], info["numba"]))
-    print("networkx %s | networkit %s | rustworkx %s | igraph %s | centrality_vision %s"
-          % (info["networkx"], info["networkit"], info["rustworkx"], info["igraph"],
-             info["centrality_vision"]))
-    print("threads: networkit %s, rustworkx RAYON_NUM_THREADS=%s, ours %s; networkx, igraph "
-          "and scipy.eigsh single-threaded" % (args.threads, os.environ.get("RAYON_NUM_THREADS"),
-                                               _our_threads()))
+    print("python %s | numpy %s | scipy %s | numba %s" % (info["python"], info["numpy"], info["scipy"], info["numba"]))
+    print(
+        "networkx %s | networkit %s | rustworkx %s | igraph %s | centrality_vision %s"
+        % (info["networkx"], info["networkit"], info["rustworkx"], info["igraph"], info["centrality_vision"])
+    )
+    print(
+        "threads: networkit %s, rustworkx RAYON_NUM_THREADS=%s, ours %s; networkx, igraph "
+        "and scipy.eigsh single-threaded" % (args.threads, os.environ.get("RAYON_NUM_THREADS"), _our_threads())
+    )
     if cen is None:
         print("ours: not available (%s)" % ours_msg)
     elif ours_msg:
@@ -568,8 +594,7 @@ def main(args):
     for lib, err in (("networkx", _nx_err), ("networkit", _nk_err), ("rustworkx", _rx_err), ("igraph", _ig_err)):
         if err and lib in args.libs:
             print("%s: not available (%s)" % (lib, err))
-    print("repeat: %d (median; a single run, marked *, when the first run takes > %g s)"
-          % (args.repeat, SINGLE_RUN_S))
+    print("repeat: %d (median; a single run, marked *, when the first run takes > %g s)" % (args.repeat, SINGLE_RUN_S))
     print(load_line("multi-threaded timings (networkit, rustworkx, ours) suffer most"))
     print("=" * 78)
 
@@ -581,8 +606,7 @@ def main(args):
         g = build_graph(name, ours_pix, ours_dela)
         dt = time.perf_counter() - t0
         graphs.append(g)
-        print("  %-14s n = %6d  edges = %7d  (%s; built by %s in %.3f s)"
-              % (g.name, g.n, g.m, g.detail, g.builder, dt))
+        print("  %-14s n = %6d  edges = %7d  (%s; built by %s in %.3f s)" % (g.name, g.n, g.m, g.detail, g.builder, dt))
 
     # conversions (not timed)
     conv = {}
@@ -614,8 +638,10 @@ def main(args):
             except Exception as exc:
                 if lib == "ours":
                     warm_msgs.append("%s: %s: %s" % (c, type(exc).__name__, exc))
-    print("\nwarm-up: every function called once on a tiny %d-node pixel disk before timing "
-          "(numba JIT compilation of ours): %.2f s" % (tiny.n, time.perf_counter() - t0))
+    print(
+        "\nwarm-up: every function called once on a tiny %d-node pixel disk before timing "
+        "(numba JIT compilation of ours): %.2f s" % (tiny.n, time.perf_counter() - t0)
+    )
     for m in warm_msgs:
         print("  ! ours warm-up failed: %s" % m)
 
@@ -635,8 +661,14 @@ def main(args):
             ref = ref_lib
             if ref is None or cells.get(ref) is None or cells[ref].status != "ok":
                 # fall back to the first library that produced values (a compiled one first)
-                ref = next((lib for lib in ("ours", "networkx", "igraph", "scipy", "rustworkx", "networkit")
-                            if lib in cells and cells[lib].status == "ok"), None)
+                ref = next(
+                    (
+                        lib
+                        for lib in ("ours", "networkx", "igraph", "scipy", "rustworkx", "networkit")
+                        if lib in cells and cells[lib].status == "ok"
+                    ),
+                    None,
+                )
             compare(cells, ref)
             results[c][g.name] = (cells, ref)
 
@@ -644,8 +676,9 @@ def main(args):
     print()
     for c in args.only:
         libs_c = [lib for lib in libs if not (lib == "scipy" and c != "eigenvector")]
-        headers = ["graph", "n", "edges"] + ["%s [s]" % lib for lib in libs_c] + [
-            "ours/fastest-compiled", "networkx/ours"]
+        headers = (
+            ["graph", "n", "edges"] + ["%s [s]" % lib for lib in libs_c] + ["ours/fastest-compiled", "networkx/ours"]
+        )
         rows, agree_rows, notes = [], [], []
         for g in graphs:
             cells, ref = results[c][g.name]
@@ -690,8 +723,7 @@ def main(args):
                     notes.append("%s/%s: warning %s" % (g.name, lib, w[:200]))
         print("### %s  (seconds, median of %d; * = single run)" % (c, args.repeat))
         print(table(headers, rows))
-        print("\nagreement with the reference (max |value - ref| after matching conventions; "
-              "nan = NaN count):")
+        print("\nagreement with the reference (max |value - ref| after matching conventions; nan = NaN count):")
         print(table(["graph", "ref"] + libs_c, agree_rows))
         for note in dict.fromkeys(notes):
             print("  note: " + note)
@@ -704,8 +736,7 @@ def main(args):
             "args": {k: v for k, v in vars(args).items()},
             "ours_available": cen is not None,
             "ours_message": ours_msg,
-            "graphs": {g.name: {"n": g.n, "edges": g.m, "builder": g.builder, "detail": g.detail}
-                       for g in graphs},
+            "graphs": {g.name: {"n": g.n, "edges": g.m, "builder": g.builder, "detail": g.detail} for g in graphs},
             "conversion_s": {lib: {g.name: conv_times[lib, g.name] for g in graphs} for lib in libs},
             "results": {},
         }
@@ -779,8 +810,10 @@ def scale_main(args):
     print("=" * 78)
     print("centrality benchmark: image scale (ours; igraph for exact betweenness)")
     info = machine_info(args.threads)
-    print("machine: %s, os.cpu_count() = %s, threads (ours) = %d; numba %s, igraph %s"
-          % (info["platform"], info["cpu_count"], args.threads, info["numba"], info["igraph"]))
+    print(
+        "machine: %s, os.cpu_count() = %s, threads (ours) = %d; numba %s, igraph %s"
+        % (info["platform"], info["cpu_count"], args.threads, info["numba"], info["igraph"])
+    )
     print(load_line("every timing is inflated; compare the ratios measured side by side"))
     print("=" * 78)
     graphs = {}
@@ -792,8 +825,10 @@ def scale_main(args):
     for name, mask in graphs.items():
         (g, _), t = _timed(pixel_graph, mask)
         built[name] = g
-        print("  %-16s n = %8d  edges = %8d  mask %dx%d  (pixel_graph, 8-neighbour, %.2f s)"
-              % (name, g.shape[0], g.nnz // 2, *mask.shape, t))
+        print(
+            "  %-16s n = %8d  edges = %8d  mask %dx%d  (pixel_graph, 8-neighbour, %.2f s)"
+            % (name, g.shape[0], g.nnz // 2, *mask.shape, t)
+        )
     tiny, _ = pixel_graph(disk_mask(30)[0])
     for f in (cen.betweenness, cen.closeness, cen.eccentricity):  # compile
         f(tiny)
@@ -843,7 +878,6 @@ def _scale_exact(args, built, cen, eps):
     print(table(["graph", "n", "edges", "ours [s]", "ours edges/s", "igraph [s]", "igraph/ours", "max |diff|"], rows))
 
 
-
 def _scale_closeness(built, cen, _kernels):
     """Weighted (1, sqrt 2) versus hop-count closeness on pixel graphs."""
     print("\n### closeness on pixel graphs: by length (1, sqrt 2) versus hop counts, same process")
@@ -857,13 +891,39 @@ def _scale_closeness(built, cen, _kernels):
         sources = np.arange(n, dtype=np.int64)
         heap, t_heap = _timed(_kernels.dijkstra_stats, prep.indptr, prep.indices, prep.data, sources)
         heap_close = prep.unpermute((n - 1) / heap[0])
-        rows.append([name, n, m, "%.2f" % t_hop, "%.2f" % t_fifo, "%.2f" % t_heap, "%.1f" % (t_fifo / t_hop),
-                     "%.1f" % (t_heap / t_fifo), "%.1e" % np.abs(fifo - heap_close).max()])
-    print(table(["graph", "n", "edges", "hops [s]", "length FIFO [s]", "length heap [s]",
-                 "FIFO/hops", "heap/FIFO", "FIFO vs heap |diff|"], rows))
-    print("  hops: bit-parallel search, 64 sources at a time; by length: one exact FIFO-queue search per "
-          "source (heap: the Dijkstra kernel it replaces, one thread)")
-
+        rows.append(
+            [
+                name,
+                n,
+                m,
+                "%.2f" % t_hop,
+                "%.2f" % t_fifo,
+                "%.2f" % t_heap,
+                "%.1f" % (t_fifo / t_hop),
+                "%.1f" % (t_heap / t_fifo),
+                "%.1e" % np.abs(fifo - heap_close).max(),
+            ]
+        )
+    print(
+        table(
+            [
+                "graph",
+                "n",
+                "edges",
+                "hops [s]",
+                "length FIFO [s]",
+                "length heap [s]",
+                "FIFO/hops",
+                "heap/FIFO",
+                "FIFO vs heap |diff|",
+            ],
+            rows,
+        )
+    )
+    print(
+        "  hops: bit-parallel search, 64 sources at a time; by length: one exact FIFO-queue search per "
+        "source (heap: the Dijkstra kernel it replaces, one thread)"
+    )
 
 
 def _scale_approx(built, cen, eps):
@@ -872,25 +932,35 @@ def _scale_approx(built, cen, eps):
     for name in ("disk-10000", "silhouette-100k", "mask-1M"):
         g = built[name]
         n, m = g.shape[0], g.nnz // 2
-        (approx, infod), t = _timed(
-            cen.betweenness, g, normalized=True, epsilon=0.01, seed=0, return_info=True
-        )
+        (approx, infod), t = _timed(cen.betweenness, g, normalized=True, epsilon=0.01, seed=0, return_info=True)
         err = "-"
         if name == "disk-10000":
             err = "%.4f" % np.abs(approx - cen.betweenness(g, normalized=True)).max()
-        rows.append([name, n, m, "%.1f" % t, infod["samples"], "%.4f" % infod["bound"], err,
-                     eps(infod["visited"] * 2 * m / n, t)])
-    print(table(["graph", "n", "edges", "seconds", "samples", "guaranteed error", "observed error",
-                 "edges/s"], rows))
-
+        rows.append(
+            [
+                name,
+                n,
+                m,
+                "%.1f" % t,
+                infod["samples"],
+                "%.4f" % infod["bound"],
+                err,
+                eps(infod["visited"] * 2 * m / n, t),
+            ]
+        )
+    print(table(["graph", "n", "edges", "seconds", "samples", "guaranteed error", "observed error", "edges/s"], rows))
 
 
 def _scale_eccentricity(built, cen):
     """One search per node versus Takes-Kosters bounds."""
     print("\n### eccentricity: all searches versus Takes-Kosters bounds (exact both)")
     rows = []
-    for name, weighted in (("disk-10000", False), ("disk-10000", True), ("silhouette-100k", False),
-                           ("silhouette-100k", True)):
+    for name, weighted in (
+        ("disk-10000", False),
+        ("disk-10000", True),
+        ("silhouette-100k", False),
+        ("silhouette-100k", True),
+    ):
         g = built[name]
         (b, ib), t_b = _timed(cen.eccentricity, g, weights=weighted, method="bounds", return_info=True)
         if name == "disk-10000" or not weighted:
@@ -900,10 +970,12 @@ def _scale_eccentricity(built, cen):
         else:
             diff, row_a = "-", ["(skipped)", g.shape[0]]
         rows.append([name, "length" if weighted else "hops", g.shape[0], *row_a, "%.2f" % t_b, ib["searches"], diff])
-    print(table(["graph", "distance", "n", "all [s]", "all searches", "bounds [s]", "bounds searches",
-                 "max |diff|"], rows))
+    print(
+        table(
+            ["graph", "distance", "n", "all [s]", "all searches", "bounds [s]", "bounds searches", "max |diff|"], rows
+        )
+    )
     print("  'all' by hops counts 64-source groups of the bit-parallel search")
-
 
 
 def _scale_eigenvector(built, cen, pixel_graph):

@@ -130,69 +130,127 @@ def _cores():
 
 
 def parse_args(argv=None):
-    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--sizes", type=int, nargs="+", default=None,
-                   help="numbers of points n (default: %s; --quick: %s)"
-                        % (" ".join(map(str, DEFAULT_SIZES)), " ".join(map(str, QUICK_SIZES))))
+    p = argparse.ArgumentParser(
+        description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    p.add_argument(
+        "--sizes",
+        type=int,
+        nargs="+",
+        default=None,
+        help="numbers of points n (default: %s; --quick: %s)"
+        % (" ".join(map(str, DEFAULT_SIZES)), " ".join(map(str, QUICK_SIZES))),
+    )
     p.add_argument("--cases", default=",".join(CASES), help="comma list of cases (default: %(default)s)")
-    p.add_argument("--only", default=",".join(LIBRARIES),
-                   help="comma list of libraries (default: %(default)s)")
-    p.add_argument("--tol", type=float, default=1e-5,
-                   help="tolerance given to every library (default: %(default)g; the criteria differ, "
-                        "see the module docstring)")
-    p.add_argument("--ours-tol", type=float, default=None,
-                   help="ours' tolerance on the relative change of L (default: --tol)")
+    p.add_argument("--only", default=",".join(LIBRARIES), help="comma list of libraries (default: %(default)s)")
+    p.add_argument(
+        "--tol",
+        type=float,
+        default=1e-5,
+        help="tolerance given to every library (default: %(default)g; the criteria differ, see the module docstring)",
+    )
+    p.add_argument(
+        "--ours-tol", type=float, default=None, help="ours' tolerance on the relative change of L (default: --tol)"
+    )
     p.add_argument("--max-iter", type=int, default=150, help="iteration cap for every library (default: %(default)s)")
     p.add_argument("--beta", type=float, default=2.0, help="non-rigid kernel width (default: %(default)g)")
-    p.add_argument("--lam", type=float, default=2.0,
-                   help="non-rigid regularisation (pycpd/cycpd alpha; default: %(default)g)")
-    p.add_argument("--low-rank", default="auto",
-                   help="ours' NonRigidCPD low_rank: auto, none (exact) or a number of eigenpairs "
-                        "(default: %(default)s)")
-    p.add_argument("--cycpd-num-eig", type=int, default=None,
-                   help="cycpd deformable num_eig (default: max(50, ceil(sqrt(n))), capped at n - 1)")
-    p.add_argument("--extent", type=float, default=3.0,
-                   help="the moving set is scaled to this extent (default: %(default)g units)")
-    p.add_argument("--shape", default="dog1",
-                   help="Kimia-99 silhouette to sample (default: %(default)s) or 'gmm' for a Gaussian mixture")
+    p.add_argument(
+        "--lam", type=float, default=2.0, help="non-rigid regularisation (pycpd/cycpd alpha; default: %(default)g)"
+    )
+    p.add_argument(
+        "--low-rank",
+        default="auto",
+        help="ours' NonRigidCPD low_rank: auto, none (exact) or a number of eigenpairs (default: %(default)s)",
+    )
+    p.add_argument(
+        "--cycpd-num-eig",
+        type=int,
+        default=None,
+        help="cycpd deformable num_eig (default: max(50, ceil(sqrt(n))), capped at n - 1)",
+    )
+    p.add_argument(
+        "--extent", type=float, default=3.0, help="the moving set is scaled to this extent (default: %(default)g units)"
+    )
+    p.add_argument(
+        "--shape",
+        default="dog1",
+        help="Kimia-99 silhouette to sample (default: %(default)s) or 'gmm' for a Gaussian mixture",
+    )
     p.add_argument("--seed", type=int, default=0, help="data seed (default: %(default)s)")
-    p.add_argument("--repeat", type=int, default=None,
-                   help="runs per measurement, median reported (default: 3 for n < %d, 1 above)" % SLOW_N)
-    p.add_argument("--quick", action="store_true",
-                   help="smoke run: sizes %s unless --sizes is given, one run, no large case"
-                        % " ".join(map(str, QUICK_SIZES)))
-    p.add_argument("--large", type=int, default=None, metavar="N",
-                   help="also run ours alone, rigid, on N points")
-    p.add_argument("--with-large", action="store_true",
-                   help="same as --large %d" % DEFAULT_LARGE)
-    p.add_argument("--large-shape", default="outline:dog1",
-                   help="data of the large case: a --shape value, or 'outline:NAME' for points along "
-                        "the outline of a Kimia-99 silhouette (default: %(default)s)")
-    p.add_argument("--threads", type=int, default=_cores(),
-                   help="threads for ours (default: all cores, %(default)s); numpy/BLAS stay at their defaults")
-    p.add_argument("--blas-threads", type=int, default=None,
-                   help="limit numpy/BLAS threads (all libraries) via threadpoolctl; default: leave "
-                        "them at their defaults")
-    p.add_argument("--max-gib", type=float, default=8.0,
-                   help="skip a run whose estimated dense arrays exceed this many GiB (default: %(default)g)")
+    p.add_argument(
+        "--repeat",
+        type=int,
+        default=None,
+        help="runs per measurement, median reported (default: 3 for n < %d, 1 above)" % SLOW_N,
+    )
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help="smoke run: sizes %s unless --sizes is given, one run, no large case" % " ".join(map(str, QUICK_SIZES)),
+    )
+    p.add_argument("--large", type=int, default=None, metavar="N", help="also run ours alone, rigid, on N points")
+    p.add_argument("--with-large", action="store_true", help="same as --large %d" % DEFAULT_LARGE)
+    p.add_argument(
+        "--large-shape",
+        default="outline:dog1",
+        help="data of the large case: a --shape value, or 'outline:NAME' for points along "
+        "the outline of a Kimia-99 silhouette (default: %(default)s)",
+    )
+    p.add_argument(
+        "--threads",
+        type=int,
+        default=_cores(),
+        help="threads for ours (default: all cores, %(default)s); numpy/BLAS stay at their defaults",
+    )
+    p.add_argument(
+        "--blas-threads",
+        type=int,
+        default=None,
+        help="limit numpy/BLAS threads (all libraries) via threadpoolctl; default: leave them at their defaults",
+    )
+    p.add_argument(
+        "--max-gib",
+        type=float,
+        default=8.0,
+        help="skip a run whose estimated dense arrays exceed this many GiB (default: %(default)g)",
+    )
     p.add_argument("--json", metavar="PATH", default=None, help="also write all raw rows as JSON")
-    p.add_argument("--estep", action="store_true",
-                   help="instead: time each E-step path and 'auto' (the planner) against sigma2 (--estep-sizes)")
+    p.add_argument(
+        "--estep",
+        action="store_true",
+        help="instead: time each E-step path and 'auto' (the planner) against sigma2 (--estep-sizes)",
+    )
     p.add_argument("--estep-sizes", type=int, nargs="+", default=[3000, 20000])
-    p.add_argument("--million", action="store_true",
-                   help="instead: ours (MultiscaleCPD) at --million-n points, 2D and 3D, rigid/affine/non-rigid, "
-                        "plus plain and multiscale at --compare-n against each other")
+    p.add_argument(
+        "--million",
+        action="store_true",
+        help="instead: ours (MultiscaleCPD) at --million-n points, 2D and 3D, rigid/affine/non-rigid, "
+        "plus plain and multiscale at --compare-n against each other",
+    )
     p.add_argument("--million-n", type=int, default=1_000_000)
     p.add_argument("--compare-n", type=int, default=100_000)
     p.add_argument("--compare-nonrigid-n", type=int, default=20_000)
-    p.add_argument("--million-sizes", type=int, nargs="+", default=[20_000, 100_000],
-                   help="MultiscaleCPD levels (default: %(default)s)")
+    p.add_argument(
+        "--million-sizes",
+        type=int,
+        nargs="+",
+        default=[20_000, 100_000],
+        help="MultiscaleCPD levels (default: %(default)s)",
+    )
     p.add_argument("--repeat-estep", type=int, default=5)
-    p.add_argument("--figure", metavar="PATH", default=None,
-                   help="log-log figure of seconds against n per library (from this run's rows, or --from-json)")
-    p.add_argument("--from-json", metavar="PATH", nargs="+", default=None,
-                   help="with --figure: read rows from these JSON files instead of running")
+    p.add_argument(
+        "--figure",
+        metavar="PATH",
+        default=None,
+        help="log-log figure of seconds against n per library (from this run's rows, or --from-json)",
+    )
+    p.add_argument(
+        "--from-json",
+        metavar="PATH",
+        nargs="+",
+        default=None,
+        help="with --figure: read rows from these JSON files instead of running",
+    )
     args = p.parse_args(argv)
 
     def split(s, allowed, what):
@@ -248,7 +306,7 @@ def _try_import(name):
             import importlib
 
             return importlib.import_module(name), None
-    except Exception as exc:  # noqa: BLE001 - any failure means "not installed"
+    except Exception as exc:
         return None, "%s: %s" % (type(exc).__name__, exc)
 
 
@@ -270,10 +328,10 @@ def _import_ours():
             sys.path.insert(0, str(src))
             try:
                 return attempt(), None
-            except Exception as exc2:  # noqa: BLE001
+            except Exception as exc2:
                 return None, "%s: %s" % (type(exc2).__name__, exc2)
         return None, "%s: %s" % (type(exc).__name__, exc)
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         return None, "%s: %s" % (type(exc).__name__, exc)
 
 
@@ -283,10 +341,22 @@ cycpd, _cycpd_err = _try_import("cycpd")
 rustcpd, _rustcpd_err = _try_import("rustcpd")
 biocpd, _biocpd_err = _try_import("biocpd")
 probreg_cpd, _probreg_err = _try_import("probreg.cpd")
-IMPORT_ERRORS = {"ours": _ours_err, "pycpd": _pycpd_err, "cycpd": _cycpd_err, "rustcpd": _rustcpd_err,
-                 "biocpd": _biocpd_err, "probreg": _probreg_err}
-AVAILABLE = {"ours": OURS is not None, "pycpd": pycpd is not None, "cycpd": cycpd is not None,
-             "rustcpd": rustcpd is not None, "biocpd": biocpd is not None, "probreg": probreg_cpd is not None}
+IMPORT_ERRORS = {
+    "ours": _ours_err,
+    "pycpd": _pycpd_err,
+    "cycpd": _cycpd_err,
+    "rustcpd": _rustcpd_err,
+    "biocpd": _biocpd_err,
+    "probreg": _probreg_err,
+}
+AVAILABLE = {
+    "ours": OURS is not None,
+    "pycpd": pycpd is not None,
+    "cycpd": cycpd is not None,
+    "rustcpd": rustcpd is not None,
+    "biocpd": biocpd is not None,
+    "probreg": probreg_cpd is not None,
+}
 
 
 # --------------------------------------------------------------------------- data
@@ -342,9 +412,11 @@ def base_shape(n, seed, shape, extent):
             pix = _kimia_pixels(shape)
             pts = pix[rng.integers(0, len(pix), n)] + rng.uniform(-0.5, 0.5, (n, 2))
             desc = "Kimia-99 '%s' (%d pixels), points uniform inside" % (shape, len(pix))
-        except Exception as exc:  # noqa: BLE001
-            print("  ! Kimia-99 shape %r unavailable (%s: %s); using a Gaussian mixture"
-                  % (shape, type(exc).__name__, exc))
+        except Exception as exc:
+            print(
+                "  ! Kimia-99 shape %r unavailable (%s: %s); using a Gaussian mixture"
+                % (shape, type(exc).__name__, exc)
+            )
             pts = None
     if pts is None:
         crng = np.random.default_rng([seed, 0])  # the mixture itself does not depend on n
@@ -373,8 +445,7 @@ def make_problem(case, n, args, shape=None):
         true = y + DEFORM * args.extent * np.column_stack([np.sin(y[:, 1]), np.sin(y[:, 0])])
     fixed = true + rng.normal(0.0, sigma, true.shape)
     fixed = fixed[rng.permutation(n)]
-    return Problem(case, n, np.ascontiguousarray(y), np.ascontiguousarray(fixed), true,
-                   args.extent, sigma, desc)
+    return Problem(case, n, np.ascontiguousarray(y), np.ascontiguousarray(fixed), true, args.extent, sigma, desc)
 
 
 # --------------------------------------------------------------------------- the calls
@@ -414,16 +485,33 @@ def make_runner(lib, case, n, args, method="auto"):
     if lib == "ours":
         _, RigidCPD, NonRigidCPD, ConvergenceWarning = OURS
         if case == "rigid":
+
             def make():
                 return RigidCPD(scale=True, w=0.0, tol=args.ours_tol, max_iter=max_iter, method=method)
+
             params = {"scale": True, "w": 0.0, "tol": args.ours_tol, "max_iter": max_iter}
         else:
+
             def make():
-                return NonRigidCPD(beta=args.beta, lam=args.lam, low_rank=args.low_rank, w=0.0,
-                                   tol=args.ours_tol, max_iter=max_iter, method=method)
-            params = {"beta": args.beta, "lam": args.lam, "low_rank": args.low_rank,
-                      "rank_used": _ours_rank(n, args) or "exact", "w": 0.0, "tol": args.ours_tol,
-                      "max_iter": max_iter}
+                return NonRigidCPD(
+                    beta=args.beta,
+                    lam=args.lam,
+                    low_rank=args.low_rank,
+                    w=0.0,
+                    tol=args.ours_tol,
+                    max_iter=max_iter,
+                    method=method,
+                )
+
+            params = {
+                "beta": args.beta,
+                "lam": args.lam,
+                "low_rank": args.low_rank,
+                "rank_used": _ours_rank(n, args) or "exact",
+                "w": 0.0,
+                "tol": args.ours_tol,
+                "max_iter": max_iter,
+            }
 
         def run(y, x):
             with warnings.catch_warnings():
@@ -436,18 +524,34 @@ def make_runner(lib, case, n, args, method="auto"):
     if lib == "rustcpd":
         k = _cycpd_num_eig(n, args)
         if case == "rigid":
+
             def call(y, x):
                 return rustcpd.register_rigid(x, y, scale=True, tolerance=tol, max_iterations=max_iter)
+
             params = {"scale": True, "tolerance": tol, "max_iterations": max_iter}
         else:
             low = None if n <= OURS_EXACT_MAX else k
 
             def call(y, x):
-                return rustcpd.register_deformable(x, y, alpha=args.lam, beta=args.beta, low_rank=low,
-                                                   low_rank_method="pivoted_cholesky", tolerance=tol,
-                                                   max_iterations=max_iter)
-            params = {"alpha": args.lam, "beta": args.beta, "low_rank": low, "low_rank_method": "pivoted_cholesky",
-                      "tolerance": tol, "max_iterations": max_iter}
+                return rustcpd.register_deformable(
+                    x,
+                    y,
+                    alpha=args.lam,
+                    beta=args.beta,
+                    low_rank=low,
+                    low_rank_method="pivoted_cholesky",
+                    tolerance=tol,
+                    max_iterations=max_iter,
+                )
+
+            params = {
+                "alpha": args.lam,
+                "beta": args.beta,
+                "low_rank": low,
+                "low_rank_method": "pivoted_cholesky",
+                "tolerance": tol,
+                "max_iterations": max_iter,
+            }
 
         def run(y, x):
             res = call(y, x)
@@ -458,15 +562,26 @@ def make_runner(lib, case, n, args, method="auto"):
     if lib == "biocpd":
         k = _cycpd_num_eig(n, args)
         if case == "rigid":
+
             def make(y, x):
                 return biocpd.RigidRegistration(X=x, Y=y, scale=True, tolerance=tol, max_iterations=max_iter, w=0.0)
+
             params = {"scale": True, "tolerance": tol, "max_iterations": max_iter, "use_kdtree": "default (True, k=10)"}
         else:
+
             def make(y, x):
-                return biocpd.DeformableRegistration(X=x, Y=y, alpha=args.lam, beta=args.beta, num_eig=k,
-                                                     tolerance=tol, max_iterations=max_iter, w=0.0)
-            params = {"alpha": args.lam, "beta": args.beta, "num_eig": k, "tolerance": tol,
-                      "max_iterations": max_iter, "use_kdtree": "default (True, k=10)"}
+                return biocpd.DeformableRegistration(
+                    X=x, Y=y, alpha=args.lam, beta=args.beta, num_eig=k, tolerance=tol, max_iterations=max_iter, w=0.0
+                )
+
+            params = {
+                "alpha": args.lam,
+                "beta": args.beta,
+                "num_eig": k,
+                "tolerance": tol,
+                "max_iterations": max_iter,
+                "use_kdtree": "default (True, k=10)",
+            }
 
         def run(y, x):
             reg = make(y, x)
@@ -488,15 +603,26 @@ def make_runner(lib, case, n, args, method="auto"):
 
     if lib == "pycpd":
         if case == "rigid":
+
             def make(y, x):
                 return pycpd.RigidRegistration(X=x, Y=y, tolerance=tol, max_iterations=max_iter, w=0)
+
             params = {"tolerance": tol, "max_iterations": max_iter, "w": 0}
         else:
+
             def make(y, x):
-                return pycpd.DeformableRegistration(X=x, Y=y, alpha=args.lam, beta=args.beta, tolerance=tol,
-                                                    max_iterations=max_iter, w=0)
-            params = {"alpha": args.lam, "beta": args.beta, "tolerance": tol, "max_iterations": max_iter,
-                      "w": 0, "exact": True}
+                return pycpd.DeformableRegistration(
+                    X=x, Y=y, alpha=args.lam, beta=args.beta, tolerance=tol, max_iterations=max_iter, w=0
+                )
+
+            params = {
+                "alpha": args.lam,
+                "beta": args.beta,
+                "tolerance": tol,
+                "max_iterations": max_iter,
+                "w": 0,
+                "exact": True,
+            }
 
         def run(y, x):
             reg = make(y, x)
@@ -508,8 +634,7 @@ def make_runner(lib, case, n, args, method="auto"):
 
     if lib == "cycpd":
         global _CYCPD_RIGID
-        common = {"tolerance": tol, "max_iterations": max_iter, "w": 0.0, "verbose": False,
-                  "print_reg_params": False}
+        common = {"tolerance": tol, "max_iterations": max_iter, "w": 0.0, "verbose": False, "print_reg_params": False}
         if case == "rigid":
             if _CYCPD_RIGID is None:
                 _CYCPD_RIGID = _cycpd_rigid_class()
@@ -517,13 +642,16 @@ def make_runner(lib, case, n, args, method="auto"):
 
             def make(y, x):
                 return cls(X=x, Y=y, scale=True, **common)
+
             params = dict(common, scale=True)
         else:
             k = _cycpd_num_eig(n, args)
 
             def make(y, x):
-                return cycpd.deformable_registration(X=x, Y=y, alpha=args.lam, beta=args.beta,
-                                                     low_rank=True, num_eig=k, **common)
+                return cycpd.deformable_registration(
+                    X=x, Y=y, alpha=args.lam, beta=args.beta, low_rank=True, num_eig=k, **common
+                )
+
             params = dict(common, alpha=args.lam, beta=args.beta, low_rank=True, num_eig=k)
 
         def run(y, x):
@@ -590,8 +718,13 @@ def measure(lib, problem, args, repeat):
         return Row(problem.case, problem.n, lib, "not installed", note=IMPORT_ERRORS[lib] or "")
     gib = estimated_gib(lib, problem.case, problem.n, args)
     if gib > args.max_gib:
-        return Row(problem.case, problem.n, lib, "skipped",
-                   note="needs ~%.1f GiB of dense arrays (> --max-gib %g)" % (gib, args.max_gib))
+        return Row(
+            problem.case,
+            problem.n,
+            lib,
+            "skipped",
+            note="needs ~%.1f GiB of dense arrays (> --max-gib %g)" % (gib, args.max_gib),
+        )
     run, params = make_runner(lib, problem.case, problem.n, args)
     row = Row(problem.case, problem.n, lib, "ok", params=params)
     caught = []
@@ -605,10 +738,9 @@ def measure(lib, problem, args, repeat):
             caught.extend("%s: %s" % (x.category.__name__, x.message) for x in w)
             if i == 0 and row.times[0] > SINGLE_RUN_S:
                 break
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
-        return Row(problem.case, problem.n, lib, "error", note="%s: %s" % (type(exc).__name__, msg),
-                   params=params)
+        return Row(problem.case, problem.n, lib, "error", note="%s: %s" % (type(exc).__name__, msg), params=params)
     row.n_iter, row.stop = n_iter, stop
     row.error = rms(problem.true_moving, np.asarray(ty, dtype=np.float64))
     row.warnings = sorted(set(caught))
@@ -632,7 +764,7 @@ def warm_up(libs, cases, args):
                     with warnings.catch_warnings():
                         warnings.simplefilter("ignore")
                         run(prob.moving, prob.fixed)
-                except Exception as exc:  # noqa: BLE001
+                except Exception as exc:
                     msgs.append("%s %s (%s): %s: %s" % (lib, case, method, type(exc).__name__, exc))
     return time.perf_counter() - t0, msgs
 
@@ -647,11 +779,13 @@ def _blas_info():
         pools = threadpool_info()
         if not pools:
             return "no BLAS/OpenMP pool found"
-        return ", ".join("%s %s: %s threads" % (p.get("internal_api"), p.get("user_api"), p.get("num_threads"))
-                         for p in pools)
-    except Exception:  # noqa: BLE001
-        env = {k: os.environ[k] for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
-               if k in os.environ}
+        return ", ".join(
+            "%s %s: %s threads" % (p.get("internal_api"), p.get("user_api"), p.get("num_threads")) for p in pools
+        )
+    except Exception:
+        env = {
+            k: os.environ[k] for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS") if k in os.environ
+        }
         return "library defaults (threadpoolctl not installed; env %s)" % (env or "unset")
 
 
@@ -678,7 +812,7 @@ def machine_info(args):
                 from importlib.metadata import version
 
                 v = version(dist)
-            except Exception:  # noqa: BLE001
+            except Exception:
                 v = "?"
         return v
 
@@ -686,7 +820,7 @@ def machine_info(args):
         import numba
 
         numba_v = numba.__version__
-    except Exception:  # noqa: BLE001
+    except Exception:
         numba_v = "not installed"
     return {
         "python": platform.python_version(),
@@ -717,43 +851,55 @@ def _limit_blas(n):
         from threadpoolctl import threadpool_limits
 
         return threadpool_limits(limits=n, user_api="blas"), None
-    except Exception as exc:  # noqa: BLE001
+    except Exception as exc:
         return None, "%s: %s" % (type(exc).__name__, exc)
 
 
 def main(args):
     if OURS is not None:
         OURS[0].set_num_threads(args.threads)
-    blas_limit, blas_err = _limit_blas(args.blas_threads)  # noqa: F841 - held until exit
+    blas_limit, blas_err = _limit_blas(args.blas_threads)
     info = machine_info(args)
     libs = list(args.only)
 
     print("=" * 78)
     print("CPD registration benchmark: ours vs pycpd vs cycpd (2D, w = 0)")
-    print("machine: %s, %s, os.cpu_count() = %s (%s usable), memory %s"
-          % (info["platform"], info["processor"], info["cpu_count"], info["cores_available"], info["memory"]))
-    print("python %s | numpy %s | scipy %s | numba %s" % (info["python"], info["numpy"], info["scipy"],
-                                                         info["numba"]))
-    print("centrality_vision %s | pycpd %s | cycpd %s | rustcpd %s | biocpd %s | probreg %s"
-          % (info["centrality_vision"], info["pycpd"], info["cycpd"], info["rustcpd"], info["biocpd"],
-             info["probreg"]))
-    print("threads: ours %s (centrality_vision.set_num_threads); numpy/BLAS (pycpd, cycpd and our "
-          "non-rigid M-step) %s: %s" % (info["ours_threads"],
-                                        "at their defaults" if args.blas_threads is None
-                                        else "limited by --blas-threads %d" % args.blas_threads,
-                                        info["blas"]))
+    print(
+        "machine: %s, %s, os.cpu_count() = %s (%s usable), memory %s"
+        % (info["platform"], info["processor"], info["cpu_count"], info["cores_available"], info["memory"])
+    )
+    print("python %s | numpy %s | scipy %s | numba %s" % (info["python"], info["numpy"], info["scipy"], info["numba"]))
+    print(
+        "centrality_vision %s | pycpd %s | cycpd %s | rustcpd %s | biocpd %s | probreg %s"
+        % (info["centrality_vision"], info["pycpd"], info["cycpd"], info["rustcpd"], info["biocpd"], info["probreg"])
+    )
+    print(
+        "threads: ours %s (centrality_vision.set_num_threads); numpy/BLAS (pycpd, cycpd and our "
+        "non-rigid M-step) %s: %s"
+        % (
+            info["ours_threads"],
+            "at their defaults" if args.blas_threads is None else "limited by --blas-threads %d" % args.blas_threads,
+            info["blas"],
+        )
+    )
     if blas_err:
         print("  ! --blas-threads ignored: threadpoolctl unavailable (%s)" % blas_err)
     for lib in libs:
         if not AVAILABLE[lib]:
             print("%s: not installed (%s)" % (lib, IMPORT_ERRORS[lib]))
-    print("tol %g (ours %g, relative change of L; pycpd: absolute change of Q (rigid) / sigma2 "
-          "(deformable); cycpd: absolute change of L) | max_iter %d" % (args.tol, args.ours_tol, args.max_iter))
-    print("non-rigid: beta %g, lam (alpha) %g; ours low_rank=%r (exact up to %d points), pycpd exact, "
-          "cycpd low-rank num_eig=%s" % (args.beta, args.lam, args.low_rank, OURS_EXACT_MAX,
-                                         args.cycpd_num_eig or "max(50, ceil(sqrt(n)))"))
-    print("repeat: %s (median; a single run, marked *, when the first run takes > %g s)"
-          % (args.repeat if args.repeat is not None else "3 for n < %d, 1 above" % SLOW_N, SINGLE_RUN_S))
+    print(
+        "tol %g (ours %g, relative change of L; pycpd: absolute change of Q (rigid) / sigma2 "
+        "(deformable); cycpd: absolute change of L) | max_iter %d" % (args.tol, args.ours_tol, args.max_iter)
+    )
+    print(
+        "non-rigid: beta %g, lam (alpha) %g; ours low_rank=%r (exact up to %d points), pycpd exact, "
+        "cycpd low-rank num_eig=%s"
+        % (args.beta, args.lam, args.low_rank, OURS_EXACT_MAX, args.cycpd_num_eig or "max(50, ceil(sqrt(n)))")
+    )
+    print(
+        "repeat: %s (median; a single run, marked *, when the first run takes > %g s)"
+        % (args.repeat if args.repeat is not None else "3 for n < %d, 1 above" % SLOW_N, SINGLE_RUN_S)
+    )
     print(load_line())
     print("=" * 78)
 
@@ -763,20 +909,23 @@ def main(args):
     for case in args.cases:
         for n in args.sizes:
             problems.append(make_problem(case, n, args))
-    if (args.large is not None and args.large not in args.sizes and "rigid" in args.cases
-            and "ours" in libs):
+    if args.large is not None and args.large not in args.sizes and "rigid" in args.cases and "ours" in libs:
         problems.append(make_problem("rigid", args.large, args, shape=args.large_shape))
     for pr in problems:
-        what = ("s=%g, %g deg, t=%s" % (SCALE, ANGLE_DEG, SHIFT) if pr.case == "rigid"
-                else "%g*extent*(sin y2, sin y1)" % DEFORM)
-        print("  %-8s n = %7d  %s; extent %.3g, noise sigma %.3g; %s; initial RMS |true - Y| = %.4f"
-              % (pr.case, pr.n, pr.shape, pr.extent, pr.noise_sigma, what, pr.initial_rms))
+        what = (
+            "s=%g, %g deg, t=%s" % (SCALE, ANGLE_DEG, SHIFT)
+            if pr.case == "rigid"
+            else "%g*extent*(sin y2, sin y1)" % DEFORM
+        )
+        print(
+            "  %-8s n = %7d  %s; extent %.3g, noise sigma %.3g; %s; initial RMS |true - Y| = %.4f"
+            % (pr.case, pr.n, pr.shape, pr.extent, pr.noise_sigma, what, pr.initial_rms)
+        )
 
     # warm-up
     avail = [lib for lib in libs if AVAILABLE[lib]]
     dt, msgs = warm_up(avail, args.cases, args)
-    print("\nwarm-up: every call run once on 60 points before timing (numba compiles ours' kernels): "
-          "%.2f s" % dt)
+    print("\nwarm-up: every call run once on 60 points before timing (numba compiles ours' kernels): %.2f s" % dt)
     for m in msgs:
         print("  ! warm-up failed: %s" % m)
 
@@ -785,17 +934,23 @@ def main(args):
     for pr in problems:
         large = pr.n == args.large and pr.n not in args.sizes
         repeat = 1 if large else (args.repeat or (1 if pr.n >= SLOW_N else 3))
-        for lib in (["ours"] if large else libs):
+        for lib in ["ours"] if large else libs:
             print("  running %-8s n = %7d  %-6s" % (pr.case, pr.n, lib), end="", flush=True)
             row = measure(lib, pr, args, repeat)
             rows.append(row)
-            print(" %s" % (fmt_s(row) + (" s, %d iterations, RMS %.2e" % (row.n_iter, row.error)
-                                         if row.status == "ok" else "")), flush=True)
+            print(
+                " %s"
+                % (
+                    fmt_s(row) + (" s, %d iterations, RMS %.2e" % (row.n_iter, row.error) if row.status == "ok" else "")
+                ),
+                flush=True,
+            )
 
     # ratios
     for row in rows:
-        ours = next((r for r in rows if r.case == row.case and r.n == row.n and r.library == "ours"
-                     and r.status == "ok"), None)
+        ours = next(
+            (r for r in rows if r.case == row.case and r.n == row.n and r.library == "ours" and r.status == "ok"), None
+        )
         if row.status == "ok" and ours is not None:
             row.ratio = row.median / ours.median
 
@@ -809,20 +964,33 @@ def main(args):
         notes = []
         for r in crows:
             ok = r.status == "ok"
-            body.append([
-                r.n, r.library, fmt_s(r), len(r.times) if ok else "-",
-                r.n_iter if ok else "-", r.stop if ok else "-",
-                "%.2e" % r.error if ok else "-",
-                "%.2f" % r.ratio if r.ratio is not None else "-",
-            ])
+            body.append(
+                [
+                    r.n,
+                    r.library,
+                    fmt_s(r),
+                    len(r.times) if ok else "-",
+                    r.n_iter if ok else "-",
+                    r.stop if ok else "-",
+                    "%.2e" % r.error if ok else "-",
+                    "%.2f" % r.ratio if r.ratio is not None else "-",
+                ]
+            )
             if r.note and r.status != "not installed":
                 notes.append("n=%d %s: %s: %s" % (r.n, r.library, r.status, r.note))
             for w in r.warnings:
                 notes.append("n=%d %s: warning %s" % (r.n, r.library, w[:200]))
-        print("### %s  (seconds: median of the runs, * = single run; RMS = |true - T(Y)|_F / sqrt(n); "
-              "ratio = library s / ours s)" % case)
-        print(table(["n", "library", "seconds", "runs", "iters", "stop", "RMS error", "lib/ours"], body,
-                    align=[">", "<", ">", ">", ">", "<", ">", ">"]))
+        print(
+            "### %s  (seconds: median of the runs, * = single run; RMS = |true - T(Y)|_F / sqrt(n); "
+            "ratio = library s / ours s)" % case
+        )
+        print(
+            table(
+                ["n", "library", "seconds", "runs", "iters", "stop", "RMS error", "lib/ours"],
+                body,
+                align=[">", "<", ">", ">", ">", "<", ">", ">"],
+            )
+        )
         for note in dict.fromkeys(notes):
             print("  note: " + note)
         print()
@@ -832,21 +1000,47 @@ def main(args):
         out = {
             "machine": info,
             "args": {k: v for k, v in vars(args).items()},
-            "data": [{"case": p.case, "n": p.n, "shape": p.shape, "extent": p.extent,
-                      "noise_sigma": p.noise_sigma, "initial_rms": p.initial_rms} for p in problems],
-            "rows": [{
-                "case": r.case, "n": r.n, "library": r.library, "status": r.status,
-                "median_s": r.median if r.status == "ok" else None, "times_s": r.times,
-                "n_iter": r.n_iter, "stop": r.stop, "rms_error": r.error, "ratio_to_ours": r.ratio,
-                "params": r.params, "note": r.note, "warnings": r.warnings,
-            } for r in rows],
+            "data": [
+                {
+                    "case": p.case,
+                    "n": p.n,
+                    "shape": p.shape,
+                    "extent": p.extent,
+                    "noise_sigma": p.noise_sigma,
+                    "initial_rms": p.initial_rms,
+                }
+                for p in problems
+            ],
+            "rows": [
+                {
+                    "case": r.case,
+                    "n": r.n,
+                    "library": r.library,
+                    "status": r.status,
+                    "median_s": r.median if r.status == "ok" else None,
+                    "times_s": r.times,
+                    "n_iter": r.n_iter,
+                    "stop": r.stop,
+                    "rms_error": r.error,
+                    "ratio_to_ours": r.ratio,
+                    "params": r.params,
+                    "note": r.note,
+                    "warnings": r.warnings,
+                }
+                for r in rows
+            ],
         }
         Path(args.json).parent.mkdir(parents=True, exist_ok=True)
         Path(args.json).write_text(json.dumps(out, indent=2, default=str))
         print("results written to %s" % args.json)
     if args.figure:
-        figure([{"case": r.case, "n": r.n, "library": r.library, "median_s": r.median if r.status == "ok" else None}
-                for r in rows], args.figure)
+        figure(
+            [
+                {"case": r.case, "n": r.n, "library": r.library, "median_s": r.median if r.status == "ok" else None}
+                for r in rows
+            ],
+            args.figure,
+        )
     return 0
 
 
@@ -867,8 +1061,10 @@ def run_estep(args):
     from centrality_vision.registration._estep import EStepPlanner, _e_step
 
     print("E-step paths against sigma2: uniform 2D points in the unit square, moving = fixed + N(0, 1e-3^2),")
-    print("w = 0; milliseconds, median of %d calls; auto = one EStepPlanner probed once at that sigma2, then"
-          " timed like the others (its probe cost is amortised over the iterations of a fit)" % args.repeat_estep)
+    print(
+        "w = 0; milliseconds, median of %d calls; auto = one EStepPlanner probed once at that sigma2, then"
+        " timed like the others (its probe cost is amortised over the iterations of a fit)" % args.repeat_estep
+    )
     print(load_line())
     rows = []
     for n in args.estep_sizes:
@@ -877,24 +1073,47 @@ def run_estep(args):
         moving = fixed[rng.permutation(n)] + rng.normal(0, 1e-3, (n, 2))
         _e_step(moving[:200], fixed[:200], 0.01, 0.0, method="truncated")
         _e_step(moving[:200], fixed[:200], 0.01, 0.0, method="fgt")
-        for sigma2 in [10.0 ** -k for k in range(0, 13)]:
+        for sigma2 in [10.0**-k for k in range(0, 13)]:
             ms = {}
             for method in ("dense", "truncated", "fgt"):
                 try:
-                    ms[method] = 1e3 * _median_time(lambda: _e_step(moving, fixed, sigma2, 0.0, method=method),
-                                                    args.repeat_estep)
+                    ms[method] = 1e3 * _median_time(
+                        lambda method=method: _e_step(moving, fixed, sigma2, 0.0, method=method),  # noqa: B023 (called at once)
+                        args.repeat_estep,
+                    )
                 except MemoryError:
                     ms[method] = math.inf
             planner = EStepPlanner()
             planner(moving, fixed, sigma2, 0.0)
-            ms["auto"] = 1e3 * _median_time(lambda: planner(moving, fixed, sigma2, 0.0), args.repeat_estep)
+            ms["auto"] = 1e3 * _median_time(lambda: planner(moving, fixed, sigma2, 0.0), args.repeat_estep)  # noqa: B023
             fastest = min(ms[m] for m in ("dense", "truncated", "fgt"))
-            rows.append({"n": n, "sigma2": sigma2, **ms, "winner": planner.winner, "auto_over_fastest": ms["auto"] / fastest})
-            print("  n=%d sigma2=%.0e  %s  auto picked %s: %.2fx the fastest" % (
-                n, sigma2, "  ".join("%s %.1f" % (m, ms[m]) for m in ("dense", "truncated", "fgt", "auto")),
-                planner.winner, ms["auto"] / fastest), flush=True)
-    body = [[r["n"], "%.0e" % r["sigma2"], "%.1f" % r["dense"], "%.1f" % r["truncated"], "%.1f" % r["fgt"],
-             "%.1f" % r["auto"], r["winner"], "%.2f" % r["auto_over_fastest"]] for r in rows]
+            rows.append(
+                {"n": n, "sigma2": sigma2, **ms, "winner": planner.winner, "auto_over_fastest": ms["auto"] / fastest}
+            )
+            print(
+                "  n=%d sigma2=%.0e  %s  auto picked %s: %.2fx the fastest"
+                % (
+                    n,
+                    sigma2,
+                    "  ".join("%s %.1f" % (m, ms[m]) for m in ("dense", "truncated", "fgt", "auto")),
+                    planner.winner,
+                    ms["auto"] / fastest,
+                ),
+                flush=True,
+            )
+    body = [
+        [
+            r["n"],
+            "%.0e" % r["sigma2"],
+            "%.1f" % r["dense"],
+            "%.1f" % r["truncated"],
+            "%.1f" % r["fgt"],
+            "%.1f" % r["auto"],
+            r["winner"],
+            "%.2f" % r["auto_over_fastest"],
+        ]
+        for r in rows
+    ]
     print()
     print(table(["n", "sigma2", "dense ms", "truncated ms", "fgt ms", "auto ms", "auto took", "auto/fastest"], body))
     print("worst auto/fastest: %.2f" % max(r["auto_over_fastest"] for r in rows))
@@ -956,14 +1175,35 @@ def run_million(args):
         tracemalloc.stop()
         err = rms(true, est.moving_transformed_)
         levels = getattr(est, "levels_", None)
-        row = {"label": label, "n": n, "dim": dim, "case": case, "seconds": sec, "rms": err,
-               "traced_peak_mib": peak / 2**20, "maxrss_mib": _peak_mib(),
-               "levels": levels, "n_iter": getattr(est, "n_iter_", None), "moving_transformed": est.moving_transformed_}
+        row = {
+            "label": label,
+            "n": n,
+            "dim": dim,
+            "case": case,
+            "seconds": sec,
+            "rms": err,
+            "traced_peak_mib": peak / 2**20,
+            "maxrss_mib": _peak_mib(),
+            "levels": levels,
+            "n_iter": getattr(est, "n_iter_", None),
+            "moving_transformed": est.moving_transformed_,
+        }
         rows.append(row)
-        print("  %-34s n=%8d D=%d  %7.2f s  RMS %.3e  traced peak %7.1f MiB  (levels: %s)" % (
-            label, n, dim, sec, err, row["traced_peak_mib"],
-            ", ".join("%d pts %d it %.1fs" % (lv["n_moving"], lv["n_iter"], lv["seconds"]) for lv in levels)
-            if levels else "full, %s iterations" % row["n_iter"]), flush=True)
+        print(
+            "  %-34s n=%8d D=%d  %7.2f s  RMS %.3e  traced peak %7.1f MiB  (levels: %s)"
+            % (
+                label,
+                n,
+                dim,
+                sec,
+                err,
+                row["traced_peak_mib"],
+                ", ".join("%d pts %d it %.1fs" % (lv["n_moving"], lv["n_iter"], lv["seconds"]) for lv in levels)
+                if levels
+                else "full, %s iterations" % row["n_iter"],
+            ),
+            flush=True,
+        )
         return row
 
     tol = args.ours_tol
@@ -972,20 +1212,39 @@ def run_million(args):
     # full resolution against coarse-to-fine where a full run fits
     full = one("RigidCPD full resolution", m, 2, "rigid", lambda: RigidCPD(tol=tol, max_iter=args.max_iter))
     ms = one("MultiscaleCPD(RigidCPD)", m, 2, "rigid", lambda: MultiscaleCPD(RigidCPD(tol=tol), sizes=sizes))
-    print("    multiscale vs full at n=%d: max |difference| of T(Y) %.3e" % (
-        m, np.abs(full["moving_transformed"] - ms["moving_transformed"]).max()))
-    nfull = one("NonRigidCPD full resolution", args.compare_nonrigid_n, 2, "nonrigid",
-                lambda: NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol, max_iter=args.max_iter))
-    nms = one("MultiscaleCPD(NonRigidCPD)", args.compare_nonrigid_n, 2, "nonrigid",
-              lambda: MultiscaleCPD(NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol), sizes=sizes))
-    print("    multiscale vs full at n=%d: max |difference| of T(Y) %.3e" % (
-        args.compare_nonrigid_n, np.abs(nfull["moving_transformed"] - nms["moving_transformed"]).max()))
+    print(
+        "    multiscale vs full at n=%d: max |difference| of T(Y) %.3e"
+        % (m, np.abs(full["moving_transformed"] - ms["moving_transformed"]).max())
+    )
+    nfull = one(
+        "NonRigidCPD full resolution",
+        args.compare_nonrigid_n,
+        2,
+        "nonrigid",
+        lambda: NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol, max_iter=args.max_iter),
+    )
+    nms = one(
+        "MultiscaleCPD(NonRigidCPD)",
+        args.compare_nonrigid_n,
+        2,
+        "nonrigid",
+        lambda: MultiscaleCPD(NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol), sizes=sizes),
+    )
+    print(
+        "    multiscale vs full at n=%d: max |difference| of T(Y) %.3e"
+        % (args.compare_nonrigid_n, np.abs(nfull["moving_transformed"] - nms["moving_transformed"]).max())
+    )
     big = args.million_n
     for dim in (2, 3):
         one("MultiscaleCPD(RigidCPD)", big, dim, "rigid", lambda: MultiscaleCPD(RigidCPD(tol=tol), sizes=sizes))
         one("MultiscaleCPD(AffineCPD)", big, dim, "affine", lambda: MultiscaleCPD(AffineCPD(tol=tol), sizes=sizes))
-    one("MultiscaleCPD(NonRigidCPD)", big, 2, "nonrigid",
-        lambda: MultiscaleCPD(NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol), sizes=sizes))
+    one(
+        "MultiscaleCPD(NonRigidCPD)",
+        big,
+        2,
+        "nonrigid",
+        lambda: MultiscaleCPD(NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol), sizes=sizes),
+    )
     print(load_line())
     for r in rows:
         r.pop("moving_transformed")
@@ -1007,8 +1266,9 @@ def figure(rows, path):
     for ax, case in zip(axes[0], cases):
         libs = sorted({r["library"] for r in rows if r["case"] == case})
         for lib in libs:
-            pts = sorted((r["n"], r["median_s"]) for r in rows
-                         if r["case"] == case and r["library"] == lib and r.get("median_s"))
+            pts = sorted(
+                (r["n"], r["median_s"]) for r in rows if r["case"] == case and r["library"] == lib and r.get("median_s")
+            )
             if pts:
                 ax.loglog(*zip(*pts), "o-", label=lib, color=colours[lib], lw=2.2 if lib.startswith("ours") else 1.2)
         ax.set_title(case)
@@ -1030,7 +1290,7 @@ def entry(args):
         figure(rows, args.figure or "results/benchmarks/registration-scaling.png")
         return 0
     if args.estep or args.million:
-        blas_limit, _ = _limit_blas(args.blas_threads)  # noqa: F841 - held until exit
+        blas_limit, _ = _limit_blas(args.blas_threads)
         out = {"machine": machine_info(args), "args": vars(args)}
         if args.estep:
             out["estep"] = run_estep(args)
@@ -1049,6 +1309,6 @@ if __name__ == "__main__":
         sys.exit(entry(parse_args()))
     except KeyboardInterrupt:
         sys.exit(130)
-    except Exception:  # noqa: BLE001
+    except Exception:
         traceback.print_exc()
         sys.exit(1)

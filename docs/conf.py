@@ -14,7 +14,9 @@ extensions = ["sphinx.ext.autodoc", "sphinx.ext.mathjax", "sphinx.ext.viewcode",
 numpydoc_show_class_members = False
 numpydoc_class_members_toctree = False
 # scikit-learn generates set_*_request methods on every estimator: they are not ours to document.
-_SKLEARN_REQUESTS = ",".join(f"set_{m}_request" for m in ("fit", "transform", "predict", "score", "partial_fit", "split"))
+_SKLEARN_REQUESTS = ",".join(
+    f"set_{m}_request" for m in ("fit", "transform", "predict", "score", "partial_fit", "split")
+)
 autodoc_default_options = {"members": True, "show-inheritance": False, "exclude-members": _SKLEARN_REQUESTS}
 autodoc_member_order = "bysource"
 autodoc_typehints = "none"  # the docstrings carry the types

@@ -19,4 +19,11 @@ try:
 except PackageNotFoundError:  # pragma: no cover - running from a source tree
     __version__ = "0.0.0"
 
-__all__ = ["CentralityVisionError", "ConvergenceWarning", "InputError", "get_num_threads", "set_num_threads", "__version__"]
+__all__ = [
+    "CentralityVisionError",
+    "ConvergenceWarning",
+    "InputError",
+    "get_num_threads",
+    "set_num_threads",
+    "__version__",
+]

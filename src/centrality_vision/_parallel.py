@@ -76,7 +76,9 @@ def _bounds(n_items: int, n_chunks: int) -> list[tuple[int, int]]:
     return [(lo, hi) for lo, hi in zip(edges[:-1], edges[1:]) if hi > lo]
 
 
-def run_chunks(task, n_items: int, *, progress: bool = False, desc: str = "", weight: int = 1, total: int | None = None):
+def run_chunks(
+    task, n_items: int, *, progress: bool = False, desc: str = "", weight: int = 1, total: int | None = None
+):
     """Call ``task(lo, hi)`` on consecutive chunks of ``range(n_items)``; return the results.
 
     Results come back in chunk order as a list of ``(lo, hi, result)``. ``weight`` is the

@@ -19,7 +19,18 @@ from .exceptions import InputError
 #: ``n_dims`` for functions that accept points of any (reasonable) dimension.
 ANY_DIMS = tuple(range(1, 65))
 
-__all__ = ["ANY_DIMS", "FOREGROUNDS", "as_points", "as_graph", "as_any_graph", "GraphInput", "as_binary_image", "check_choice", "check_int", "check_float"]
+__all__ = [
+    "ANY_DIMS",
+    "FOREGROUNDS",
+    "as_points",
+    "as_graph",
+    "as_any_graph",
+    "GraphInput",
+    "as_binary_image",
+    "check_choice",
+    "check_int",
+    "check_float",
+]
 
 
 def _describe(value) -> str:
@@ -50,7 +61,9 @@ def as_points(
     try:
         arr = np.asarray(points)
     except (TypeError, ValueError) as exc:  # ragged nested lists
-        raise InputError(f"`{name}` must be an array of shape (n_points, n_dims); got {_describe(points)} ({exc}).") from None
+        raise InputError(
+            f"`{name}` must be an array of shape (n_points, n_dims); got {_describe(points)} ({exc})."
+        ) from None
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
         raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
     if np.iscomplexobj(arr):
@@ -111,11 +124,17 @@ def _edge_list_graph(n, rows, cols, lengths, directed: bool, name: str) -> spars
     try:
         lengths = np.asarray(lengths, dtype=np.float64).reshape(-1)
     except (TypeError, ValueError):
-        raise TypeError(f"`{name}` must have numeric edge attribute 'weight' (an edge length); got non-numeric values.") from None
+        raise TypeError(
+            f"`{name}` must have numeric edge attribute 'weight' (an edge length); got non-numeric values."
+        ) from None
     rows = np.asarray(rows, dtype=np.int64).reshape(-1)
     cols = np.asarray(cols, dtype=np.int64).reshape(-1)
     if not directed:
-        rows, cols, lengths = np.concatenate([rows, cols]), np.concatenate([cols, rows]), np.concatenate([lengths, lengths])
+        rows, cols, lengths = (
+            np.concatenate([rows, cols]),
+            np.concatenate([cols, rows]),
+            np.concatenate([lengths, lengths]),
+        )
     order = np.lexsort((lengths, cols, rows))  # per (row, col) the shortest first
     rows, cols, lengths = rows[order], cols[order], lengths[order]
     first = np.ones(rows.size, dtype=bool)
@@ -225,7 +244,12 @@ def _border(mask: np.ndarray) -> np.ndarray:
 
 
 def as_binary_image(
-    image, *, name: str = "image", foreground: str = "auto", threshold: float | None = None, check_inverted: bool = False
+    image,
+    *,
+    name: str = "image",
+    foreground: str = "auto",
+    threshold: float | None = None,
+    check_inverted: bool = False,
 ) -> np.ndarray:
     """Return a 2D boolean foreground mask (True = the shape) from ``image``.
 

@@ -114,8 +114,13 @@ def test_multiscale_nonrigid_composes_fields_and_the_refinement_gets_closer():
 
 @pytest.mark.parametrize(
     ("kwargs", "match"),
-    [({"sizes": (100, 50)}, "sizes"), ({"sizes": ()}, "sizes"), ({"refine_iter": 0}, "refine_iter"),
-     ({"random_state": -1}, "random_state"), ({"sizes": (1.5,)}, "sizes")],
+    [
+        ({"sizes": (100, 50)}, "sizes"),
+        ({"sizes": ()}, "sizes"),
+        ({"refine_iter": 0}, "refine_iter"),
+        ({"random_state": -1}, "random_state"),
+        ({"sizes": (1.5,)}, "sizes"),
+    ],
 )
 def test_multiscale_rejects_bad_parameters(kwargs, match):
     y = np.random.default_rng(7).random((50, 2))

@@ -197,7 +197,9 @@ def run_units(
     units = list(units)
     keys = [u.key for u in units]
     if len(set(keys)) != len(keys):
-        raise InputError(f"`units` must have unique keys; got duplicates, e.g. {next(k for k in keys if keys.count(k) > 1)!r}.")
+        raise InputError(
+            f"`units` must have unique keys; got duplicates, e.g. {next(k for k in keys if keys.count(k) > 1)!r}."
+        )
     path = Path(path)
     ids = {u.key: unit_id(u) for u in units}
     stored = load_results(path)

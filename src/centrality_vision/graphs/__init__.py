@@ -5,10 +5,10 @@ stored values are Euclidean edge lengths; row ``i`` is node ``i`` (point ``i``, 
 ``i``-th foreground pixel for pixel graphs).
 """
 
-from ._pixel import pixel_coordinates, pixel_graph, salt_noise
-from ._pointsets import complete_graph, delaunay_graph, emst_graph, gabriel_graph, knn_graph
 from ._convert import to_networkx
 from ._entropy import MSTMEResult, MWMEResult, mstme_graph, mwme_degrees, mwme_graph, nhdd_graph, nhdd_joining
+from ._pixel import pixel_coordinates, pixel_graph, salt_noise
+from ._pointsets import complete_graph, delaunay_graph, emst_graph, gabriel_graph, knn_graph
 
 __all__ = [
     "pixel_graph",

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-
 from .._validation import ANY_DIMS, as_graph, as_points
 from ..exceptions import InputError
 

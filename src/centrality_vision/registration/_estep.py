@@ -1,12 +1,12 @@
 """The one E-step shared by every CPD variant and by GPD.
 
-``_e_step(moving_t, fixed, sigma2, w, log_prior=None)`` returns the sufficient statistics of
-the posterior matrix ``P`` (M x N) of CPD [1]_ (or of GPD's: CPD's posterior with the centrality prior added to every log-term
-before the rows are normalised) without ever
-forming it: ``P1 = P 1``, ``Pt1 = P^T 1``, ``PX = P X``, ``Np = 1^T P 1``, the negative
-log-likelihood and, for each fixed point, its most probable moving point. Everything is
-computed in log space (each row is shifted by its largest exponent before ``exp``), so a
-tiny ``sigma2`` neither underflows to 0/0 nor overflows.
+``_e_step(moving_t, fixed, sigma2, w, log_prior=None)`` returns the sufficient statistics of the
+posterior matrix ``P`` (M x N) of CPD [1]_ (or of GPD's: CPD's posterior with the centrality
+prior added to every log-term before the rows are normalised) without ever forming it:
+``P1 = P 1``, ``Pt1 = P^T 1``, ``PX = P X``, ``Np = 1^T P 1``, the negative log-likelihood and, for each
+fixed point, its most probable moving point. Everything is computed in log space (each row is
+shifted by its largest exponent before ``exp``), so a tiny ``sigma2`` neither underflows to 0/0
+nor overflows.
 
 References
 ----------
@@ -186,7 +186,7 @@ class _Grid:
         cell = max(cell, float(extent.max()) / 2**20, 1e-300)
         self.origin = lo
         self.cell = cell
-        self.dims = (np.floor(extent / cell).astype(np.int64) + 1)
+        self.dims = np.floor(extent / cell).astype(np.int64) + 1
         keys = K.grid_keys(points, lo, cell, self.dims)
         self.order = np.argsort(keys, kind="stable")
         self.keys = keys[self.order]
@@ -197,7 +197,9 @@ def _nearest(moving_t, fixed):
     """Squared distance from each fixed point to its nearest moving point, and that point."""
     from scipy.spatial import cKDTree
 
-    workers = get_num_threads() if fixed.shape[0] * max(1, int(math.log2(max(moving_t.shape[0], 2)))) > _SERIAL_PAIRS else 1
+    workers = (
+        get_num_threads() if fixed.shape[0] * max(1, int(math.log2(max(moving_t.shape[0], 2)))) > _SERIAL_PAIRS else 1
+    )
     dist, index = cKDTree(moving_t).query(fixed, k=1, workers=workers)
     return dist * dist, index
 
@@ -236,8 +238,28 @@ def _truncated(moving_t, fixed, sigma2, inv2s2, log_c, prior, tau, grid=None, ne
         a = lo
         while a < hi:
             b = K.truncated_scores(
-                fixed, grid.points, grid.keys, grid.origin, grid.cell, grid.dims, a, hi, d2_min, extra,
-                inv2s2, log_c, lw, vy, vx, scale, inv2phi2, index, value, row_ptr, ref, best,
+                fixed,
+                grid.points,
+                grid.keys,
+                grid.origin,
+                grid.cell,
+                grid.dims,
+                a,
+                hi,
+                d2_min,
+                extra,
+                inv2s2,
+                log_c,
+                lw,
+                vy,
+                vx,
+                scale,
+                inv2phi2,
+                index,
+                value,
+                row_ptr,
+                ref,
+                best,
             )
             if b <= a:  # pragma: no cover - capacity >= M makes this impossible
                 raise RuntimeError("truncated E-step: a row did not fit its buffer")
@@ -324,8 +346,23 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
 
     def task_boxes(lo, hi):
         K.fgt_translate_evaluate(
-            targets, t_start, t_order, t_coords, box_keys, coords, coeffs, origin, side, dims,
-            1.0 / h, p, reach, trans, lo, hi, out,
+            targets,
+            t_start,
+            t_order,
+            t_coords,
+            box_keys,
+            coords,
+            coeffs,
+            origin,
+            side,
+            dims,
+            1.0 / h,
+            p,
+            reach,
+            trans,
+            lo,
+            hi,
+            out,
         )
 
     run_chunks(task_boxes, t_box_keys.size)
@@ -361,7 +398,9 @@ def _fgt(moving_t, fixed, sigma2, log_c, eps, nearest=None):
         else:  # many rows: visit only their neighbourhoods (exact to rounding as well)
             tau = 36.8 + math.log(n_moving)
             sub_nearest = (d2_nearest[rows], index[rows])
-            d_p1, d_px, d_pt1, d_log_den, d_best = _truncated(moving_t, sub, sigma2, inv2s2, log_c, None, tau, nearest=sub_nearest)
+            d_p1, d_px, d_pt1, d_log_den, d_best = _truncated(
+                moving_t, sub, sigma2, inv2s2, log_c, None, tau, nearest=sub_nearest
+            )
         p1 += d_p1
         px += d_px
         pt1[rows] = d_pt1
@@ -536,7 +575,15 @@ def _default_tau(n_moving):
 
 
 def _e_step(
-    moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None, *, method="auto", tau=None, eps=1e-8,
+    moving_t,
+    fixed,
+    sigma2,
+    w,
+    log_prior: CentralityPrior | None = None,
+    *,
+    method="auto",
+    tau=None,
+    eps=1e-8,
     planner: EStepPlanner | None = None,
 ):
     """The shared E-step; see the module docstring.

@@ -215,8 +215,9 @@ def _exp_shifted(row, a, b, shift):
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
-def dense_rows(x, yt, lo, hi, inv2s2, log_c, log_weight, v_moving, v_fixed, prior_scale, inv2phi2,
-               row, p1, pxt, pt1, log_den, best):
+def dense_rows(
+    x, yt, lo, hi, inv2s2, log_c, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, row, p1, pxt, pt1, log_den, best
+):
     """The whole E-step for fixed points ``lo <= n < hi`` against every moving point.
 
     ``yt`` is the moving set transposed (D x M), ``row`` a scratch buffer of M values;
@@ -323,11 +324,30 @@ def grid_keys(points, origin, cell, dims):
     return keys
 
 
-
 @njit(nogil=True, cache=True)
 def truncated_scores(
-    x, y_sorted, keys_sorted, origin, cell, dims, lo, hi, d2_min, extra, inv2s2, log_c,
-    log_weight, v_moving, v_fixed, prior_scale, inv2phi2, index, value, row_ptr, ref, best,
+    x,
+    y_sorted,
+    keys_sorted,
+    origin,
+    cell,
+    dims,
+    lo,
+    hi,
+    d2_min,
+    extra,
+    inv2s2,
+    log_c,
+    log_weight,
+    v_moving,
+    v_fixed,
+    prior_scale,
+    inv2phi2,
+    index,
+    value,
+    row_ptr,
+    ref,
+    best,
 ):
     """Scores of the moving points within ``d_min^2 + extra`` of each fixed point.
 
@@ -605,8 +625,23 @@ def _mode_product(tensor, matrix, axis, n_dims, p, out):
 
 @njit(nogil=True, cache=True, fastmath=_FAST)
 def fgt_translate_evaluate(
-    targets, t_start, t_order, t_coords, s_box_keys, s_coords, coeffs, origin, side, dims, inv_h, p,
-    reach, trans, lo, hi, out,
+    targets,
+    t_start,
+    t_order,
+    t_coords,
+    s_box_keys,
+    s_coords,
+    coeffs,
+    origin,
+    side,
+    dims,
+    inv_h,
+    p,
+    reach,
+    trans,
+    lo,
+    hi,
+    out,
 ):
     """For target boxes lo..hi: sum the source boxes' Hermite series as one Taylor series about
     the box centre (separable translation, D p^(D+1) per pair), then evaluate it at each target."""

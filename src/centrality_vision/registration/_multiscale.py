@@ -127,7 +127,8 @@ class MultiscaleCPD:
     >>> y = np.random.default_rng(0).random((3000, 2))
     >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
     >>> reg = MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(300, 3000)).fit(y, y @ r.T + 0.1)  # the last level: every point
-    >>> [level["n_moving"] for level in reg.levels_], bool(np.abs(reg.moving_transformed_ - (y @ r.T + 0.1)).max() < 1e-6)
+    >>> error = np.abs(reg.moving_transformed_ - (y @ r.T + 0.1)).max()
+    >>> [level["n_moving"] for level in reg.levels_], bool(error < 1e-6)
     ([300, 3000], True)
     """
 
@@ -138,8 +139,12 @@ class MultiscaleCPD:
         self.random_state = random_state
 
     def get_params(self, deep=True):
-        return {"estimator": self.estimator, "sizes": self.sizes, "refine_iter": self.refine_iter,
-                "random_state": self.random_state}
+        return {
+            "estimator": self.estimator,
+            "sizes": self.sizes,
+            "refine_iter": self.refine_iter,
+            "random_state": self.random_state,
+        }
 
     def set_params(self, **params):
         for key, value in params.items():
@@ -200,10 +205,16 @@ class MultiscaleCPD:
                 fields.append(compress_field(est.transform_))
             else:
                 transform = est.transform_
-            self.levels_.append({
-                "n_moving": sub_moving.shape[0], "n_fixed": sub_fixed.shape[0], "n_iter": int(est.n_iter_),
-                "converged": bool(est.converged_), "sigma2": sigma2, "seconds": time.perf_counter() - start,
-            })
+            self.levels_.append(
+                {
+                    "n_moving": sub_moving.shape[0],
+                    "n_fixed": sub_fixed.shape[0],
+                    "n_iter": int(est.n_iter_),
+                    "converged": bool(est.converged_),
+                    "sigma2": sigma2,
+                    "seconds": time.perf_counter() - start,
+                }
+            )
         self.transform_ = ComposedTransform(tuple(fields)) if nonrigid else transform
         self.moving_transformed_ = self.transform_(moving)
         self.sigma2_ = sigma2
@@ -216,8 +227,10 @@ class MultiscaleCPD:
         return self.transform_(as_points(points, name="points", n_dims=ANY_DIMS))
 
     def __repr__(self):
-        return (f"MultiscaleCPD({self.estimator!r}, sizes={self.sizes!r}, refine_iter={self.refine_iter!r}, "
-                f"random_state={self.random_state!r})")
+        return (
+            f"MultiscaleCPD({self.estimator!r}, sizes={self.sizes!r}, refine_iter={self.refine_iter!r}, "
+            f"random_state={self.random_state!r})"
+        )
 
 
 def _subsample(points, size, rng):

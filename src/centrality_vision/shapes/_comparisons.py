@@ -326,7 +326,9 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         from sklearn.utils.multiclass import check_classification_targets
 
         if y is None:
-            raise InputError("`y` is required: CentralityComparisonForest requires y to be passed, but the target y is None.")
+            raise InputError(
+                "`y` is required: CentralityComparisonForest requires y to be passed, but the target y is None."
+            )
         y = check_array(y, ensure_2d=False, dtype=None, input_name="y")  # NaN/inf: sklearn's message
         check_classification_targets(y)
         masks = self._masks(X)

@@ -6,8 +6,8 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .._validation import check_choice, check_int
-from ..exceptions import InputError
 from ..centrality import CENTRALITIES
+from ..exceptions import InputError
 from ._cache import SHAPE_CENTRALITIES, as_shape_images, shape_centralities
 
 __all__ = ["CentralityHistogram", "ShapeInputMixin", "resolve_centralities"]
@@ -192,7 +192,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         return self
 
     def transform(self, X) -> np.ndarray:
-        """Histogram features of the shapes in ``X``, shape (n_images, n_features_out_)."""
+        """Histogram features of the shapes in ``X``, shape (n_images, ``n_features_out_``)."""
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "centralities_")
