@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from sklearn.exceptions import NotFittedError
 
 from centrality_vision.exceptions import InputError
 from centrality_vision.registration import AffineCPD, NonRigidCPD, RigidCPD
@@ -131,5 +132,5 @@ def test_multiscale_rejects_bad_parameters(kwargs, match):
 def test_multiscale_rejects_a_non_cpd_estimator_and_unfitted_use():
     with pytest.raises(TypeError, match="estimator"):
         MultiscaleCPD(object()).fit(np.zeros((5, 2)), np.zeros((5, 2)))
-    with pytest.raises(InputError, match="not fitted"):
+    with pytest.raises(NotFittedError, match="not fitted"):  # the one not-fitted error of every estimator
         MultiscaleCPD(RigidCPD()).transform(np.zeros((2, 2)))

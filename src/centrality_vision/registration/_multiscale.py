@@ -26,6 +26,8 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from sklearn.base import BaseEstimator
+from sklearn.utils.validation import check_is_fitted
 
 from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import ConvergenceWarning, InputError
@@ -92,7 +94,7 @@ def _clone(estimator):
         return type(estimator)(**estimator.get_params())
 
 
-class MultiscaleCPD:
+class MultiscaleCPD(BaseEstimator):
     """Coarse-to-fine registration of large sets with any CPD estimator (see the module docstring).
 
     Parameters
@@ -137,21 +139,6 @@ class MultiscaleCPD:
         self.sizes = sizes
         self.refine_iter = refine_iter
         self.random_state = random_state
-
-    def get_params(self, deep=True):
-        return {
-            "estimator": self.estimator,
-            "sizes": self.sizes,
-            "refine_iter": self.refine_iter,
-            "random_state": self.random_state,
-        }
-
-    def set_params(self, **params):
-        for key, value in params.items():
-            if key not in self.get_params():
-                raise InputError(f"MultiscaleCPD has no parameter {key!r}; it has {sorted(self.get_params())}.")
-            setattr(self, key, value)
-        return self
 
     def _check(self):
         from ._cpd import AffineCPD, NonRigidCPD, RigidCPD
@@ -222,15 +209,8 @@ class MultiscaleCPD:
 
     def transform(self, points):
         """Apply the fitted transform to new points."""
-        if not hasattr(self, "transform_"):
-            raise InputError("This MultiscaleCPD is not fitted yet; call fit(moving, fixed) first.")
+        check_is_fitted(self, "transform_")
         return self.transform_(as_points(points, name="points", n_dims=ANY_DIMS))
-
-    def __repr__(self):
-        return (
-            f"MultiscaleCPD({self.estimator!r}, sizes={self.sizes!r}, refine_iter={self.refine_iter!r}, "
-            f"random_state={self.random_state!r})"
-        )
 
 
 def _subsample(points, size, rng):
