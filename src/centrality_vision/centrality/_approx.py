@@ -34,7 +34,7 @@ def _largest_eccentricity_bound(prep) -> int:
     for root in range(n):
         if seen[root]:
             continue
-        count = _sampling.single_source_distances(prep.indptr, prep.indices, root, dist, order)
+        count = _kernels._bfs(prep.indptr, prep.indices, root, dist, order)
         members = order[:count]
         seen[members] = True
         best = max(best, 2 * int(dist[members].max()))

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["sample_paths", "single_source_distances", "uniform"]
+__all__ = ["sample_paths", "uniform"]
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _RESCALE = 1e200
@@ -177,23 +177,3 @@ def sample_paths(indptr, indices, t_indptr, t_indices, pairs, seed, first, stop)
             dist_s[v] = -1
             dist_t[v] = -1
     return hits, work
-
-
-@njit(cache=True, nogil=True)
-def single_source_distances(indptr, indices, s, dist, order):
-    """Hop distances from ``s`` into ``dist`` (must be -1); returns the count reached."""
-    dist[s] = 0
-    order[0] = s
-    head = 0
-    tail = 1
-    while head < tail:
-        v = order[head]
-        head += 1
-        nd = dist[v] + 1
-        for j in range(indptr[v], indptr[v + 1]):
-            w = indices[j]
-            if dist[w] < 0:
-                dist[w] = nd
-                order[tail] = w
-                tail += 1
-    return tail
