@@ -7,10 +7,11 @@ stored values are Euclidean edge lengths; row ``i`` is node ``i`` (point ``i``, 
 
 from ._convert import to_networkx
 from ._entropy import MSTMEResult, MWMEResult, mstme_graph, mwme_degrees, mwme_graph, nhdd_graph, nhdd_joining
-from ._pixel import pixel_coordinates, pixel_graph, salt_noise
+from ._pixel import PixelGraph, pixel_coordinates, pixel_graph, salt_noise
 from ._pointsets import complete_graph, delaunay_graph, emst_graph, gabriel_graph, knn_graph
 
 __all__ = [
+    "PixelGraph",
     "pixel_graph",
     "pixel_coordinates",
     "salt_noise",

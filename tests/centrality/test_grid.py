@@ -1,0 +1,156 @@
+"""Betweenness on pixel graphs walked on the grid, with the mask's symmetries."""
+
+import networkx as nx
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from scipy import sparse
+
+import centrality_vision as cv
+from centrality_vision import centrality as cen
+from centrality_vision.centrality._grid import mask_symmetries
+from centrality_vision.graphs import PixelGraph, pixel_graph
+
+
+def _disk(radius):
+    y, x = np.mgrid[-radius : radius + 1, -radius : radius + 1]
+    return x * x + y * y <= radius * radius
+
+
+def _plain(graph):
+    """The same adjacency as an ordinary csr_array: the adjacency-list kernels."""
+    return sparse.csr_array(graph)
+
+
+def _close(a, b):
+    np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, float(np.max(b))))
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(
+    mask=arrays(bool, st.tuples(st.integers(1, 9), st.integers(1, 9))),
+    connectivity=st.sampled_from([4, 8]),
+    mirror=st.sampled_from([None, 0, 1, "both", "transpose"]),
+)
+def test_grid_equals_adjacency_lists_on_any_mask(mask, connectivity, mirror):
+    # Symmetric masks (made so half the time) take the orbit path; others the plain grid path.
+    if mirror in (0, 1):
+        mask = mask | np.flip(mask, mirror)
+    elif mirror == "both":
+        mask = mask | mask[::-1] | mask[:, ::-1] | mask[::-1, ::-1]
+    elif mirror == "transpose":
+        k = min(mask.shape)
+        mask = mask[:k, :k] | mask[:k, :k].T
+    if not mask.any():
+        return
+    graph, _ = pixel_graph(mask, connectivity=connectivity)
+    _close(cen.betweenness(graph, normalized=True), cen.betweenness(_plain(graph), normalized=True))
+
+
+@pytest.mark.parametrize("connectivity", [26, 18, 6])
+def test_grid_equals_adjacency_lists_in_3d(connectivity):
+    rng = np.random.default_rng(4)
+    volume = rng.random((5, 6, 7)) > 0.35
+    symmetric = np.ones((4, 4, 4), dtype=bool)
+    symmetric[1:3, 1:3, 1:3] = False
+    for mask in (volume, symmetric):
+        graph, _ = pixel_graph(mask, connectivity=connectivity)
+        _close(cen.betweenness(graph), cen.betweenness(_plain(graph)))
+
+
+def test_grid_agrees_with_networkx():
+    mask = np.zeros((7, 9), dtype=bool)
+    mask[1:6, 1:8] = True
+    mask[3, 2:7] = False  # a hole: two routes around it
+    graph, _ = pixel_graph(mask)
+    ref = nx.betweenness_centrality(nx.from_scipy_sparse_array(_plain(graph)), normalized=False)
+    _close(cen.betweenness(graph), np.array([ref[i] for i in range(graph.shape[0])]))
+
+
+@pytest.mark.parametrize(
+    ("mask", "count"),
+    [
+        (np.ones((3, 3), dtype=bool), 8),  # the square's dihedral group
+        (np.ones((2, 5), dtype=bool), 4),  # a rectangle: its flips
+        (np.array([[1, 1, 1], [1, 0, 0]], dtype=bool), 1),  # an L: none
+        (np.array([[1, 1], [1, 0]], dtype=bool), 2),  # identity and transpose
+        (np.array([[0, 1, 0], [1, 1, 1]], dtype=bool), 2),  # a T: one mirror
+        (np.ones((2, 2, 2), dtype=bool), 48),  # the cube's group
+    ],
+)
+def test_mask_symmetries_counts_the_maps(mask, count):
+    found = mask_symmetries(mask)
+    assert len(found) == count
+    assert found[0] == (tuple(range(mask.ndim)), ())
+    for axes, flipped in found:  # every map found maps the mask onto itself
+        moved = np.transpose(mask, axes)
+        assert np.array_equal(np.flip(moved, flipped) if flipped else moved, mask)
+
+
+def test_disk_needs_one_search_per_orbit():
+    mask = _disk(12)
+    graph, _ = pixel_graph(mask)
+    values, info = cen.betweenness(graph, return_info=True)
+    n = graph.shape[0]
+    assert info["symmetries"] == 8
+    # Orbits of the dihedral group: n / 8 plus the fixed axes' extra ones.
+    assert n / 8 <= info["searches"] <= n / 8 + 2 * 12 + 2
+    _close(values, cen.betweenness(_plain(graph)))
+    # Symmetric values: the centre is the largest and mirror pixels agree.
+    image = np.zeros(mask.shape)
+    image[mask] = values
+    np.testing.assert_allclose(image, image[::-1], rtol=1e-12)
+    np.testing.assert_allclose(image, image.T, rtol=1e-12)
+    assert image[12, 12] == image.max()
+
+
+def test_overflowing_counts_fall_back_to_logarithms():
+    mask = np.ones((5, 1100), dtype=bool)  # more than 1e300 shortest paths end to end
+    mask[2, 500] = False
+    graph, _ = pixel_graph(mask)
+    values, info = cen.betweenness(graph, normalized=True, return_info=True)
+    assert info["log_searches"] > 0 and info["symmetries"] == 2
+    assert np.all(np.isfinite(values))
+    _close(values, cen.betweenness(_plain(graph), normalized=True))
+
+
+def test_edited_pixel_graph_is_treated_as_a_plain_graph():
+    graph, _ = pixel_graph(np.ones((6, 6), dtype=bool))
+    assert graph.matches_mask()
+    expected = cen.betweenness(_plain(graph))
+    graph.data[:] = 2.0  # edited in place: lengths no longer the mask's
+    assert not graph.matches_mask()
+    _close(cen.betweenness(graph), expected)  # hop counts: same graph, plain path
+    cut = graph.copy()
+    cut.data[0] = 0.0
+    cut.eliminate_zeros()  # structure edited: one edge fewer
+    assert cut.mask is None and not cut.matches_mask()
+    _, info = cen.betweenness(cut, return_info=True)
+    assert "symmetries" not in info
+
+
+def test_pixel_graph_is_a_csr_array_that_remembers_its_mask():
+    mask = _disk(3)
+    graph, _ = pixel_graph(mask, spacing=(2.0, 1.0))
+    assert isinstance(graph, sparse.csr_array) and isinstance(graph, PixelGraph)
+    assert np.array_equal(graph.mask, mask) and graph.connectivity == 8
+    np.testing.assert_array_equal(graph.spacing, [2.0, 1.0])
+    with pytest.raises(ValueError):
+        graph.mask[0, 0] = True  # read-only
+    mask[0, 0] = not mask[0, 0]  # the caller's array is a different one
+    assert graph.matches_mask()
+    assert (graph @ graph).mask is None
+
+
+def test_grid_results_do_not_depend_on_thread_count():
+    graph, _ = pixel_graph(_disk(9) & (np.arange(19)[:, None] > 3))  # one mirror axis
+    try:
+        cv.set_num_threads(1)
+        single = cen.betweenness(graph)
+        cv.set_num_threads(3)
+        multi = cen.betweenness(graph)
+    finally:
+        cv.set_num_threads(None)
+    np.testing.assert_allclose(multi, single, rtol=1e-12)
