@@ -12,7 +12,11 @@ Everything is unweighted (hop distances), which is what we benchmark:
 ==============  ===========================================================================
 library         calls
 ==============  ===========================================================================
-ours            ``cen.betweenness/closeness/eigenvector/eccentricity(graph, weights=False)``
+ours            ``cen.betweenness/closeness/eigenvector/eccentricity(graph, weights=False)``;
+                on pixel disks ``graph`` is the ``PixelGraph`` of ``pixel_graph``: betweenness
+                walks the grid and needs one search per orbit of the disk's 8 symmetries
+ours-csr        the same calls on the same adjacency as a plain ``csr_array`` (no grid walk,
+                no symmetries): the like-for-like kernel comparison
 networkx        ``betweenness_centrality(G, normalized=False)``, ``closeness_centrality``,
                 ``eigenvector_centrality_numpy``, ``eccentricity``
 networkit       ``centrality.Betweenness(G, normalized=False)``, ``centrality.Closeness(G,
@@ -58,9 +62,9 @@ from pathlib import Path
 from typing import Any
 
 CENTRALITIES = ("betweenness", "closeness", "eigenvector", "eccentricity")
-LIBRARIES = ("ours", "networkx", "networkit", "rustworkx", "igraph", "scipy")
+LIBRARIES = ("ours", "ours-csr", "networkx", "networkit", "rustworkx", "igraph", "scipy")
 COMPILED = ("networkit", "rustworkx", "igraph", "scipy")
-SHORT = {"networkit": "nk", "rustworkx": "rx", "igraph": "ig", "scipy": "sp", "networkx": "nx", "ours": "ours"}
+SHORT = {"ours-csr": "ours-csr", "networkit": "nk", "rustworkx": "rx", "igraph": "ig", "scipy": "sp", "networkx": "nx", "ours": "ours"}
 
 # name -> (kind, target size)
 GRAPHS = {
@@ -114,6 +118,11 @@ def parse_args(argv=None):
         "--scale-exact",
         action="store_true",
         help="with --scale: also exact betweenness of the 100,000-pixel silhouette (minutes)",
+    )
+    p.add_argument(
+        "--scale-plain",
+        action="store_true",
+        help="with --scale-exact: also the 100,000-pixel disk on the plain adjacency (minutes)",
     )
     p.add_argument(
         "--scale-sections",
@@ -349,7 +358,8 @@ def to_scipy_unit(g):
 
 
 CONVERTERS = {
-    "ours": lambda g: g.csr,
+    "ours": lambda g: g.csr,  # pixel graphs: our PixelGraph (grid walk, mask symmetries)
+    "ours-csr": lambda g: sp.csr_array(g.csr),  # the same adjacency as a plain csr_array
     "networkx": to_networkx,
     "networkit": to_networkit,
     "rustworkx": to_rustworkx,
@@ -390,7 +400,7 @@ def _eigsh(A):
 def calls_for(lib, centrality, cen, n):
     """(callable, to_array) or None when the library has no such function."""
     d2a, l2a = _dict_to_array(n), _list_to_array(n)
-    if lib == "ours":
+    if lib in ("ours", "ours-csr"):
         f = getattr(cen, centrality)
         return (lambda G: f(G, weights=False)), l2a
     if lib == "networkx":
@@ -560,6 +570,7 @@ def main(args):
     cen, ours_pix, ours_dela, ours_msg = _import_ours()
     avail = {
         "ours": cen is not None,
+        "ours-csr": cen is not None,
         "networkx": nx is not None,
         "networkit": nk is not None,
         "rustworkx": rx is not None,
@@ -819,6 +830,7 @@ def scale_main(args):
     graphs = {}
     disk, _ = disk_mask(10000)
     graphs["disk-10000"] = disk
+    graphs["disk-100k"] = disk_mask(100_000)[0]
     graphs["silhouette-100k"] = silhouette_mask("horse-1", 100_000)
     graphs["mask-1M"] = silhouette_mask("elephant-1", 1_000_000)
     built = {}
@@ -861,12 +873,17 @@ def scale_main(args):
 def _scale_exact(args, built, cen, eps):
     print("\n### exact betweenness (hop counts); edges/s = n * edges / seconds")
     rows = []
-    names = ["disk-10000"] + (["silhouette-100k"] if args.scale_exact else [])
+    names = ["disk-10000"] + (["disk-100k", "silhouette-100k"] if args.scale_exact else [])
     for name in names:
         g = built[name]
         n, m = g.shape[0], g.nnz // 2
-        ours, t_ours = _timed(cen.betweenness, g)
-        row = [name, n, m, "%.2f" % t_ours, eps(n * m, t_ours)]
+        (ours, info), t_ours = _timed(cen.betweenness, g, return_info=True)
+        row = [name, n, m, "%.2f" % t_ours, eps(n * m, t_ours), "%d / %d" % (info["searches"], info["symmetries"])]
+        if name == "disk-10000" or (name == "disk-100k" and args.scale_plain):
+            plain, t_plain = _timed(cen.betweenness, sp.csr_array(g))
+            row += ["%.2f" % t_plain, "%.2f" % (t_plain / t_ours), "%.1e" % (np.abs(plain - ours).max() / plain.max())]
+        else:
+            row += ["-", "-", "-"]
         if ig is not None and name == "disk-10000":
             upper = sp.triu(g, k=1).tocoo()
             G = ig.Graph(n=n, edges=np.column_stack([upper.row, upper.col]).tolist())
@@ -875,7 +892,29 @@ def _scale_exact(args, built, cen, eps):
         else:
             row += ["-", "-", "-"]
         rows.append(row)
-    print(table(["graph", "n", "edges", "ours [s]", "ours edges/s", "igraph [s]", "igraph/ours", "max |diff|"], rows))
+    print(
+        table(
+            [
+                "graph",
+                "n",
+                "edges",
+                "ours [s]",
+                "ours edges/s",
+                "searches / maps",
+                "csr [s]",
+                "csr/ours",
+                "rel diff",
+                "igraph [s]",
+                "igraph/ours",
+                "max |diff|",
+            ],
+            rows,
+        )
+    )
+    print(
+        "  ours: the PixelGraph (grid walk; one search per orbit of the mask's mirror/rotation maps);"
+        " csr: the same adjacency as a plain csr_array (adjacency lists, every node a source)"
+    )
 
 
 def _scale_closeness(built, cen, _kernels):

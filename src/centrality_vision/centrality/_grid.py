@@ -19,8 +19,8 @@ representative ``r`` per orbit, then add the ``|G|`` moved copies of that image.
 has 8 such maps (its dihedral group), so 1/8 of the searches. ``|O| / |G|`` is 1, 1/2,
 1/4 or 1/8 in 2D, exact in floating point.
 
-Path counts are float64 as in :mod:`._kernels`; a source whose counts overflow is run
-again by the adjacency-list kernel with counts kept as logarithms.
+The searches are those of :mod:`._kernels` in their grid mode: path counts are float64,
+and a source whose counts overflow is run again with counts kept as logarithms.
 """
 
 from __future__ import annotations
@@ -39,60 +39,9 @@ _BACKGROUND = 1 << 30  # a hop count no search reaches: background pixels never 
 
 
 @njit(cache=True, nogil=True)
-def _grid_source(offs, s, hops, order, sigma, coef, bc, weight):
-    """One source of Brandes' algorithm on the padded raster; False if counts overflow."""
-    hops[s] = 0
-    sigma[s] = 1.0
-    order[0] = s
-    head = 0
-    tail = 1
-    n_offs = offs.shape[0]
-    while head < tail:
-        v = order[head]
-        head += 1
-        nxt = hops[v] + 1
-        sv = sigma[v]
-        for k in range(n_offs):
-            w = v + offs[k]
-            hw = hops[w]
-            if hw < 0:
-                hops[w] = nxt
-                sigma[w] = sv
-                order[tail] = w
-                tail += 1
-            elif hw == nxt:
-                sigma[w] += sv
-    ok = True
-    for q in range(tail):
-        if sigma[order[q]] > _kernels._OVERFLOW:
-            ok = False
-            break
-    if ok:
-        # coef[w] = (1 + delta[w]) / sigma[w]; delta[v] = sigma[v] * sum of coef over successors.
-        for q in range(tail - 1, 0, -1):
-            v = order[q]
-            nxt = hops[v] + 1
-            acc = 0.0
-            for k in range(n_offs):
-                w = v + offs[k]
-                if hops[w] == nxt:
-                    acc += coef[w]
-            delta_v = acc * sigma[v]
-            bc[v] += weight * delta_v
-            coef[v] = (1.0 + delta_v) / sigma[v]
-    for q in range(tail):
-        hops[order[q]] = -1
-        coef[order[q]] = 0.0
-    return ok
-
-
-@njit(cache=True, nogil=True)
 def grid_brandes(foreground, offs, sources, weights):
-    """Weighted sum over ``sources`` (padded-raster indices) of their dependencies.
-
-    Returns the raster of sums and a boolean per source: True where its path counts
-    overflowed float64 (its dependencies are then not in the sums).
-    """
+    """Weighted sum over ``sources`` (padded-raster indices) of their dependencies, and
+    the number of sources whose path counts overflowed float64 (run in log space)."""
     size = foreground.shape[0]
     bc = np.zeros(size)
     hops = np.full(size, _BACKGROUND, dtype=np.int64)
@@ -102,11 +51,15 @@ def grid_brandes(foreground, offs, sources, weights):
     order = np.empty(size, dtype=np.int64)
     sigma = np.empty(size)
     coef = np.zeros(size)
-    overflowed = np.zeros(sources.shape[0], dtype=np.bool_)
+    lists = np.empty(0, dtype=np.int64)  # no adjacency lists: the grid mode
+    heads = np.empty(0, dtype=np.int32)
+    n_log = 0
     for i in range(sources.shape[0]):
-        if not _grid_source(offs, sources[i], hops, order, sigma, coef, bc, weights[i]):
-            overflowed[i] = True
-    return bc, overflowed
+        s, w = sources[i], weights[i]
+        if not _kernels._brandes_source_bfs(lists, heads, offs, True, s, hops, order, sigma, coef, bc, w):
+            n_log += 1
+            _kernels._brandes_source_bfs_log(lists, heads, offs, True, s, hops, order, sigma, coef, bc, w)
+    return bc, n_log
 
 
 def mask_symmetries(mask: np.ndarray) -> list[tuple[tuple[int, ...], tuple[int, ...]]]:
@@ -184,25 +137,10 @@ def grid_betweenness(graph, progress: bool = False) -> tuple[np.ndarray, dict]:
         return grid_brandes(foreground, offs, sources[lo:hi], weights[lo:hi])
 
     total = np.zeros(padded.size)
-    overflowed = []
-    for lo, _, (part, over) in run_chunks(task, sources.size, progress=progress, desc="betweenness"):
+    n_log = 0
+    for _, _, (part, count) in run_chunks(task, sources.size, progress=progress, desc="betweenness"):
         total += part
-        overflowed.extend((lo + np.flatnonzero(over)).tolist())
+        n_log += count
     sums = total.reshape(padded.shape)[tuple(slice(1, -1) for _ in padded.shape)]
     sums = sum(_apply(sums, transform) for transform in group)
-    values = sums[crop]
-    if overflowed:  # rare: long thin shapes; log-space counts on the adjacency lists
-        nodes = np.flatnonzero(is_rep)[np.asarray(overflowed)]
-        node_weights = weights[np.asarray(overflowed)]
-        indptr = graph.indptr.astype(np.int64)
-        indices = graph.indices.astype(np.int32)
-        extra = np.zeros(values.size)
-        for w in np.unique(node_weights):
-            part, _ = _kernels.brandes(
-                indptr, indices, np.ones(indices.size), nodes[node_weights == w], False, _kernels.TIE_RTOL, True
-            )
-            extra += w * part
-        extra_image = np.zeros(crop.shape)
-        extra_image[crop] = extra
-        values = values + sum(_apply(extra_image, t) for t in group)[crop]
-    return values, {"searches": int(sources.size), "symmetries": len(group), "log_searches": len(overflowed)}
+    return sums[crop], {"searches": int(sources.size), "symmetries": len(group), "log_searches": n_log}

@@ -288,9 +288,27 @@ def multi_source_stats(indptr, indices, members, group_ptr, first_group, stop_gr
     return tot, inv, big, rea
 
 
+# Breadth-first kernels walk either adjacency lists or, with ``grid``, a padded pixel raster
+# whose neighbours are ``v + offs[k]`` (see :mod:`._grid`); ``_span`` gives the loop range
+# and ``_neighbour`` the node, so one kernel serves both (the branch is loop-invariant).
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _span(indptr, offs, grid, v):
+    if grid:
+        return 0, offs.shape[0]
+    return indptr[v], indptr[v + 1]
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _neighbour(indices, offs, grid, v, j):
+    return v + offs[j] if grid else indices[j]
+
+
 @njit(cache=True, nogil=True)
-def _brandes_source_bfs(indptr, indices, s, hops, order, sigma, coef, bc):
-    """One source of Brandes' algorithm with float64 path counts; False if they overflow."""
+def _brandes_source_bfs(indptr, indices, offs, grid, s, hops, order, sigma, coef, bc, weight):
+    """One source of Brandes' algorithm with float64 path counts, adding ``weight`` times
+    its dependencies to ``bc``; False (and nothing added) if the counts overflow."""
     hops[s] = 0
     sigma[s] = 1.0
     order[0] = s
@@ -301,8 +319,9 @@ def _brandes_source_bfs(indptr, indices, s, hops, order, sigma, coef, bc):
         head += 1
         nxt = hops[v] + 1
         sv = sigma[v]
-        for j in range(indptr[v], indptr[v + 1]):
-            w = indices[j]
+        lo, hi = _span(indptr, offs, grid, v)
+        for j in range(lo, hi):
+            w = _neighbour(indices, offs, grid, v, j)
             hw = hops[w]
             if hw < 0:
                 hops[w] = nxt
@@ -323,12 +342,13 @@ def _brandes_source_bfs(indptr, indices, s, hops, order, sigma, coef, bc):
             v = order[q]
             nxt = hops[v] + 1
             acc = 0.0
-            for j in range(indptr[v], indptr[v + 1]):
-                w = indices[j]
+            lo, hi = _span(indptr, offs, grid, v)
+            for j in range(lo, hi):
+                w = _neighbour(indices, offs, grid, v, j)
                 if hops[w] == nxt:
                     acc += coef[w]
             delta_v = acc * sigma[v]
-            bc[v] += delta_v
+            bc[v] += weight * delta_v
             coef[v] = (1.0 + delta_v) / sigma[v]
     for q in range(tail):
         hops[order[q]] = -1
@@ -337,7 +357,7 @@ def _brandes_source_bfs(indptr, indices, s, hops, order, sigma, coef, bc):
 
 
 @njit(cache=True, nogil=True)
-def _brandes_source_bfs_log(indptr, indices, s, hops, order, lsigma, delta, bc):
+def _brandes_source_bfs_log(indptr, indices, offs, grid, s, hops, order, lsigma, delta, bc, weight):
     """One source of Brandes' algorithm with path counts kept as logarithms (cannot overflow)."""
     hops[s] = 0
     lsigma[s] = 0.0
@@ -349,8 +369,9 @@ def _brandes_source_bfs_log(indptr, indices, s, hops, order, lsigma, delta, bc):
         head += 1
         nxt = hops[v] + 1
         sv = lsigma[v]
-        for j in range(indptr[v], indptr[v + 1]):
-            w = indices[j]
+        lo, hi = _span(indptr, offs, grid, v)
+        for j in range(lo, hi):
+            w = _neighbour(indices, offs, grid, v, j)
             hw = hops[w]
             if hw < 0:
                 hops[w] = nxt
@@ -366,14 +387,16 @@ def _brandes_source_bfs_log(indptr, indices, s, hops, order, lsigma, delta, bc):
         v = order[q]
         nxt = hops[v] + 1
         acc = 0.0
-        for j in range(indptr[v], indptr[v + 1]):
-            w = indices[j]
+        lo, hi = _span(indptr, offs, grid, v)
+        for j in range(lo, hi):
+            w = _neighbour(indices, offs, grid, v, j)
             if hops[w] == nxt:
                 acc += np.exp(lsigma[v] - lsigma[w]) * (1.0 + delta[w])
         delta[v] = acc
-        bc[v] += acc
+        bc[v] += weight * acc
     for q in range(tail):
         hops[order[q]] = -1
+        delta[order[q]] = 0.0
 
 
 @njit(cache=True, nogil=True)
@@ -461,6 +484,7 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
     hops = np.full(n, -1, dtype=np.int64)
     rank = np.empty(n, dtype=np.int64)
     dist, done, heap_d, heap_v = _dijkstra_workspace(n, indices.shape[0] if weighted else 0)
+    no_offs = np.empty(0, dtype=np.int64)
     for i in range(sources.shape[0]):
         s = sources[i]
         ok = False
@@ -476,10 +500,10 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
                 )
         else:
             if not force_log:
-                ok = _brandes_source_bfs(indptr, indices, s, hops, order, sigma, delta, bc)
+                ok = _brandes_source_bfs(indptr, indices, no_offs, False, s, hops, order, sigma, delta, bc, 1.0)
             if not ok:
                 n_log += 1
-                _brandes_source_bfs_log(indptr, indices, s, hops, order, sigma, delta, bc)
+                _brandes_source_bfs_log(indptr, indices, no_offs, False, s, hops, order, sigma, delta, bc, 1.0)
     return bc, n_log
 
 
