@@ -36,14 +36,16 @@ succeeds when the rotation error is below 5 degrees (the rotation of each method
 is read by a least-squares fit of its transformed moving points, so every library's
 convention is handled alike).
 
-Methods. Ours: ``NonRigidCPD`` / ``RigidCPD(scale=False)`` (``cpd``), ``GPD`` over it with
+Methods. Ours: ``NonRigidCPD`` / ``RigidCPD(scale=False)`` (``cpd``: CPD's dense model), the same
+with ``n_neighbors=10`` (``cpd-knn``: the k-nearest-neighbour E-step, biocpd's model and k) and
+with ``n_neighbors=10, w="auto"`` (``cpd-knn-auto``), ``GPD`` over the dense one with
 each centrality on Delaunay graphs (``gpd-<centrality>``; only closeness in the rotation
 family), rigid ``ICP``, and on the rotation family each of those started from
 ``global_pose_search`` (``+global``: the function ``RigidCPD(init="global")`` calls, applied
 to Y here and followed by the plain fit, so that ICP and GPD get the same start).
 Peers: pycpd 2.0 (its rigid registration always estimates a scale), cycpd 0.28 (deformable:
 low-rank with ``num_eig`` = M - 1), probreg 0.3.8 (``registration_cpd``; its kernel is
-``exp(-|d|^2 / beta^2)``, so it gets ``beta * sqrt(2)`` for the same kernel), rustcpd 4.0
+CPD's ``exp(-|d|^2 / (2 beta^2))``, so it gets ``beta`` itself), rustcpd 4.0
 (``low_rank=None``: exact) and biocpd 1.3 (``low_rank=False``). Each library's tolerance
 means something else (see ``registration.py``); they get the same number. A library that
 fails on a case is reported with its error instead of a number.
@@ -92,8 +94,20 @@ SUCCESS_DEGREES = 5.0
 SETTINGS = {"beta": 2.0, "lam": 3.0, "tol": 1e-7, "max_iter": 150}
 CENTRALITIES = ("degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity")
 PEERS = ("pycpd", "cycpd", "probreg", "rustcpd", "biocpd")
-NONRIGID_METHODS = ("cpd",) + tuple(f"gpd-{c}" for c in CENTRALITIES) + ("icp",) + PEERS
-ROTATION_METHODS = ("cpd", "cpd+global", "gpd-closeness", "gpd-closeness+global", "icp", "icp+global") + PEERS
+# ours: CPD's dense model with the family's w ("cpd"), the k-nearest-neighbour model with the
+# same w ("cpd-knn", n_neighbors=KNN, biocpd's k) and with w="auto" ("cpd-knn-auto")
+KNN = 10
+OURS_CPD = ("cpd", "cpd-knn", "cpd-knn-auto")
+NONRIGID_METHODS = OURS_CPD + tuple(f"gpd-{c}" for c in CENTRALITIES) + ("icp",) + PEERS
+ROTATION_METHODS = (
+    "cpd",
+    "cpd+global",
+    "cpd-knn",
+    "gpd-closeness",
+    "gpd-closeness+global",
+    "icp",
+    "icp+global",
+) + PEERS
 SHAPES_2D = ("fish", "dog1")
 
 
@@ -195,7 +209,7 @@ def run_method(method, y, x, *, rigid, w, seed):
     beta, lam, tol, max_iter = SETTINGS["beta"], SETTINGS["lam"], SETTINGS["tol"], SETTINGS["max_iter"]
     base, _, glob = method.partition("+")
     info = {}
-    if base in ("cpd", "icp") or base.startswith("gpd-"):
+    if base in OURS_CPD or base == "icp" or base.startswith("gpd-"):
         from centrality_vision.registration import GPD, ICP, NonRigidCPD, RigidCPD
         from centrality_vision.registration._pose import global_pose_search
 
@@ -208,11 +222,14 @@ def run_method(method, y, x, *, rigid, w, seed):
             start = pose(y)
         if base == "icp":
             return ICP(max_iter=max_iter, tol=tol).fit(start, x).moving_transformed_, info
+        model = {"n_neighbors": KNN} if base.startswith("cpd-knn") else {}
+        if base == "cpd-knn-auto":
+            w = "auto"
         if rigid:
-            cpd = RigidCPD(scale=False, w=w, tol=tol, max_iter=max_iter)
+            cpd = RigidCPD(scale=False, w=w, tol=tol, max_iter=max_iter, **model)
         else:
-            cpd = NonRigidCPD(beta=beta, lam=lam, w=w, tol=tol, max_iter=max_iter)
-        est = cpd if base == "cpd" else GPD(cpd, centrality=base[4:], graph="delaunay")
+            cpd = NonRigidCPD(beta=beta, lam=lam, w=w, tol=tol, max_iter=max_iter, **model)
+        est = cpd if base in OURS_CPD else GPD(cpd, centrality=base[4:], graph="delaunay")
         return est.fit(start, x).moving_transformed_, info
     if base == "pycpd":
         import pycpd
@@ -259,8 +276,9 @@ def run_method(method, y, x, *, rigid, w, seed):
         _preload_libusb()
         from probreg import cpd as probreg_cpd
 
-        # probreg's kernel is exp(-|d|^2 / beta^2): beta * sqrt(2) is CPD's exp(-|d|^2 / (2 beta^2))
-        kw = {"update_scale": False} if rigid else {"beta": beta * math.sqrt(2.0), "lmd": lam}
+        # probreg's kernel is CPD's exp(-|d|^2 / (2 beta^2)) (checked: its rbf_kernel at distance 1,
+        # beta 1 is exp(-1/2)); the last session's runs passed beta * sqrt(2), a wider kernel
+        kw = {"update_scale": False} if rigid else {"beta": beta, "lmd": lam}
         res = probreg_cpd.registration_cpd(
             y, x, tf_type_name="rigid" if rigid else "nonrigid", w=w, maxiter=max_iter, tol=tol, **kw
         )
@@ -337,7 +355,14 @@ def rotation_unit(shape, degrees, method, trials, settings, bunny_points):
 def build_units(args):
     from centrality_vision.experiments._runner import Unit
 
-    settings = {**SETTINGS, "success_error": SUCCESS_ERROR, "warp_width": WARP_WIDTH, "base_warp": BASE_WARP}
+    settings = {
+        **SETTINGS,
+        "success_error": SUCCESS_ERROR,
+        "warp_width": WARP_WIDTH,
+        "base_warp": BASE_WARP,
+        "knn": KNN,
+        "probreg_beta": "beta",
+    }
     units = []
     for family in args.families:
         if family == "rotation":
@@ -362,6 +387,7 @@ def build_units(args):
                             ),
                         )
                     )
+    units.sort(key=lambda u: u.kwargs["method"].startswith("gpd-"))  # stable: GPD units last
     if "rotation" in args.families:
         rsettings = {**SETTINGS, **ROTATION_SETTINGS}
         for shape in ("fish", "bunny"):
@@ -433,6 +459,15 @@ def report(args, units, results):
         f"rotation error < {SUCCESS_DEGREES} deg"
     )
     lines.append(
+        "settings per library (non-rigid): cpd = NonRigidCPD(beta, lam, w, tol, max_iter) [dense model]; "
+        f"cpd-knn = the same with n_neighbors={KNN}; cpd-knn-auto = n_neighbors={KNN}, w='auto'; "
+        "gpd-* = GPD(cpd, centrality, graph='delaunay'); pycpd DeformableRegistration(alpha=lam, beta, w, "
+        "tolerance, max_iterations); cycpd deformable_registration(alpha=lam, beta, low_rank, num_eig=M-1, w); "
+        "probreg registration_cpd('nonrigid', beta, lmd=lam, w, maxiter, tol); rustcpd register_deformable("
+        "alpha=lam, beta, low_rank=None, outlier_weight=w); biocpd DeformableRegistration(alpha=lam, beta, "
+        "low_rank=False, w) [its defaults: k=10 nearest-neighbour E-step, float32]"
+    )
+    lines.append(
         "cells: '!' = the library raised on some pairs (its mean is over the others; not counted as best peer), "
         "'fail' = on all, '-' = not run"
     )
@@ -447,7 +482,7 @@ def report(args, units, results):
         else:
             rot_res[(k["shape"], k["degrees"], k["method"])] = results[u.key]
     missing = {"mean": None, "success": None, "seconds": None, "failed": 0, "status": "not run"}
-    checks, exact_checks = [], []
+    checks, exact_checks, all_checks = [], [], {}
     for family in [f for f in args.families if f != "rotation"]:
         for shape in SHAPES_2D:
             rows = []
@@ -463,8 +498,14 @@ def report(args, units, results):
                     if p in cells and cells[p]["mean"] is not None and cells[p]["failed"] == 0
                 ]
                 best_peer = min(peers) if peers else None
+                for config in OURS_CPD:
+                    mine = cells.get(config, {}).get("mean")
+                    if best_peer not in (None, 0) and mine is not None:
+                        all_checks.setdefault(config, []).append((family, shape, level, mine / best_peer))
                 ours = cells.get("cpd", {}).get("mean")
                 ratio = None if best_peer in (None, 0) or ours is None else ours / best_peer
+                knn = cells.get("cpd-knn", {}).get("mean")
+                knn_ratio = None if best_peer in (None, 0) or knn is None else knn / best_peer
                 if ratio is not None:
                     checks.append((family, shape, level, ratio))
                 exact_peers = [
@@ -481,13 +522,14 @@ def report(args, units, results):
                         _cell(c, f"{c['mean']:.4f}/{100 * (c['success'] or 0):.0f}%" if c["mean"] is not None else "")
                     )
                 row.append("-" if ratio is None else f"{ratio:.3f}")
+                row.append("-" if knn_ratio is None else f"{knn_ratio:.3f}")
                 rows.append(row)
             lines.append("")
             lines.append(
                 f"[{family}] {shape}: mean error / success rate per level  "
                 "(cpd/best peer = ours' mean error over the best peer's)"
             )
-            lines.append(table([family] + list(args.methods_nonrigid) + ["cpd/best peer"], rows))
+            lines.append(table([family] + list(args.methods_nonrigid) + ["cpd/best peer", "knn/best peer"], rows))
     if checks:
         worst = max(checks, key=lambda c: c[3])
         n_ok = sum(c[3] <= 1.05 for c in checks)
@@ -505,22 +547,43 @@ def report(args, units, results):
                 f"worst ratio {worst_exact[3]:.3f} at {worst_exact[:3]}"
             )
         summary["check_cpd_vs_best_peer"] = {"within_5pct": n_ok, "cases": len(checks), "worst": list(worst)}
+        for config, cases in all_checks.items():
+            worst_c = max(cases, key=lambda c: c[3])
+            n_c = sum(c[3] <= 1.05 for c in cases)
+            lines.append(
+                f"check: {config} within 5% of the best peer on {n_c} of {len(cases)}; "
+                f"worst ratio {worst_c[3]:.3f} at {worst_c[:3]}"
+            )
+            summary.setdefault("checks", {})[config] = {"within_5pct": n_c, "cases": len(cases), "worst": list(worst_c)}
+        if {"cpd", "cpd-knn"} <= set(all_checks):
+            best_of = [(a[0], a[1], a[2], min(a[3], b[3])) for a, b in zip(all_checks["cpd"], all_checks["cpd-knn"])]
+            worst_b = max(best_of, key=lambda c: c[3])
+            lines.append(
+                f"check: the better of cpd and cpd-knn (our two models at the peers' w) within 5% of the best peer on "
+                f"{sum(c[3] <= 1.05 for c in best_of)} of {len(best_of)}; worst ratio {worst_b[3]:.3f} at {worst_b[:3]}"
+            )
         gpd_rows = []
         for family in summary["synthetic"]:
             for shape in summary["synthetic"][family]:
                 cells_by_level = summary["synthetic"][family][shape]
-                cpd = np.mean([c["cpd"]["success"] or 0 for c in cells_by_level.values()])
-                row = [f"{family}/{shape}", f"{100 * cpd:.1f}%"]
+                row = [f"{family}/{shape}"]
+                for config in OURS_CPD:
+                    if config in args.methods_nonrigid:
+                        row.append(
+                            f"{100 * np.mean([c[config]['success'] or 0 for c in cells_by_level.values()]):.1f}%"
+                        )
                 for c in CENTRALITIES:
                     m = f"gpd-{c}"
                     if m in args.methods_nonrigid:
                         row.append(f"{100 * np.mean([cl[m]['success'] or 0 for cl in cells_by_level.values()]):.1f}%")
                 gpd_rows.append(row)
         lines.append("")
-        lines.append("success rate averaged over levels: CPD beside GPD with each centrality")
+        lines.append("success rate averaged over levels: CPD beside GPD (over the dense CPD) with each centrality")
         lines.append(
             table(
-                ["family/shape", "cpd"] + [f"gpd-{c}" for c in CENTRALITIES if f"gpd-{c}" in args.methods_nonrigid],
+                ["family/shape"]
+                + [c for c in OURS_CPD if c in args.methods_nonrigid]
+                + [f"gpd-{c}" for c in CENTRALITIES if f"gpd-{c}" in args.methods_nonrigid],
                 gpd_rows,
             )
         )

@@ -27,7 +27,16 @@ from .._parallel import get_num_threads, run_chunks
 from ..exceptions import InputError
 from . import _kernels as K
 
-__all__ = ["Posteriors", "CentralityPrior", "E_STEP_METHODS", "EStepPlanner", "_e_step", "dense_posterior"]
+__all__ = [
+    "Posteriors",
+    "CentralityPrior",
+    "E_STEP_METHODS",
+    "EStepPlanner",
+    "_e_step",
+    "dense_posterior",
+    "knn_posterior",
+    "knn_posterior_matrix",
+]
 
 E_STEP_METHODS = ("auto", "dense", "truncated", "fgt")
 
@@ -620,3 +629,100 @@ def dense_posterior(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | Non
     e = np.exp(s - ref)
     den = e.sum(axis=0) + np.exp(log_c - ref)
     return e / den
+
+
+def _knn_scores(moving_t, fixed, sigma2, prior, k, tree):
+    """Rows, columns and log-terms of the k-NN model: each moving point's k nearest fixed points."""
+    n_moving = moving_t.shape[0]
+    k = min(int(k), fixed.shape[0])
+    dist, cols = tree.query(moving_t, k=k)
+    dist = np.asarray(dist, dtype=float).reshape(n_moving, k)
+    cols = np.asarray(cols, dtype=np.int64).reshape(n_moving, k)
+    rows = np.repeat(np.arange(n_moving), k)
+    cols = cols.ravel()
+    s = -(dist.ravel() ** 2) / (2.0 * sigma2)
+    if prior is not None and prior.scale != 0:
+        dv = prior.v_fixed[cols] - prior.v_moving[rows]
+        s = s + prior.scale * (prior.log_weight[rows] - dv * dv * prior.inv2phi2)
+    return rows, cols, s
+
+
+def knn_posterior(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = None, *, k, tree=None) -> Posteriors:
+    """E-step of the k-nearest-neighbour CPD model (``n_neighbors=k`` on the estimators).
+
+    The dense model lets every moving point explain every fixed point. Here a moving point
+    ``m`` may explain only its ``k`` nearest fixed points ``K(m)`` (found afresh at every
+    E-step), so the posterior of fixed point ``n`` is spread over ``S_n = {m : n in K(m)}``:
+    ``P(m | x_n) = exp(s_mn) / (sum_{m' in S_n} exp(s_m'n) + c)`` for ``m`` in ``S_n``, else
+    0, with CPD's ``s_mn = -|x_n - T(y_m)|^2 / (2 sigma2)`` (plus GPD's prior) and outlier
+    constant ``c``. A fixed point that is no moving point's neighbour (far clutter) gets no
+    posterior mass at all: it is an outlier whatever ``w``. With ``k >= N`` this is exactly
+    the dense E-step. The objective takes, for such an unclaimed fixed point, the term of its
+    nearest transformed moving point, so it stays finite and continuous.
+
+    ``tree``: a ``scipy.spatial.cKDTree`` of ``fixed`` (built here when None).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> moving = np.array([[0.0, 0.0], [10.0, 0.0]])
+    >>> fixed = np.array([[0.0, 1.0], [10.0, 1.0], [50.0, 50.0]])
+    >>> post = knn_posterior(moving, fixed, 1.0, 0.0, k=1)
+    >>> post.pt1.tolist(), post.best.tolist()  # the far point is claimed by no moving point
+    ([1.0, 1.0, 0.0], [0, 1, -1])
+    """
+    from scipy.spatial import cKDTree
+
+    n_moving, n_dims = moving_t.shape
+    n_fixed = fixed.shape[0]
+    if tree is None:
+        tree = cKDTree(fixed)
+    rows, cols, s = _knn_scores(moving_t, fixed, sigma2, prior, k, tree)
+    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    col_max = np.full(n_fixed, -np.inf)
+    np.maximum.at(col_max, cols, s)
+    claimed = np.isfinite(col_max)
+    ref = np.where(claimed, np.maximum(col_max, log_c), 0.0)
+    e = np.exp(s - ref[cols])
+    col_sum = np.bincount(cols, weights=e, minlength=n_fixed)
+    outlier = np.exp(log_c - ref) if math.isfinite(log_c) else np.zeros(n_fixed)
+    den = col_sum + outlier
+    p = np.divide(e, den[cols], out=np.zeros_like(e), where=den[cols] > 0)
+    p1 = np.bincount(rows, weights=p, minlength=n_moving)
+    pt1 = np.bincount(cols, weights=p, minlength=n_fixed)
+    px = np.empty((n_moving, n_dims))
+    for d in range(n_dims):
+        px[:, d] = np.bincount(rows, weights=p * fixed[cols, d], minlength=n_moving)
+    log_den = np.empty(n_fixed)
+    log_den[claimed] = ref[claimed] + np.log(den[claimed])
+    if not claimed.all():
+        # an unclaimed fixed point: the term of its nearest transformed moving point (and c)
+        d_near = cKDTree(moving_t).query(fixed[~claimed], k=1)[0]
+        log_den[~claimed] = np.logaddexp(-(d_near**2) / (2.0 * sigma2), log_c)
+    # the most probable moving point of each fixed point (-1: the outlier term wins or none claims it)
+    order = np.lexsort((rows, -p, cols))
+    first = np.ones(order.size, dtype=bool)
+    first[1:] = cols[order][1:] != cols[order][:-1]
+    best = np.full(n_fixed, -1, dtype=np.int64)
+    top = order[first]
+    wins = p[top] * den[cols[top]] > outlier[cols[top]]
+    best[cols[top][wins]] = rows[top][wins]
+    nll = float(-np.sum(log_den) + 0.5 * n_fixed * n_dims * math.log(sigma2))
+    return Posteriors(p1=p1, pt1=pt1, px=px, n_p=float(np.sum(pt1)), neg_log_likelihood=nll, best=best, method="knn")
+
+
+def knn_posterior_matrix(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = None, *, k) -> np.ndarray:
+    """The full (M, N) posterior of the k-NN model (see :func:`knn_posterior`; small sets only)."""
+    from scipy.spatial import cKDTree
+
+    n_moving, n_dims = moving_t.shape
+    n_fixed = fixed.shape[0]
+    rows, cols, s = _knn_scores(moving_t, fixed, sigma2, prior, k, cKDTree(fixed))
+    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    full = np.full((n_moving, n_fixed), -np.inf)
+    full[rows, cols] = s
+    ref = np.maximum(full.max(axis=0), log_c)
+    ref = np.where(np.isfinite(ref), ref, 0.0)
+    e = np.exp(full - ref)
+    den = e.sum(axis=0) + (np.exp(log_c - ref) if math.isfinite(log_c) else 0.0)
+    return np.divide(e, den, out=np.zeros_like(e), where=den > 0)
