@@ -149,12 +149,16 @@ def test_fifo_queue_kernel_matches_heap_dijkstra_on_pixel_graphs():
     kind, lengths = _kernels.length_classes(prep.data)
     np.testing.assert_array_equal(lengths, [1.0, np.sqrt(2.0)])
     sources = np.arange(prep.n, dtype=np.int64)
-    fifo = _kernels.class_stats(prep.indptr, prep.indices, kind, lengths, sources)
+    fifo = _kernels.class_stats(prep.indptr, prep.indices, kind, lengths, sources, *_kernels.NO_GRID)
     heap = _kernels.dijkstra_stats(prep.indptr, prep.indices, prep.data, sources)
     for a, b in zip(fifo, heap):
         np.testing.assert_allclose(a, b, rtol=1e-12)
-    plain, n_log, _ = _kernels.class_brandes(prep.indptr, prep.indices, kind, lengths, sources, 1e-10, False, False)
-    logs, n_logs, _ = _kernels.class_brandes(prep.indptr, prep.indices, kind, lengths, sources, 1e-10, True, False)
+    plain, n_log, _ = _kernels.class_brandes(
+        prep.indptr, prep.indices, kind, lengths, sources, 1e-10, False, False, *_kernels.NO_GRID, np.ones(sources.size)
+    )
+    logs, n_logs, _ = _kernels.class_brandes(
+        prep.indptr, prep.indices, kind, lengths, sources, 1e-10, True, False, *_kernels.NO_GRID, np.ones(sources.size)
+    )
     ref, _ = _kernels.brandes(prep.indptr, prep.indices, prep.data, sources, True, 1e-10, False)
     assert n_log == 0 and n_logs == prep.n
     np.testing.assert_allclose(plain, ref, rtol=1e-10)
@@ -224,7 +228,7 @@ def test_fifo_kernel_property_random_masks():
         classes = _kernels.length_classes(prep.data)
         if classes is not None:
             sources = np.arange(prep.n, dtype=np.int64)
-            fifo = _kernels.class_stats(prep.indptr, prep.indices, *classes, sources)
+            fifo = _kernels.class_stats(prep.indptr, prep.indices, *classes, sources, *_kernels.NO_GRID)
             heap = _kernels.dijkstra_stats(prep.indptr, prep.indices, prep.data, sources)
             for a, b in zip(fifo, heap):
                 np.testing.assert_allclose(a, b, rtol=1e-12)

@@ -47,6 +47,8 @@ def test_grid_equals_adjacency_lists_on_any_mask(mask, connectivity, mirror):
         return
     graph, _ = pixel_graph(mask, connectivity=connectivity)
     _close(cen.betweenness(graph, normalized=True), cen.betweenness(_plain(graph), normalized=True))
+    _close(cen.betweenness(graph, weights=True), cen.betweenness(_plain(graph), weights=True))
+    _close(cen.closeness(graph, weights=True), cen.closeness(_plain(graph), weights=True))
 
 
 @pytest.mark.parametrize("connectivity", [26, 18, 6])
@@ -56,8 +58,20 @@ def test_grid_equals_adjacency_lists_in_3d(connectivity):
     symmetric = np.ones((4, 4, 4), dtype=bool)
     symmetric[1:3, 1:3, 1:3] = False
     for mask in (volume, symmetric):
-        graph, _ = pixel_graph(mask, connectivity=connectivity)
-        _close(cen.betweenness(graph), cen.betweenness(_plain(graph)))
+        for spacing in (None, (1.0, 2.0, 0.5)):
+            graph, _ = pixel_graph(mask, connectivity=connectivity, spacing=spacing)
+            _close(cen.betweenness(graph), cen.betweenness(_plain(graph)))
+            for name in ("betweenness", "closeness", "harmonic"):
+                _close(cen.compute(graph, name, weights=True), cen.compute(_plain(graph), name, weights=True))
+
+
+def test_anisotropic_spacing_keeps_only_the_isometries():
+    graph, _ = pixel_graph(_disk(6), spacing=(1.0, 1.5))
+    values, info = cen.betweenness(graph, weights=True, return_info=True)
+    assert info["symmetries"] == 4  # the flips; the transposes would swap the spacings
+    _close(values, cen.betweenness(_plain(graph), weights=True))
+    _, info = cen.betweenness(graph, return_info=True)
+    assert info["symmetries"] == 8  # hop counts do not see the spacing
 
 
 def test_grid_agrees_with_networkx():
@@ -110,10 +124,12 @@ def test_overflowing_counts_fall_back_to_logarithms():
     mask = np.ones((5, 1100), dtype=bool)  # more than 1e300 shortest paths end to end
     mask[2, 500] = False
     graph, _ = pixel_graph(mask)
-    values, info = cen.betweenness(graph, normalized=True, return_info=True)
-    assert info["log_searches"] > 0 and info["symmetries"] == 2
-    assert np.all(np.isfinite(values))
-    _close(values, cen.betweenness(_plain(graph), normalized=True))
+    for weights in (False, True):
+        values, info = cen.betweenness(graph, normalized=True, weights=weights, return_info=True)
+        # By length the straight paths win and counts stay small; by hops they overflow.
+        assert (info["log_searches"] > 0) != weights and info["symmetries"] == 2
+        assert np.all(np.isfinite(values))
+        _close(values, cen.betweenness(_plain(graph), normalized=True, weights=weights))
 
 
 def test_edited_pixel_graph_is_treated_as_a_plain_graph():

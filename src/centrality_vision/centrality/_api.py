@@ -186,19 +186,24 @@ def _length_stats(indptr, indices, data, progress: bool, desc: str):
     def task(lo, hi):
         sources = np.arange(lo, hi, dtype=np.int64)
         if classes is not None:
-            return _kernels.class_stats(indptr, indices, classes[0], classes[1], sources)
+            return _kernels.class_stats(indptr, indices, classes[0], classes[1], sources, *_kernels.NO_GRID)
         return _kernels.dijkstra_stats(indptr, indices, data, sources)
 
     parts = [r for _, _, r in run_chunks(task, n, progress=progress, desc=desc)]
     return [np.concatenate(p) for p in zip(*parts)]
 
 
-def _distance_stats(prep: _Prepared, weights: bool, progress: bool, desc: str, inward: bool):
+def _distance_stats(prep: _Prepared, weights: bool, progress: bool, desc: str, inward: bool, graph=None):
     """Per node: sum of distances, sum of inverse distances, eccentricity, nodes reached.
 
     ``inward``: distances to the node (closeness, harmonic); else from it (eccentricity).
-    The two coincide on undirected graphs.
+    The two coincide on undirected graphs. With lengths, a ``graph`` that is a pixel graph
+    of its mask is searched on the pixel grid.
     """
+    if weights and graph is not None and _on_pixel_grid(graph):
+        from ._grid import grid_length_stats
+
+        return grid_length_stats(graph, progress, desc)  # node order already
     if weights:
         # Per-source searches give distances from the source: reverse the arcs for inward.
         indptr, indices, data = prep.transposed() if inward else (prep.indptr, prep.indices, prep.data)
@@ -373,10 +378,10 @@ def betweenness(
         values = prep.unpermute(values)  # normalised
         if not normalized:
             values = values * pairs
-    elif not weights and _on_pixel_grid(graph):
+    elif _on_pixel_grid(graph):
         from ._grid import grid_betweenness
 
-        values, info = grid_betweenness(graph, progress)
+        values, info = grid_betweenness(graph, weights, progress)
         values = values * 0.5  # every unordered pair was counted from both ends
         if normalized:
             values = values / pairs if n > 2 else np.zeros(n)
@@ -387,8 +392,18 @@ def betweenness(
         def task(lo, hi):
             sources = np.arange(lo, hi, dtype=np.int64)
             if classes is not None:
+                ones = np.ones(sources.size)
                 return _kernels.class_brandes(
-                    prep.indptr, prep.indices, classes[0], classes[1], sources, _kernels.TIE_RTOL, False, False
+                    prep.indptr,
+                    prep.indices,
+                    classes[0],
+                    classes[1],
+                    sources,
+                    _kernels.TIE_RTOL,
+                    False,
+                    False,
+                    *_kernels.NO_GRID,
+                    ones,
                 )[0]
             return _kernels.brandes(prep.indptr, prep.indices, prep.data, sources, weights, _kernels.TIE_RTOL, False)[0]
 
@@ -580,7 +595,7 @@ def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc):
         total, inverse, largest, reached, info = sample_sources(prep, epsilon, delta, seed, progress, desc)
         stats = [prep.unpermute(v) for v in (total, inverse, largest, reached)]
     else:
-        stats = _distance_stats(prep, weights, progress, desc, inward=True)
+        stats = _distance_stats(prep, weights, progress, desc, inward=True, graph=graph)
         info = {"searches": prep.n, "samples": 0}
     info["labels"] = prep.labels
     return (prep.n, *stats, info)
@@ -736,7 +751,7 @@ def eccentricity(
         if largest is not None:
             largest = prep.unpermute(largest)
     if largest is None:
-        largest = _distance_stats(prep, weights, progress, "eccentricity", inward=False)[2]
+        largest = _distance_stats(prep, weights, progress, "eccentricity", inward=False, graph=graph)[2]
         searches += prep.n if weights else int(math.ceil(prep.n / 64))
     if normalized:
         top = largest.max()

@@ -94,27 +94,52 @@ def _apply(image: np.ndarray, transform) -> np.ndarray:
     return np.flip(moved, flipped) if flipped else moved
 
 
-def _offsets(shape, connectivity: int) -> np.ndarray:
-    """Raster offsets of the neighbours within ``connectivity`` orthogonal steps."""
-    strides = np.cumprod((1,) + tuple(shape[:0:-1]))[::-1]
-    steps = [d for d in itertools.product((-1, 0, 1), repeat=len(shape)) if 0 < np.abs(d).sum() <= connectivity]
-    return np.array([int(np.dot(d, strides)) for d in steps], dtype=np.int64)
+def _steps(ndim: int, connectivity: int) -> list[tuple[int, ...]]:
+    """Neighbour steps within ``connectivity`` orthogonal moves, in a fixed order."""
+    return [d for d in itertools.product((-1, 0, 1), repeat=ndim) if 0 < np.abs(d).sum() <= connectivity]
 
 
 # pixel_graph's connectivity -> the most orthogonal steps of one neighbour
 _MAX_STEPS = {4: 1, 8: 2, 6: 1, 18: 2, 26: 3}
 
 
-def grid_betweenness(graph, progress: bool = False) -> tuple[np.ndarray, dict]:
+class _Grid:
+    """A PixelGraph's mask cropped to its bounding box and padded by one background pixel,
+    with the raster index of each node (node order = row-major = the graph's order)."""
+
+    def __init__(self, graph):
+        mask = np.asarray(graph.mask, dtype=bool)
+        box = tuple(slice(int(i.min()), int(i.max()) + 1) for i in np.nonzero(mask))
+        self.crop = mask[box]
+        self.padded = np.pad(self.crop, 1)
+        self.foreground = self.padded.ravel()
+        self.raster = np.ravel_multi_index(np.nonzero(self.padded), self.padded.shape).astype(np.int64)
+        self.steps = _steps(mask.ndim, _MAX_STEPS[int(graph.connectivity)])
+        strides = np.cumprod((1,) + self.padded.shape[:0:-1])[::-1]
+        self.offs = np.array([int(np.dot(d, strides)) for d in self.steps], dtype=np.int64)
+        spacing = np.ones(mask.ndim) if graph.spacing is None else np.asarray(graph.spacing, dtype=np.float64)
+        self.spacing = spacing
+        # Edge lengths as pixel_graph computes them, in classes as the adjacency kernels take them.
+        step_lengths = np.array([np.sqrt(np.sum((np.asarray(d) * spacing) ** 2)) for d in self.steps])
+        self.kind, self.lengths = _kernels.length_classes(step_lengths, max_classes=len(self.steps))
+
+    def image(self, raster_values: np.ndarray) -> np.ndarray:
+        """Values on the padded raster -> an image of the crop."""
+        inner = tuple(slice(1, -1) for _ in self.padded.shape)
+        return raster_values.reshape(self.padded.shape)[inner]
+
+
+def grid_betweenness(graph, weights: bool = False, progress: bool = False) -> tuple[np.ndarray, dict]:
     """Ordered-pair betweenness sums (node order of ``graph``) of a PixelGraph that
-    :meth:`~centrality_vision.graphs.PixelGraph.matches_mask`.
+    :meth:`~centrality_vision.graphs.PixelGraph.matches_mask`, by hops or by edge length.
 
     Returns the sums and an info dict with ``searches`` and ``symmetries`` (``|G|``).
     """
-    mask = np.asarray(graph.mask, dtype=bool)
-    box = tuple(slice(int(i.min()), int(i.max()) + 1) for i in np.nonzero(mask))
-    crop = mask[box]
+    grid = _Grid(graph)
+    crop = grid.crop
     group = mask_symmetries(crop)
+    if weights:  # with lengths, an axis permutation must also keep the spacing
+        group = [t for t in group if np.array_equal(grid.spacing[list(t[0])], grid.spacing)]
     # Orbit representative of each pixel: its smallest raster index over the group's maps.
     big = np.iinfo(np.int64).max
     index = np.where(crop, np.arange(crop.size, dtype=np.int64).reshape(crop.shape), big)
@@ -125,22 +150,50 @@ def grid_betweenness(graph, progress: bool = False) -> tuple[np.ndarray, dict]:
     flat_index = index[crop]
     is_rep = flat_rep == flat_index
     orbit_size = np.bincount(np.searchsorted(flat_index, flat_rep), minlength=flat_index.size)
-    weights = orbit_size[is_rep] / len(group)
-    padded = np.pad(crop, 1)
-    coords = np.nonzero(padded)  # row-major: node order
-    raster = np.ravel_multi_index(coords, padded.shape).astype(np.int64)
-    sources = raster[is_rep]
-    offs = _offsets(padded.shape, _MAX_STEPS[int(graph.connectivity)])
-    foreground = padded.ravel()
+    source_weights = orbit_size[is_rep] / len(group)
+    sources = grid.raster[is_rep]
+    empty_lists = np.empty(0, dtype=np.int64)
+    empty_heads = np.empty(0, dtype=np.int32)
 
     def task(lo, hi):
-        return grid_brandes(foreground, offs, sources[lo:hi], weights[lo:hi])
+        if weights:
+            part, n_log, _ = _kernels.class_brandes(
+                empty_lists,
+                empty_heads,
+                grid.kind,
+                grid.lengths,
+                sources[lo:hi],
+                _kernels.TIE_RTOL,
+                False,
+                False,
+                grid.offs,
+                grid.foreground,
+                source_weights[lo:hi],
+            )
+            return part, n_log
+        return grid_brandes(grid.foreground, grid.offs, sources[lo:hi], source_weights[lo:hi])
 
-    total = np.zeros(padded.size)
+    total = np.zeros(grid.padded.size)
     n_log = 0
     for _, _, (part, count) in run_chunks(task, sources.size, progress=progress, desc="betweenness"):
         total += part
         n_log += count
-    sums = total.reshape(padded.shape)[tuple(slice(1, -1) for _ in padded.shape)]
+    sums = grid.image(total)
     sums = sum(_apply(sums, transform) for transform in group)
     return sums[crop], {"searches": int(sources.size), "symmetries": len(group), "log_searches": n_log}
+
+
+def grid_length_stats(graph, progress: bool, desc: str) -> list[np.ndarray]:
+    """Per node (node order of ``graph``), by edge length: sum of distances, of inverse
+    distances, largest distance, nodes reached: one grid-mode FIFO-queue search per node."""
+    grid = _Grid(graph)
+    empty_lists = np.empty(0, dtype=np.int64)
+    empty_heads = np.empty(0, dtype=np.int32)
+
+    def task(lo, hi):
+        return _kernels.class_stats(
+            empty_lists, empty_heads, grid.kind, grid.lengths, grid.raster[lo:hi], grid.offs, grid.foreground
+        )
+
+    parts = [r for _, _, r in run_chunks(task, grid.raster.size, progress=progress, desc=desc)]
+    return [np.concatenate(p) for p in zip(*parts)]

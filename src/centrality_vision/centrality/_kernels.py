@@ -30,6 +30,7 @@ __all__ = ["TIE_RTOL", "dijkstra_stats", "multi_source_stats", "compact_groups",
 
 TIE_RTOL = 1e-10
 _OVERFLOW = 1e300
+NO_GRID = (np.empty(0, dtype=np.int64), np.empty(0, dtype=np.bool_))  # offs, foreground: adjacency lists
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -536,13 +537,15 @@ def length_classes(data, max_classes=8, rtol=1e-9):
 
 
 @njit(cache=True, nogil=True)
-def _class_workspace(n, kind, n_classes):
+def _class_workspace(n, kind, n_classes, repeat=1):
+    """Integer length counts, distances, flags and one FIFO queue per class, each as long
+    as the arcs of its class (``repeat`` times ``kind``: the grid mode's per-pixel offsets)."""
     counts = np.zeros((n, n_classes), dtype=np.int32)
     dist = np.full(n, np.inf)
     done = np.zeros(n, dtype=np.bool_)
     qstart = np.zeros(n_classes + 1, dtype=np.int64)
     for j in range(kind.shape[0]):
-        qstart[kind[j] + 1] += 1
+        qstart[kind[j] + 1] += repeat
     for k in range(n_classes):
         qstart[k + 1] += qstart[k]
     qnode = np.empty(qstart[n_classes], dtype=np.int64)
@@ -550,9 +553,30 @@ def _class_workspace(n, kind, n_classes):
 
 
 @njit(cache=True, nogil=True)
+def _walk_workspace(indptr, kind, n_classes, offs, foreground):
+    """``(n, grid, workspace)`` for adjacency lists, or for the grid mode when ``offs`` is
+    not empty: one node per raster pixel, background pixels flagged as settled forever."""
+    grid = offs.shape[0] > 0
+    if not grid:
+        n = indptr.shape[0] - 1
+        return n, grid, _class_workspace(n, kind, n_classes, 1)
+    n = foreground.shape[0]
+    n_pixels = 0
+    for i in range(n):
+        if foreground[i]:
+            n_pixels += 1
+    counts, dist, done, qstart, qnode = _class_workspace(n, kind, n_classes, n_pixels)
+    for i in range(n):
+        done[i] = not foreground[i]
+    return n, grid, (counts, dist, done, qstart, qnode)
+
+
+@njit(cache=True, nogil=True)
 def _class_search(
     indptr,
     indices,
+    offs,
+    grid,
     kind,
     lengths,
     s,
@@ -602,8 +626,9 @@ def _class_search(
             for k in range(n_classes):
                 nd += (counts[v, k] + (1 if k == c else 0)) * lengths[k]
             cand[c] = nd
-        for j in range(indptr[v], indptr[v + 1]):
-            w = indices[j]
+        lo, hi = _span(indptr, offs, grid, v)
+        for j in range(lo, hi):
+            w = _neighbour(indices, offs, grid, v, j)
             if done[w]:
                 continue
             c = kind[j]
@@ -650,16 +675,19 @@ def _class_search(
 
 
 @njit(cache=True, nogil=True)
-def class_stats(indptr, indices, kind, lengths, sources):
-    """As :func:`dijkstra_stats`, by the FIFO-queue search of few-length graphs."""
-    n = indptr.shape[0] - 1
+def class_stats(indptr, indices, kind, lengths, sources, offs, foreground):
+    """As :func:`dijkstra_stats`, by the FIFO-queue search of few-length graphs.
+
+    Grid mode when ``offs`` is not empty: nodes are the pixels of the padded raster
+    ``foreground`` (see :mod:`._grid`), ``kind`` the class of each offset.
+    """
+    n, grid, (counts, dist, done, qstart, qnode) = _walk_workspace(indptr, kind, lengths.shape[0], offs, foreground)
     k = sources.shape[0]
     total = np.zeros(k)
     inverse = np.zeros(k)
     largest = np.zeros(k)
     reached = np.zeros(k, dtype=np.int64)
     order = np.empty(n, dtype=np.int64)
-    counts, dist, done, qstart, qnode = _class_workspace(n, kind, lengths.shape[0])
     qhead = np.empty(lengths.shape[0], dtype=np.int64)
     qtail = np.empty(lengths.shape[0], dtype=np.int64)
     cand = np.empty(lengths.shape[0])
@@ -668,6 +696,8 @@ def class_stats(indptr, indices, kind, lengths, sources):
         count = _class_search(
             indptr,
             indices,
+            offs,
+            grid,
             kind,
             lengths,
             sources[i],
@@ -702,19 +732,20 @@ def class_stats(indptr, indices, kind, lengths, sources):
 
 
 @njit(cache=True, nogil=True)
-def class_brandes(indptr, indices, kind, lengths, sources, rtol, force_log, edge_values):
-    """As :func:`brandes` with edge lengths, by the FIFO-queue search of few-length graphs.
+def class_brandes(indptr, indices, kind, lengths, sources, rtol, force_log, edge_values, offs, foreground, weights):
+    """As :func:`brandes` with edge lengths, by the FIFO-queue search of few-length graphs,
+    adding ``weights[i]`` times the dependencies of ``sources[i]``.
 
     With ``edge_values`` also returns the per-arc dependencies (edge betweenness parts).
+    Grid mode as in :func:`class_stats`.
     """
-    n = indptr.shape[0] - 1
+    n, grid, (counts, dist, done, qstart, qnode) = _walk_workspace(indptr, kind, lengths.shape[0], offs, foreground)
     bc = np.zeros(n)
     eb = np.zeros(indices.shape[0] if edge_values else 0)
     n_log = 0
     order = np.empty(n, dtype=np.int64)
     sigma = np.empty(n)
     delta = np.zeros(n)
-    counts, dist, done, qstart, qnode = _class_workspace(n, kind, lengths.shape[0])
     qhead = np.empty(lengths.shape[0], dtype=np.int64)
     qtail = np.empty(lengths.shape[0], dtype=np.int64)
     cand = np.empty(lengths.shape[0])
@@ -725,6 +756,8 @@ def class_brandes(indptr, indices, kind, lengths, sources, rtol, force_log, edge
             count = _class_search(
                 indptr,
                 indices,
+                offs,
+                grid,
                 kind,
                 lengths,
                 s,
@@ -751,7 +784,23 @@ def class_brandes(indptr, indices, kind, lengths, sources, rtol, force_log, edge
         if use_log:
             n_log += 1
         _accumulate(
-            indptr, indices, lengths, kind, order, count, dist, sigma, delta, bc, eb, use_log, rtol, edge_values
+            indptr,
+            indices,
+            offs,
+            grid,
+            lengths,
+            kind,
+            order,
+            count,
+            dist,
+            sigma,
+            delta,
+            bc,
+            eb,
+            use_log,
+            rtol,
+            edge_values,
+            weights[i],
         )
         for q in range(count):
             dist[order[q]] = np.inf
@@ -760,7 +809,25 @@ def class_brandes(indptr, indices, kind, lengths, sources, rtol, force_log, edge
 
 
 @njit(cache=True, nogil=True)
-def _accumulate(indptr, indices, lengths, kind, order, count, dist, sigma, delta, bc, eb, use_log, rtol, edge_values):
+def _accumulate(
+    indptr,
+    indices,
+    offs,
+    grid,
+    lengths,
+    kind,
+    order,
+    count,
+    dist,
+    sigma,
+    delta,
+    bc,
+    eb,
+    use_log,
+    rtol,
+    edge_values,
+    weight,
+):
     """Brandes' backward pass over a few-length search (successor: d(v) + len = d(w))."""
     for q in range(count):
         delta[order[q]] = 0.0
@@ -768,8 +835,9 @@ def _accumulate(indptr, indices, lengths, kind, order, count, dist, sigma, delta
         v = order[q]
         dv = dist[v]
         acc = 0.0
-        for j in range(indptr[v], indptr[v + 1]):
-            w = indices[j]
+        lo, hi = _span(indptr, offs, grid, v)
+        for j in range(lo, hi):
+            w = _neighbour(indices, offs, grid, v, j)
             dw = dist[w]
             if dw > dv and dw < np.inf and abs(dv + lengths[kind[j]] - dw) <= rtol * dw:
                 if use_log:
@@ -781,7 +849,7 @@ def _accumulate(indptr, indices, lengths, kind, order, count, dist, sigma, delta
                     eb[j] += part
         if q > 0:
             delta[v] = acc
-            bc[v] += acc
+            bc[v] += weight * acc
 
 
 @njit(cache=True, nogil=True)
@@ -798,6 +866,7 @@ def distances_from(indptr, indices, data, kind, lengths, s, weighted):
             out[order[q]] = hops[order[q]]
         return out
     if kind.shape[0] > 0:
+        no_offs = np.empty(0, dtype=np.int64)
         counts, dist, done, qstart, qnode = _class_workspace(n, kind, lengths.shape[0])
         qhead = np.empty(lengths.shape[0], dtype=np.int64)
         qtail = np.empty(lengths.shape[0], dtype=np.int64)
@@ -805,6 +874,8 @@ def distances_from(indptr, indices, data, kind, lengths, s, weighted):
         _class_search(
             indptr,
             indices,
+            no_offs,
+            False,
             kind,
             lengths,
             s,
