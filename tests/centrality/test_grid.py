@@ -170,3 +170,22 @@ def test_grid_results_do_not_depend_on_thread_count():
     finally:
         cv.set_num_threads(None)
     np.testing.assert_allclose(multi, single, rtol=1e-12)
+
+
+def test_sampled_betweenness_on_the_grid_keeps_its_bound():
+    mask = _disk(14)
+    mask[:3, 10:] = True  # no symmetry
+    graph, _ = pixel_graph(mask)
+    exact = cen.betweenness(graph, normalized=True)
+    try:
+        cv.set_num_threads(1)
+        single, info = cen.betweenness(graph, normalized=True, epsilon=0.03, seed=5, return_info=True)
+        cv.set_num_threads(3)
+        multi = cen.betweenness(graph, normalized=True, epsilon=0.03, seed=5)
+    finally:
+        cv.set_num_threads(None)
+    np.testing.assert_array_equal(single, multi)  # the thread count changes nothing
+    assert np.abs(single - exact).max() <= info["bound"] <= 0.03
+    # Same estimator as on the adjacency lists: the same guarantee, other draws.
+    plain = cen.betweenness(_plain(graph), normalized=True, epsilon=0.03, seed=5)
+    assert np.abs(plain - exact).max() <= 0.03

@@ -374,8 +374,13 @@ def betweenness(
         from ._approx import sample_betweenness
 
         epsilon, delta = _check_epsilon(epsilon, delta)
-        values, info = sample_betweenness(prep, epsilon, delta, seed, progress)
-        values = prep.unpermute(values)  # normalised
+        if _on_pixel_grid(graph):
+            from ._grid import _Grid
+
+            values, info = sample_betweenness(prep, epsilon, delta, seed, progress, grid=_Grid(graph))
+        else:
+            values, info = sample_betweenness(prep, epsilon, delta, seed, progress)
+            values = prep.unpermute(values)  # normalised
         if not normalized:
             values = values * pairs
     elif _on_pixel_grid(graph):

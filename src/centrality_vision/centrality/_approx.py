@@ -56,8 +56,12 @@ def _bernstein(hits: np.ndarray, k: int, log_term: float) -> float:
     return math.sqrt(2.0 * variance * log_term / k) + 7.0 * log_term / (3.0 * (k - 1))
 
 
-def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool):
-    """Normalised betweenness estimates (node order of ``prep``) and an info dict."""
+def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool, grid=None):
+    """Normalised betweenness estimates (node order of ``prep``) and an info dict.
+
+    With ``grid`` (a :class:`._grid._Grid` of the same graph) the searches walk the pixel
+    grid, and the estimates come in the node order of the graph itself (not ``prep``'s).
+    """
     n = prep.n
     rng = as_generator(seed)  # validated even when there is nothing to sample
     if n < 3:
@@ -81,7 +85,14 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool)
     pairs = np.stack([s, t], axis=1).astype(np.int64)
     stream = int(rng.integers(0, 2**63 - 1))
     t_indptr, t_indices, _ = prep.transposed()
-    hits = np.zeros(n, dtype=np.int64)
+    offs, foreground = _kernels.NO_GRID
+    indptr, indices = prep.indptr, prep.indices
+    if grid is not None:
+        offs, foreground = grid.offs, grid.foreground
+        indptr = t_indptr = np.empty(0, dtype=np.int64)
+        indices = t_indices = np.empty(0, dtype=np.int32)
+        pairs = grid.raster[pairs]
+    hits = np.zeros(foreground.size if grid is not None else n, dtype=np.int64)
     done = 0
     bound = math.inf
     visited = 0
@@ -89,7 +100,7 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool)
 
         def task(lo, hi, first=done):
             return _sampling.sample_paths(
-                prep.indptr, prep.indices, t_indptr, t_indices, pairs, stream, first + lo, first + hi
+                indptr, indices, t_indptr, t_indices, pairs, stream, first + lo, first + hi, offs, foreground
             )
 
         for _, _, (part, work) in run_chunks(task, k - done, progress=progress, desc="betweenness samples"):
@@ -101,6 +112,8 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool)
             break
     if done == cap:
         bound = min(bound, target)
+    if grid is not None:
+        hits = hits[grid.raster]
     return hits / done * n / (n - 2), {
         "samples": done,
         "searches": done,

@@ -10,10 +10,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ._kernels import _neighbour, _span
+
 __all__ = ["sample_paths", "uniform"]
 
 _GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 _RESCALE = 1e200
+_BLOCKED = 1 << 40  # grid mode: the distance of background pixels, never a search level
 
 
 @njit(cache=True, nogil=True, inline="always")
@@ -32,7 +35,7 @@ def uniform(seed, sample, step):
 
 
 @njit(cache=True, nogil=True)
-def _expand(indptr, indices, frontier, n_front, dist, sigma, other, nxt, visited, n_visited):
+def _expand(indptr, indices, offs, grid, frontier, n_front, dist, sigma, other, nxt, visited, n_visited):
     """One breadth-first level of one side; returns (n_next, n_visited, met)."""
     level = dist[frontier[0]] + 1
     n_next = 0
@@ -40,8 +43,9 @@ def _expand(indptr, indices, frontier, n_front, dist, sigma, other, nxt, visited
     for a in range(n_front):
         v = frontier[a]
         sv = sigma[v]
-        for j in range(indptr[v], indptr[v + 1]):
-            w = indices[j]
+        lo, hi = _span(indptr, offs, grid, v)
+        for j in range(lo, hi):
+            w = _neighbour(indices, offs, grid, v, j)
             dw = dist[w]
             if dw < 0:
                 dist[w] = level
@@ -65,21 +69,22 @@ def _expand(indptr, indices, frontier, n_front, dist, sigma, other, nxt, visited
 
 
 @njit(cache=True, nogil=True)
-def _walk(indptr, indices, start, dist, sigma, seed, sample, step, hits, path_len):
+def _walk(indptr, indices, offs, grid, start, dist, sigma, seed, sample, step, hits, path_len):
     """Walk from ``start`` down to distance 0, each step to a predecessor drawn with
     probability proportional to its path count; counts the inner nodes in ``hits``."""
     v = start
     while dist[v] > 1:
         total = 0.0
-        for j in range(indptr[v], indptr[v + 1]):
-            w = indices[j]
+        lo, hi = _span(indptr, offs, grid, v)
+        for j in range(lo, hi):
+            w = _neighbour(indices, offs, grid, v, j)
             if dist[w] == dist[v] - 1:
                 total += sigma[w]
         r = uniform(seed, sample, step) * total
         step += 1
         pick = -1
-        for j in range(indptr[v], indptr[v + 1]):
-            w = indices[j]
+        for j in range(lo, hi):
+            w = _neighbour(indices, offs, grid, v, j)
             if dist[w] == dist[v] - 1:
                 pick = w
                 r -= sigma[w]
@@ -92,18 +97,26 @@ def _walk(indptr, indices, start, dist, sigma, seed, sample, step, hits, path_le
 
 
 @njit(cache=True, nogil=True)
-def sample_paths(indptr, indices, t_indptr, t_indices, pairs, seed, first, stop):
+def sample_paths(indptr, indices, t_indptr, t_indices, pairs, seed, first, stop, offs, foreground):
     """Riondato-Kornaropoulos samples ``first .. stop - 1``: for each pair ``(s, t)`` a
     shortest path drawn uniformly at random by a balanced bidirectional breadth-first
     search; returns how often each node was an inner node of a drawn path, and the
     number of nodes the searches visited.
 
     ``t_indptr, t_indices`` is the transposed adjacency (the same arrays when undirected).
+    Grid mode when ``offs`` is not empty: nodes are the pixels of the padded raster
+    ``foreground`` (undirected; background pixels are never reached).
     """
-    n = indptr.shape[0] - 1
+    grid = offs.shape[0] > 0
+    n = foreground.shape[0] if grid else indptr.shape[0] - 1
     hits = np.zeros(n, dtype=np.int64)
     dist_s = np.full(n, -1, dtype=np.int64)
     dist_t = np.full(n, -1, dtype=np.int64)
+    if grid:  # background: a distance no level reaches, and "seen" so never entered
+        for i in range(n):
+            if not foreground[i]:
+                dist_s[i] = _BLOCKED
+                dist_t[i] = _BLOCKED
     sig_s = np.zeros(n)
     sig_t = np.zeros(n)
     front_s = np.empty(n, dtype=np.int64)
@@ -129,21 +142,24 @@ def sample_paths(indptr, indices, t_indptr, t_indices, pairs, seed, first, stop)
         meet_side = 0
         while not met and ns > 0 and nt > 0:
             # Expand the side whose frontier has fewer arcs to scan.
-            cost_s = 0
-            for a in range(ns):
-                cost_s += indptr[front_s[a] + 1] - indptr[front_s[a]]
-            cost_t = 0
-            for a in range(nt):
-                cost_t += t_indptr[front_t[a] + 1] - t_indptr[front_t[a]]
+            cost_s = ns  # the grid: every pixel has the same offsets to scan
+            cost_t = nt
+            if not grid:
+                cost_s = 0
+                for a in range(ns):
+                    cost_s += indptr[front_s[a] + 1] - indptr[front_s[a]]
+                cost_t = 0
+                for a in range(nt):
+                    cost_t += t_indptr[front_t[a] + 1] - t_indptr[front_t[a]]
             if cost_s <= cost_t:
                 ns, n_visited, met = _expand(
-                    indptr, indices, front_s, ns, dist_s, sig_s, dist_t, nxt, visited, n_visited
+                    indptr, indices, offs, grid, front_s, ns, dist_s, sig_s, dist_t, nxt, visited, n_visited
                 )
                 front_s[:ns] = nxt[:ns]
                 meet_side = 0
             else:
                 nt, n_visited, met = _expand(
-                    t_indptr, t_indices, front_t, nt, dist_t, sig_t, dist_s, nxt, visited, n_visited
+                    t_indptr, t_indices, offs, grid, front_t, nt, dist_t, sig_t, dist_s, nxt, visited, n_visited
                 )
                 front_t[:nt] = nxt[:nt]
                 meet_side = 1
@@ -170,8 +186,8 @@ def sample_paths(indptr, indices, t_indptr, t_indices, pairs, seed, first, stop)
             if pick != s and pick != t:
                 hits[pick] += 1
             # Towards s over in-arcs of the forward search, towards t over out-arcs.
-            step, _ = _walk(t_indptr, t_indices, pick, dist_s, sig_s, seed, i, 1, hits, 0)
-            _walk(indptr, indices, pick, dist_t, sig_t, seed, i, step, hits, 0)
+            step, _ = _walk(t_indptr, t_indices, offs, grid, pick, dist_s, sig_s, seed, i, 1, hits, 0)
+            _walk(indptr, indices, offs, grid, pick, dist_t, sig_t, seed, i, step, hits, 0)
         for q in range(n_visited):
             v = visited[q]
             dist_s[v] = -1
