@@ -86,11 +86,24 @@ def test_grey_images_and_inputs_not_modified():
     np.testing.assert_array_equal(grey, before)
 
 
-def test_profiles_shape_and_counterclockwise_start_invariance():
-    p = outline_profiles(_ell(), n_points=40)
-    assert p.shape == (40, 8 + 25)
-    reach = p[:, :8] / 2.0  # REACH_WEIGHT
-    assert np.all(np.diff(reach, axis=1) >= 0) and np.all((reach > 0) & (reach <= 1))
+def test_profile_features_reach_quantiles_and_visibility():
+    from centrality_vision.shapes._retrieval import FEATURE_SCALES
+
+    raw = outline_profiles(_ell(), n_points=40) * np.asarray(FEATURE_SCALES)
+    assert raw.shape == (40, 8 + 20 + 10)
+    reach, quantiles, visibility = raw[:, :8], raw[:, 8:28], raw[:, 28:]
+    # shares of the shape, growing with the radius; quantiles growing with the level
+    assert np.all(np.diff(reach, axis=1) >= 0) and np.all((reach > 0) & (reach <= 1 + 1e-12))
+    assert np.all(np.diff(quantiles, axis=1) >= -1e-12) and np.all(quantiles >= 0)
+    assert np.all((visibility > 0) & (visibility <= 1 + 1e-12))
+    # The L's outline sees round its inner corner: some points see part of it at a
+    # visibility well below 1. A convex rectangle is seen straight: an 8-neighbour path is
+    # at most 1/cos(22.5 deg) = 1.0824 times the straight line.
+    assert visibility[:, 0].min() < 0.8
+    box = np.zeros((60, 60), dtype=bool)
+    box[10:50, 20:40] = True
+    seen = outline_profiles(box, n_points=40)[:, 28:] * np.asarray(FEATURE_SCALES[28:])
+    assert seen.min() >= 1 / 1.0824 - 1e-9
 
 
 def test_normalize_shape_keeps_largest_part_and_area():
