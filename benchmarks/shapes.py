@@ -12,7 +12,8 @@ prints its wall-clock time, split into centralities and classifiers.
 Three other measurements, each on its own (outputs committed in results/benchmarks/):
 
     python benchmarks/shapes.py --cv           # cross_val_score n_jobs=1 vs 2, cold shared disk cache
-    python benchmarks/shapes.py --rotation     # held-out accuracy on test shapes rotated by 37 degrees
+    python benchmarks/shapes.py --rotation     # held-out accuracy on test shapes rotated by 15, 37, 60 degrees
+    python benchmarks/shapes.py --rotation --cache DIR   # keep / reuse the centralities in DIR
     python benchmarks/shapes.py --eigenvector  # why eigenvector histograms collapse under salt noise
 """
 
@@ -35,6 +36,7 @@ def main() -> None:
     parser.add_argument("--cv", action="store_true")
     parser.add_argument("--rotation", action="store_true")
     parser.add_argument("--eigenvector", action="store_true")
+    parser.add_argument("--cache", default=None, help="--rotation: a directory that keeps the centralities")
     args = parser.parse_args()
     if args.cv or args.rotation or args.eigenvector:
         sys.path.insert(0, os.path.dirname(__file__))
@@ -44,7 +46,7 @@ def main() -> None:
         if args.cv:
             cross_validation_jobs(table)
         if args.rotation:
-            rotation(table, args.seed)
+            rotation(table, args.seed, args.cache)
         if args.eigenvector:
             eigenvector_collapse(table, args.seed)
         print(load_line("timings are inflated by the other processes"))
@@ -94,13 +96,19 @@ def cross_validation_jobs(table) -> None:
     """5-fold cross_val_score of closeness histograms + naive Bayes on Kimia-99, n_jobs=1 vs 2.
 
     Each run starts with an empty cache directory (cold): with n_jobs=2 the two worker
-    processes share it, each image computed once by one of them.
+    processes share it, each image computed once by one of them. With n_jobs=1 the
+    centrality kernels already run on a pool of threads, one per core; the third
+    configuration, n_jobs=1 on one kernel thread, shows what one core does alone, so the
+    speed-up of the two parallel forms (threads inside a fold, processes across folds)
+    can be read off. Each configuration runs three times, interleaved; the load average
+    beside each run says how many cores the other processes on the machine took.
     """
     from joblib import Parallel, delayed
     from sklearn.model_selection import StratifiedKFold, cross_val_score
     from sklearn.naive_bayes import GaussianNB
     from sklearn.pipeline import make_pipeline
 
+    import centrality_vision as cv
     from centrality_vision.datasets import load_kimia99
     from centrality_vision.shapes import CentralityHistogram
 
@@ -110,23 +118,36 @@ def cross_validation_jobs(table) -> None:
     # Start the two worker processes (imports, compiled kernels loaded) before timing, as
     # in a session that has used joblib once: joblib keeps its workers between calls.
     Parallel(n_jobs=2)(delayed(_warm_worker)() for _ in range(2))
-    for repeat in range(2):
-        for jobs in (1, 2):
+    configurations = [("n_jobs=1", 1, None), ("n_jobs=2", 2, None), ("n_jobs=1, 1 thread", 1, 1)]
+    for repeat in range(3):
+        for label, jobs, threads in configurations:
             with tempfile.TemporaryDirectory() as cache:
                 model = make_pipeline(CentralityHistogram(centrality="closeness", cache=cache), GaussianNB())
-                t = time.perf_counter()
-                score = cross_val_score(model, data.images, data.labels, cv=folds, n_jobs=jobs)
-                seconds = time.perf_counter() - t
+                cv.set_num_threads(threads)
+                try:
+                    t = time.perf_counter()
+                    score = cross_val_score(model, data.images, data.labels, cv=folds, n_jobs=jobs)
+                    seconds = time.perf_counter() - t
+                finally:
+                    cv.set_num_threads(None)
                 files = len([f for f in os.listdir(cache) if f.endswith(".npy")])
-            scores.setdefault(jobs, []).append(seconds)
-            rows.append([f"run {repeat + 1}", str(jobs), f"{seconds:.1f}", f"{score.mean():.3f}", str(files)])
+            scores.setdefault(label, []).append(seconds)
+            load = os.getloadavg()[0]
+            rows.append(
+                [f"run {repeat + 1}", label, f"{seconds:.1f}", f"{score.mean():.3f}", str(files), f"{load:.1f}"]
+            )
     print(
         "\ncross_val_score(CentralityHistogram(cache=<empty dir>) + GaussianNB, Kimia-99, 5 folds; "
-        "joblib's two workers started before the first run"
+        f"joblib's two workers started before the first run; {cv.get_num_threads()} kernel threads by default"
     )
-    print(table(["run", "n_jobs", "seconds", "accuracy", "images computed"], rows))
-    one, two = statistics.median(scores[1]), statistics.median(scores[2])
-    print(f"median n_jobs=1 {one:.1f} s, n_jobs=2 {two:.1f} s: n_jobs=2 is {one / two:.2f}x as fast")
+    print(table(["run", "configuration", "seconds", "accuracy", "images computed", "load (1 min)"], rows))
+    median = {label: statistics.median(values) for label, values in scores.items()}
+    one, two, single = median["n_jobs=1"], median["n_jobs=2"], median["n_jobs=1, 1 thread"]
+    print(
+        f"medians: n_jobs=1 {one:.1f} s, n_jobs=2 {two:.1f} s, n_jobs=1 on one thread {single:.1f} s: "
+        f"n_jobs=2 is {one / two:.2f}x as fast as n_jobs=1; against one core, processes give "
+        f"{single / two:.2f}x and the kernel's threads {single / one:.2f}x"
+    )
 
 
 def _warm_worker() -> int:
@@ -139,16 +160,35 @@ def _warm_worker() -> int:
     return len(shape_centralities([square], ["closeness"], cache=CentralityCache()))
 
 
-def _rotate(image, degrees):
+def _turned(image, degrees):
+    """The shape on a larger canvas turned by ``degrees`` (bilinear, thresholded at one half)."""
     from scipy import ndimage
 
     padded = np.pad(image, max(image.shape) // 3).astype(float)
-    return ndimage.rotate(padded, degrees, order=1, reshape=True) > 0.5
+    return ndimage.rotate(padded, degrees, order=1, reshape=True) > 0.5 if degrees else padded > 0.5
 
 
-def rotation(table, seed: int) -> None:
-    """Kimia-99, 5-fold: train on upright shapes, test on the held-out ones upright and rotated by 37 degrees."""
-    from sklearn.model_selection import StratifiedKFold
+def _cropped(mask):
+    rows, cols = np.nonzero(mask)
+    return np.pad(mask[rows.min() : rows.max() + 1, cols.min() : cols.max() + 1], 1)
+
+
+ANGLES = (15, 37, 60)
+
+
+def rotation(table, seed: int, cache=None) -> None:
+    """Kimia-99, 5-fold: train on upright shapes, test on the held-out ones upright and rotated.
+
+    Test shapes are turned by each of :data:`ANGLES`, and by 37 degrees and back (the
+    resampling alone, no net rotation). Beside the accuracies: how far rotation moves a
+    shape's weighted closeness histogram (L1), against how far apart shapes of one class
+    are, and how much it changes a shape's mean inner distance (the 8-neighbour metric's
+    anisotropy). Naive Bayes is run with scikit-learn's default ``var_smoothing`` (1e-9)
+    and with ``var_smoothing`` chosen by an inner 5-fold cross-validation on the
+    training shapes only.
+    """
+    from sklearn.base import clone
+    from sklearn.model_selection import GridSearchCV, StratifiedKFold
     from sklearn.naive_bayes import GaussianNB
     from sklearn.pipeline import make_pipeline
 
@@ -161,47 +201,95 @@ def rotation(table, seed: int) -> None:
     )
 
     data = load_kimia99()
-    rotated = [_rotate(image, 37) for image in data.images]
+    sets = {"upright": [_cropped(image) for image in data.images]}
+    for angle in ANGLES:
+        sets[f"{angle}"] = [_cropped(_turned(image, angle)) for image in data.images]
+    sets["37 and back"] = [_cropped(_turned(_turned(image, 37), -37)) for image in data.images]
     t = time.perf_counter()
-    for weights in (False, True):  # once, in parallel, into the in-memory cache the models read
-        shape_centralities(list(data.images) + rotated, ["closeness"], weights=weights, n_jobs=2)
-    print(f"  closeness of {2 * len(rotated)} images, hops and weighted: {time.perf_counter() - t:.0f} s", flush=True)
+    for weights, names in ((True, list(sets)), (False, ["upright", "37"])):
+        images = [image for name in names for image in sets[name]]
+        shape_centralities(images, ["closeness"], weights=weights, n_jobs=2, cache=cache)
+    print(
+        f"  weighted closeness of {len(sets) * len(data.images)} images, hop counts of {2 * len(data.images)}: "
+        f"{time.perf_counter() - t:.0f} s{' (disk cache ' + cache + ')' if cache else ''}",
+        flush=True,
+    )
     folds = list(StratifiedKFold(5, shuffle=True, random_state=seed).split(data.images, data.labels))
+    tuned = GridSearchCV(
+        GaussianNB(),
+        {"var_smoothing": [1e-9, 1e-6, 1e-4, 1e-3, 1e-2, 1e-1]},
+        cv=StratifiedKFold(5, shuffle=True, random_state=seed + 1),
+    )
+    every = list(sets)
     models = {
-        "NB closeness histogram, hops": make_pipeline(CentralityHistogram(), GaussianNB()),
-        "NB closeness histogram, weights=True": make_pipeline(CentralityHistogram(weights=True), GaussianNB()),
-        "comparison forest closeness, hops": CentralityComparisonForest(n_estimators=100, n_comparisons=500),
-        "comparison forest closeness, weights=True": CentralityComparisonForest(
-            n_estimators=100, n_comparisons=500, weights=True
+        "NB closeness histogram, hops": (make_pipeline(CentralityHistogram(cache=cache), GaussianNB()), ["37"]),
+        "NB closeness histogram, weights=True": (
+            make_pipeline(CentralityHistogram(weights=True, cache=cache), GaussianNB()),
+            every[1:],
+        ),
+        "  same, var_smoothing by inner CV": (
+            make_pipeline(CentralityHistogram(weights=True, cache=cache), tuned),
+            every[1:],
+        ),
+        "comparison forest closeness, hops": (
+            CentralityComparisonForest(n_estimators=100, n_comparisons=500, cache=cache),
+            ["37"],
+        ),
+        "comparison forest closeness, weights=True": (
+            CentralityComparisonForest(n_estimators=100, n_comparisons=500, weights=True, cache=cache),
+            ["37"],
         ),
     }
-    rows = []
-    for name, model in models.items():
-        upright, turned = [], []
-        t = time.perf_counter()
+    rows, chosen = [], []
+    for name, (model, tests) in models.items():
+        scores = {key: [] for key in ["upright", *tests]}
         for train, test in folds:
-            from sklearn.base import clone
-
-            fitted = clone(model).fit([data.images[i] for i in train], data.labels[train])
-            upright.append(np.mean(fitted.predict([data.images[i] for i in test]) == data.labels[test]))
-            turned.append(np.mean(fitted.predict([rotated[i] for i in test]) == data.labels[test]))
-        a, b = float(np.mean(upright)), float(np.mean(turned))
-        rows.append([name, f"{a:.3f}", f"{b:.3f}", f"{b - a:+.3f}", f"{time.perf_counter() - t:.0f}"])
+            fitted = clone(model).fit([sets["upright"][i] for i in train], data.labels[train])
+            if hasattr(fitted, "steps") and hasattr(fitted[-1], "best_params_"):
+                chosen.append(fitted[-1].best_params_["var_smoothing"])
+            for key in scores:
+                scores[key].append(np.mean(fitted.predict([sets[key][i] for i in test]) == data.labels[test]))
+        upright = float(np.mean(scores["upright"]))
+        cells = [f"{np.mean(scores[key]):.3f}" if key in scores else "" for key in every]
+        worst = min(float(np.mean(scores[key])) - upright for key in tests)
+        rows.append([name, *cells, f"{worst:+.3f}"])
         print(f"  {name}: done", flush=True)
     # 1-NN on the outline-profile distance (no training beyond the stored shapes)
-    d = pairwise_shape_distances(list(data.images) + rotated, n_jobs=2)
     n = len(data.images)
-    upright, turned = [], []
+    d = pairwise_shape_distances([image for key in every for image in sets[key]], n_jobs=2)
+    scores = {key: [] for key in every}
     for train, test in folds:
-        upright.append(np.mean(data.labels[train[np.argmin(d[np.ix_(test, train)], axis=1)]] == data.labels[test]))
-        turned.append(np.mean(data.labels[train[np.argmin(d[np.ix_(test + n, train)], axis=1)]] == data.labels[test]))
-    a, b = float(np.mean(upright)), float(np.mean(turned))
-    rows.append(["1-NN outline-profile distance", f"{a:.3f}", f"{b:.3f}", f"{b - a:+.3f}", ""])
+        for k, key in enumerate(every):
+            nearest = train[np.argmin(d[np.ix_(test + k * n, train)], axis=1)]
+            scores[key].append(np.mean(data.labels[nearest] == data.labels[test]))
+    upright = float(np.mean(scores["upright"]))
+    worst = min(float(np.mean(scores[key])) - upright for key in every[1:])
+    rows.append(["1-NN outline-profile distance", *[f"{np.mean(scores[key]):.3f}" for key in every], f"{worst:+.3f}"])
     print(
-        f"\nKimia-99, 5-fold (StratifiedKFold shuffle, seed {seed}): trained on upright shapes; "
-        "test shapes upright and rotated by 37 degrees"
+        f"\nKimia-99, 5-fold (StratifiedKFold shuffle, seed {seed}): trained on upright shapes; test shapes upright, "
+        "rotated by 15, 37 and 60 degrees, and rotated by 37 and back; worst = lowest rotated minus upright"
     )
-    print(table(["model", "upright", "rotated 37", "difference", "seconds"], rows))
+    print(table(["model", *every, "worst"], rows))
+    print(f"var_smoothing chosen by the inner cross-validation in the 5 folds: {chosen}")
+
+    records = {key: shape_centralities(sets[key], ["closeness"], weights=True, cache=cache) for key in every}
+    features = {key: CentralityHistogram(weights=True, cache=cache).fit_transform(sets[key]) for key in every}
+    base = features["upright"]
+    apart = np.abs(base[:, None] - base[None]).sum(axis=2)
+    same = (data.labels[:, None] == data.labels[None]) & ~np.eye(n, dtype=bool)
+    rows = [["shapes of one class (median)", f"{np.median(apart[same]):.3f}", ""]]
+    rows.append(["shapes of different classes (median)", f"{np.median(apart[~same & ~np.eye(n, dtype=bool)]):.3f}", ""])
+    for key in every[1:]:
+        moved = np.abs(features[key] - base).sum(axis=1)
+        ratio = [
+            float(np.mean(1 / turned["closeness"]) / np.mean(1 / upright["closeness"]))
+            for turned, upright in zip(records[key], records["upright"])
+            if np.all(turned["closeness"] > 0)
+        ]
+        spread = f"{np.median(ratio):.4f} ({min(ratio):.4f} to {max(ratio):.4f})"
+        rows.append([f"each shape: upright vs {key} (median)", f"{np.median(moved):.3f}", spread])
+    print("\nweighted closeness histograms (40 bins): L1 distances; each shape's mean inner distance turned / upright")
+    print(table(["pair", "L1 between histograms", "mean distance ratio: median (range)"], rows))
 
 
 def eigenvector_collapse(table, seed: int) -> None:
