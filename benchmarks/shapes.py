@@ -114,7 +114,7 @@ def cross_validation_jobs(table) -> None:
 
     data = load_kimia99()
     folds = StratifiedKFold(5, shuffle=True, random_state=0)
-    rows, scores = [], {}
+    rows, scores, cpus = [], {}, {}
     # Start the two worker processes (imports, compiled kernels loaded) before timing, as
     # in a session that has used joblib once: joblib keeps its workers between calls.
     Parallel(n_jobs=2)(delayed(_warm_worker)() for _ in range(2))
@@ -125,22 +125,34 @@ def cross_validation_jobs(table) -> None:
                 model = make_pipeline(CentralityHistogram(centrality="closeness", cache=cache), GaussianNB())
                 cv.set_num_threads(threads)
                 try:
+                    cpu = _cpu_seconds()
                     t = time.perf_counter()
                     score = cross_val_score(model, data.images, data.labels, cv=folds, n_jobs=jobs)
                     seconds = time.perf_counter() - t
+                    cpu = _cpu_seconds() - cpu
                 finally:
                     cv.set_num_threads(None)
                 files = len([f for f in os.listdir(cache) if f.endswith(".npy")])
             scores.setdefault(label, []).append(seconds)
             load = os.getloadavg()[0]
             rows.append(
-                [f"run {repeat + 1}", label, f"{seconds:.1f}", f"{score.mean():.3f}", str(files), f"{load:.1f}"]
+                [
+                    f"run {repeat + 1}",
+                    label,
+                    f"{seconds:.1f}",
+                    f"{cpu:.1f}",
+                    f"{score.mean():.3f}",
+                    str(files),
+                    f"{load:.1f}",
+                ]
             )
+            cpus.setdefault(label, []).append(cpu)
     print(
         "\ncross_val_score(CentralityHistogram(cache=<empty dir>) + GaussianNB, Kimia-99, 5 folds; "
         f"joblib's two workers started before the first run; {cv.get_num_threads()} kernel threads by default"
     )
-    print(table(["run", "configuration", "seconds", "accuracy", "images computed", "load (1 min)"], rows))
+    headers = ["run", "configuration", "seconds", "CPU seconds", "accuracy", "images computed", "load (1 min)"]
+    print(table(headers, rows))
     median = {label: statistics.median(values) for label, values in scores.items()}
     one, two, single = median["n_jobs=1"], median["n_jobs=2"], median["n_jobs=1, 1 thread"]
     print(
@@ -148,6 +160,27 @@ def cross_validation_jobs(table) -> None:
         f"n_jobs=2 is {one / two:.2f}x as fast as n_jobs=1; against one core, processes give "
         f"{single / two:.2f}x and the kernel's threads {single / one:.2f}x"
     )
+    work = {label: statistics.median(values) for label, values in cpus.items()}
+    print(
+        "median CPU seconds (this process and its joblib workers): "
+        + ", ".join(f"{label} {value:.1f}" for label, value in work.items())
+    )
+
+
+def _cpu_seconds() -> float:
+    """User + system CPU seconds of this process and of its child processes (joblib's workers) so far."""
+    import psutil
+
+    total = 0.0
+    processes = [psutil.Process()]
+    processes += processes[0].children(recursive=True)
+    for process in processes:
+        try:
+            times = process.cpu_times()
+        except psutil.NoSuchProcess:
+            continue
+        total += times.user + times.system
+    return total
 
 
 def _warm_worker() -> int:
