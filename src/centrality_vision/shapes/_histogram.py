@@ -130,6 +130,19 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         The centralities, in the order their histograms are concatenated.
     n_features_out_ : int
 
+    Notes
+    -----
+    With ``weights=True`` turning a shape changes its closeness histogram little: on
+    Kimia-99, turned by 15, 37 or 60 degrees (bilinear resampling), by 0.03 to 0.05 in
+    L1 (median), where shapes of one class are 0.10 apart and of different classes
+    0.27; resampling alone (37 degrees and back) accounts for 0.025, and each shape's
+    mean inner distance changes by at most 3%. Naive Bayes with scikit-learn's default
+    ``GaussianNB(var_smoothing=1e-9)`` magnifies that: a bin that is empty in a class's
+    few training shapes gets a near-zero variance, and held-out accuracy falls from 0.90
+    to 0.80 at 15 degrees. With ``var_smoothing`` chosen by cross-validation on the
+    training shapes (1e-2 in every fold) it is 0.94 upright and 0.92 to 0.95 turned
+    (``benchmarks/shapes.py --rotation``).
+
     Examples
     --------
     >>> import numpy as np

@@ -430,6 +430,12 @@ def diffusion_rerank(distances, /, *, n_neighbors: int = 8, bandwidth: int = 10,
     affinities, row-normalised (Yang, Koknar-Tezel and Latecki, 2009). Two shapes that
     share many near neighbours become close even when their own distance is not small.
 
+    The defaults were chosen on MPEG-7. Chosen instead on Kimia-99 (the best of 60
+    settings, ``n_neighbors`` 5 to 15, ``bandwidth`` 5 to 15, ``n_iter`` 1 to 5: 8/10/1)
+    and applied unchanged to MPEG-7, the profile distance's bullseye goes from 77.4% to
+    87.3% (88.4% with the defaults); chosen on MPEG-7 (5/10/5) and applied to Kimia-99,
+    its top-10 count goes from 891 to 985 of 990 (``benchmarks/shape_retrieval.py``).
+
     Returns
     -------
     ndarray of shape (n, n)
