@@ -159,6 +159,15 @@ def test_rerank_pulls_a_chain_together():
     assert retrieval_counts(r, labels, k=5).sum() == 60
 
 
+def test_rerank_of_huge_finite_distances_stays_finite():
+    # squared distances over 1e308 once gave inf / inf = NaN affinities
+    x = np.r_[np.arange(4.0), 1e200 + np.arange(4.0) * 1e190]
+    d = np.abs(np.subtract.outer(x, x))
+    r = diffusion_rerank(d, n_neighbors=2, bandwidth=1)
+    assert np.all(np.isfinite(r))
+    assert retrieval_counts(r, np.repeat([0, 1], 4), k=3).sum() == 24
+
+
 @pytest.mark.parametrize(
     ("call", "error", "match"),
     [
