@@ -270,7 +270,13 @@ def rotation(table, seed: int, cache=None) -> None:
         ),
         "comparison forest closeness, weights=True": (
             CentralityComparisonForest(n_estimators=100, n_comparisons=500, weights=True, cache=cache),
-            ["37"],
+            every[1:],
+        ),
+        "  same, orientation='principal'": (
+            CentralityComparisonForest(
+                n_estimators=100, n_comparisons=500, weights=True, orientation="principal", cache=cache
+            ),
+            every[1:],
         ),
     }
     rows, chosen = [], []

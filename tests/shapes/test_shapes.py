@@ -133,6 +133,27 @@ def test_comparisons_are_invariant_to_translation():
     np.testing.assert_array_equal(comp.transform([image]), comp.transform([shifted]))
 
 
+def _lopsided(size=64):
+    """An L with arms of different lengths and widths: no mirror or rotation symmetry."""
+    image = np.zeros((size, size), dtype=bool)
+    image[8:50, 10:22] = True
+    image[40:50, 10:40] = True
+    image[30:40, 30:40] = True
+    return image
+
+
+def test_principal_orientation_turns_with_the_shape():
+    image = _lopsided()
+    turned = np.rot90(image)  # an exact quarter turn: the pixel graph is the same
+    principal = CentralityComparisons(n_comparisons=400, orientation="principal", random_state=2).fit([image])
+    same = np.mean(principal.transform([image]) == principal.transform([turned]))
+    assert same > 0.98  # the offsets turn with the shape's axes (rare rounding ties may differ)
+    fixed = CentralityComparisons(n_comparisons=400, random_state=2).fit([image])
+    assert np.mean(fixed.transform([image]) == fixed.transform([turned])) < 0.9  # image axes do not turn
+    with pytest.raises(ValueError, match="`orientation` must be one of"):
+        CentralityComparisons(orientation="pca").fit([image])
+
+
 def test_comparisons_are_seeded():
     a = CentralityComparisons(n_comparisons=20, random_state=3).fit([_disk(5)])
     b = CentralityComparisons(n_comparisons=20, random_state=3).fit([_disk(5)])

@@ -96,6 +96,23 @@ def centrality_map(mask, values, nodes, *, reference: str = "centroid"):
     return dense, centre, max(size, 1.0)
 
 
+def _principal_axes(mask: np.ndarray) -> np.ndarray:
+    """(2, 2) matrix whose columns are the shape's major and minor axes, in (row, col).
+
+    The axes are the eigenvectors of the pixels' second moments about their centre of
+    mass; each points the way the pixels are skewed (positive third moment along it), so
+    the frame turns with the shape (and flips with a mirror image). Axes are only
+    defined up to those choices: a shape as wide as it is long, or symmetric along an
+    axis, has no preferred direction there, and the frame follows pixel noise.
+    """
+    coords = np.argwhere(mask).astype(float)
+    coords -= coords.mean(axis=0)
+    _, vectors = np.linalg.eigh(coords.T @ coords / max(len(coords), 1))
+    axes = vectors[:, ::-1]  # major axis first
+    skew = np.mean((coords @ axes) ** 3, axis=0)
+    return axes * np.where(skew < 0, -1.0, 1.0)
+
+
 def _random_state(estimator):
     """``random_state``, or the deprecated ``seed`` when it was given (with a FutureWarning)."""
     if estimator.seed is None:
@@ -118,7 +135,9 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
     ``c`` (centre of mass, or the graph centre) and size ``s`` (RMS radius), it reads the
     centrality ``v`` at ``x = c + s a_k`` and ``y = c + s b_k`` and outputs
     ``1.0 if v(x) >= v(y) else 0.0`` (thesis fig. 4.7). Offsets scale with the shape, so
-    the features do not depend on its size or position.
+    the features do not depend on its size or position; with
+    ``orientation="principal"`` they are taken along the shape's principal axes, so that
+    they turn with it too.
 
     Parameters
     ----------
@@ -129,6 +148,12 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
     extent : float, default=2.0
         Largest offset, in units of the shape's RMS radius.
     reference : {"centroid", "graph-centre"}, default="centroid"
+    orientation : {"image", "principal"}, default="image"
+        The frame of the offsets: the image's rows and columns (the thesis), or the
+        shape's major and minor axes (eigenvectors of its second moments, each pointing
+        the way the shape is skewed), which turns with the shape. Near-round or
+        symmetric shapes have no stable axes; with ``weights=True`` it makes the
+        comparisons nearly rotation invariant.
     connectivity : {8, 4}, default=8
     random_state : int, Generator or None, default=0
         Seed of the random comparisons.
@@ -158,6 +183,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         random_state=0,
         progress: bool = False,
         *,
+        orientation: str = "image",
         weights: bool = False,
         foreground: str = "auto",
         threshold=None,
@@ -170,6 +196,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         self.n_comparisons = n_comparisons
         self.extent = extent
         self.reference = reference
+        self.orientation = orientation
         self.connectivity = connectivity
         self.random_state = random_state
         self.progress = progress
@@ -187,6 +214,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         n = check_int(self.n_comparisons, name="n_comparisons", low=1)
         extent = check_float(self.extent, name="extent", low=0.0, low_open=True)
         check_choice(self.reference, ("centroid", "graph-centre"), name="reference")
+        check_choice(self.orientation, ("image", "principal"), name="orientation")
         self._masks(X)
         rng = as_generator(_random_state(self))
         self.centralities_ = names
@@ -210,7 +238,10 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
             stack = np.stack([centrality_map(mask, record[name], nodes)[0] for name in self.centralities_])
             values = record["eccentricity"] if self.reference == "graph-centre" else record[self.centralities_[0]]
             _, centre, size = centrality_map(mask, values, nodes, reference=self.reference)
-            points = centre + size * self.offsets_  # (n, 2, 2)
+            offsets = self.offsets_
+            if self.orientation == "principal":
+                offsets = offsets @ _principal_axes(mask).T  # along the axes, in (row, col)
+            points = centre + size * offsets  # (n, 2, 2)
             rows = np.clip(np.rint(points[..., 0]), 0, mask.shape[0] - 1).astype(np.int64)
             cols = np.clip(np.rint(points[..., 1]), 0, mask.shape[1] - 1).astype(np.int64)
             vx = stack[self.which_, rows[:, 0], cols[:, 0]]
@@ -242,7 +273,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
     max_features : int, float or "sqrt", default="sqrt"
         Comparisons examined per tree node.
     max_depth : int or None, default=None
-    extent, reference, connectivity :
+    extent, reference, connectivity, orientation :
         As in :class:`CentralityComparisons`.
     random_state : int or None, default=0
         Seeds the comparisons and the trees.
@@ -288,6 +319,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         random_state=0,
         progress: bool = False,
         *,
+        orientation: str = "image",
         weights: bool = False,
         foreground: str = "auto",
         threshold=None,
@@ -303,6 +335,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         self.max_depth = max_depth
         self.extent = extent
         self.reference = reference
+        self.orientation = orientation
         self.connectivity = connectivity
         self.random_state = random_state
         self.progress = progress
@@ -341,6 +374,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
             n_comparisons=self.n_comparisons,
             extent=self.extent,
             reference=self.reference,
+            orientation=self.orientation,
             connectivity=self.connectivity,
             random_state=comparison_seed,
             progress=self.progress,
