@@ -53,10 +53,16 @@ def grid_brandes(foreground, offs, sources, weights):
     coef = np.zeros(size)
     lists = np.empty(0, dtype=np.int64)  # no adjacency lists: the grid mode
     heads = np.empty(0, dtype=np.int32)
+    n_pixels = 0
+    for i in range(size):
+        if foreground[i]:
+            n_pixels += 1
+    succ = np.empty(n_pixels * offs.shape[0], dtype=np.int64)
+    first = np.empty(n_pixels + 1, dtype=np.int64)
     n_log = 0
     for i in range(sources.shape[0]):
         s, w = sources[i], weights[i]
-        if not _kernels._brandes_source_bfs(lists, heads, offs, True, s, hops, order, sigma, coef, bc, w):
+        if not _kernels._brandes_source_bfs(lists, heads, offs, True, s, hops, order, sigma, coef, bc, w, succ, first):
             n_log += 1
             _kernels._brandes_source_bfs_log(lists, heads, offs, True, s, hops, order, sigma, coef, bc, w)
     return bc, n_log
