@@ -154,6 +154,17 @@ def test_principal_orientation_turns_with_the_shape():
         CentralityComparisons(orientation="pca").fit([image])
 
 
+def test_principal_comparisons_do_not_depend_on_the_margin():
+    from scipy import ndimage
+
+    # an oblique shape cropped to a one-pixel margin: many positions fall beyond the border
+    image = ndimage.rotate(np.pad(_lopsided(), 20).astype(float), 37, order=0) > 0.5
+    rows, cols = np.nonzero(image)
+    tight = np.pad(image[rows.min() : rows.max() + 1, cols.min() : cols.max() + 1], 1)
+    comp = CentralityComparisons(n_comparisons=500, orientation="principal", random_state=4).fit([image])
+    np.testing.assert_array_equal(comp.transform([tight]), comp.transform([np.pad(tight, 40)]))
+
+
 def test_comparisons_are_seeded():
     a = CentralityComparisons(n_comparisons=20, random_state=3).fit([_disk(5)])
     b = CentralityComparisons(n_comparisons=20, random_state=3).fit([_disk(5)])
