@@ -90,20 +90,25 @@ def test_profile_features_reach_quantiles_and_visibility():
     from centrality_vision.shapes._retrieval import FEATURE_SCALES
 
     raw = outline_profiles(_ell(), n_points=40) * np.asarray(FEATURE_SCALES)
-    assert raw.shape == (40, 8 + 20 + 10)
-    reach, quantiles, visibility = raw[:, :8], raw[:, 8:28], raw[:, 28:]
+    assert raw.shape == (40, 8 + 20 + 10 + 10)
+    reach, quantiles, visibility, sines = raw[:, :8], raw[:, 8:28], raw[:, 28:38], raw[:, 38:]
     # shares of the shape, growing with the radius; quantiles growing with the level
     assert np.all(np.diff(reach, axis=1) >= 0) and np.all((reach > 0) & (reach <= 1 + 1e-12))
     assert np.all(np.diff(quantiles, axis=1) >= -1e-12) and np.all(quantiles >= 0)
     assert np.all((visibility > 0) & (visibility <= 1 + 1e-12))
+    assert np.all(np.diff(sines, axis=1) >= -1e-12) and np.all(np.abs(sines) <= 1 + 1e-12)
+    # Round the L's inner corner some paths leave backwards, away from the shape's side.
+    assert sines.min() < -0.3
     # The L's outline sees round its inner corner: some points see part of it at a
     # visibility well below 1. A convex rectangle is seen straight: an 8-neighbour path is
     # at most 1/cos(22.5 deg) = 1.0824 times the straight line.
     assert visibility[:, 0].min() < 0.8
     box = np.zeros((60, 60), dtype=bool)
     box[10:50, 20:40] = True
-    seen = outline_profiles(box, n_points=40)[:, 28:] * np.asarray(FEATURE_SCALES[28:])
-    assert seen.min() >= 1 / 1.0824 - 1e-9
+    seen = outline_profiles(box, n_points=40) * np.asarray(FEATURE_SCALES)
+    assert seen[:, 28:38].min() >= 1 / 1.0824 - 1e-9
+    # From a convex outline every path leaves into the shape or along the outline.
+    assert seen[:, 38:].min() >= -1e-9
 
 
 def test_normalize_shape_keeps_largest_part_and_area():

@@ -8,7 +8,8 @@ Two families of distances between shapes:
   geodesic radius r of the point (a multi-scale "reach" centrality), the distribution
   of its inner distances (shortest paths inside the shape) to the outline points, and
   the distribution of how visible those points are from it (Euclidean over inner
-  distance). Two shapes are compared by matching their profiles in outline order: the best cyclic
+  distance), and the distribution of the directions in which its shortest paths to them
+  leave (inner angles). Two shapes are compared by matching their profiles in outline order: the best cyclic
   shift over both orientations (mirror images) by FFT, then a banded dynamic-programming
   alignment around that shift for the nearest candidates.
 - ``method="chi2"`` or ``"emd"`` (the thesis' features): centrality histograms
@@ -46,7 +47,11 @@ REACH_RADII = (0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0, 1.5)
 DISTANCE_QUANTILES = tuple(round(0.05 * k, 2) for k in range(1, 21))
 #: Quantiles of its visibility ratios, Euclidean over inner distance, to the outline points.
 VISIBILITY_QUANTILES = tuple(round(0.05 + 0.1 * k, 2) for k in range(10))
-#: The spread of each profile feature (reach, distance quantiles, visibility quantiles):
+#: Quantiles of the sines of its inner angles (see :func:`outline_profiles`).
+ANGLE_QUANTILES = VISIBILITY_QUANTILES
+#: How far along a shortest path its direction is read, in units of the mean inner distance.
+ANGLE_REACH = 0.15
+#: The spread of each profile feature (reach, distance, visibility and angle quantiles):
 #: its standard deviation over the 9,900 outline points of the bundled Kimia-99 shapes
 #: (no labels used). Every feature is divided by it, so that each weighs alike in the
 #: squared profile difference.
@@ -55,6 +60,7 @@ FEATURE_SCALES = (
     + (0.042, 0.072, 0.1, 0.13, 0.16, 0.18, 0.2, 0.21, 0.22, 0.22)  # distance quantiles 0.05 to 0.5
     + (0.23, 0.24, 0.25, 0.26, 0.28, 0.29, 0.31, 0.32, 0.33, 0.34)  # distance quantiles 0.55 to 1
     + (0.17, 0.13, 0.1, 0.074, 0.049, 0.029, 0.018, 0.016, 0.016, 0.012)  # visibility quantiles
+    + (0.33, 0.34, 0.36, 0.36, 0.35, 0.34, 0.33, 0.31, 0.27, 0.2)  # inner-angle quantiles
 )
 METHODS = ("profile", "chi2", "emd")
 
@@ -126,13 +132,15 @@ def _raw_profile(mask: np.ndarray, n_points: int, resolution: int) -> np.ndarray
     rows = np.clip(np.rint(points[:, 0]).astype(np.int64), 0, small.shape[0] - 1)
     cols = np.clip(np.rint(points[:, 1]).astype(np.int64), 0, small.shape[1] - 1)
     sources = np.searchsorted(nodes, near_rows[rows, cols] * small.shape[1] + near_cols[rows, cols])
-    distances = dijkstra(graph, indices=sources)  # (n_points, n_nodes): inner distances
+    # (n_points, n_nodes): inner distances, and each node's predecessor on a shortest path
+    distances, predecessors = dijkstra(graph, indices=sources, return_predecessors=True)
     inner = distances[:, sources]  # (n_points, n_points) between outline points
     # An 8-neighbour path is never shorter than the straight line, so the ratio is in (0, 1].
     pixel_rows, pixel_cols = np.divmod(nodes[sources], small.shape[1])
     euclidean = np.hypot(pixel_rows[:, None] - pixel_rows[None, :], pixel_cols[:, None] - pixel_cols[None, :])
     visibility = np.divide(euclidean, inner, out=np.ones_like(inner), where=inner > 0)
     mean = distances.mean()
+    turning = _inner_angle_sines(points, sources, predecessors, distances, ANGLE_REACH * mean, nodes, small.shape[1])
     ordered = np.sort(distances, axis=1)
     reach = np.stack([np.searchsorted(row, np.multiply(REACH_RADII, mean), side="right") for row in ordered])
     return np.hstack(
@@ -140,8 +148,39 @@ def _raw_profile(mask: np.ndarray, n_points: int, resolution: int) -> np.ndarray
             reach / distances.shape[1],
             np.quantile(inner / mean, DISTANCE_QUANTILES, axis=1).T,
             np.quantile(visibility, VISIBILITY_QUANTILES, axis=1).T,
+            np.quantile(turning, ANGLE_QUANTILES, axis=1).T,
         ]
     )
+
+
+def _inner_angle_sines(points, sources, predecessors, distances, reach, nodes, width) -> np.ndarray:
+    """``out[i, j]``: sine of the angle from the outline's direction at point i to the
+    direction in which the shortest path from i to outline point j leaves i: towards its
+    last pixel within ``reach`` of i (0 for j = i). Looking that far along the path,
+    rather than at its first pixel step (a multiple of 45 degrees), keeps the angle
+    from following the pixel grid when the shape turns.
+
+    The outline runs counter-clockwise, so a positive sine is a path leaving into the
+    shape's side of the outline. A mirror image walked the other way gives the same
+    values (both the direction and the handedness flip).
+    """
+    n = len(sources)
+    rows = np.arange(n)[:, None]
+    current = np.broadcast_to(sources[None, :], (n, n)).copy()  # walks back from j towards i
+    for _ in range(predecessors.shape[1]):
+        previous = predecessors[rows, current]
+        move = (distances[rows, current] > reach) & (previous >= 0)
+        if not move.any():
+            break
+        current = np.where(move, previous, current)
+    step_rows, step_cols = np.divmod(nodes[current], width)
+    source_rows, source_cols = np.divmod(nodes[sources], width)
+    step = np.stack([step_rows - source_rows[:, None], step_cols - source_cols[:, None]], axis=-1).astype(float)
+    tangent = np.roll(points, -1, axis=0) - np.roll(points, 1, axis=0)
+    tangent /= np.maximum(np.linalg.norm(tangent, axis=1, keepdims=True), 1e-12)
+    length = np.maximum(np.linalg.norm(step, axis=-1), 1e-12)
+    cross = step[..., 0] * tangent[:, None, 1] - step[..., 1] * tangent[:, None, 0]
+    return np.where(current == sources[:, None], 0.0, cross / length)
 
 
 def _profiles(mask: np.ndarray, n_points: int, resolution: int) -> tuple[np.ndarray, np.ndarray]:
@@ -173,7 +212,12 @@ def outline_profiles(
       outline (an occlusion) changes little;
     - the quantiles :data:`VISIBILITY_QUANTILES` of its visibility ratios, the Euclidean
       over the inner distance to each outline point (1 where the straight line stays
-      inside the shape, small across a concavity; 10 features).
+      inside the shape, small across a concavity; 10 features);
+    - the quantiles :data:`ANGLE_QUANTILES` of the sines of its inner angles: for each
+      outline point j, the angle from the outline's direction at i to the direction in
+      which the shortest path from i to j leaves i (read :data:`ANGLE_REACH` times the
+      mean inner distance along it; positive into the shape; the inner angle of Ling and
+      Jacobs' inner-distance shape context; 10 features).
 
     Each feature is divided by :data:`FEATURE_SCALES`, its spread over the outline
     points of the Kimia-99 shapes, so all weigh alike. None depends on the direction in
@@ -200,7 +244,7 @@ def outline_profiles(
     >>> disk = (yy - 30) ** 2 + (xx - 30) ** 2 < 400
     >>> profile = outline_profiles(disk)
     >>> profile.shape, bool(np.all(profile[:, :8] <= 1 / np.array(FEATURE_SCALES[:8])))
-    ((100, 38), True)
+    ((100, 48), True)
     >>> bar = (abs(yy - 30) < 6) & (abs(xx - 30) < 25)
     >>> # the outline points of a disk look more alike than those of a bar
     >>> bool(profile.std(axis=0).mean() < outline_profiles(bar).std(axis=0).mean())
