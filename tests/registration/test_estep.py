@@ -256,3 +256,82 @@ def test_far_points_at_tiny_sigma2_do_not_walk_millions_of_empty_cells():
         np.testing.assert_allclose(truncated.p1, dense.p1, rtol=1e-12, atol=1e-300)
         np.testing.assert_allclose(automatic.pt1, dense.pt1, rtol=1e-8, atol=1e-12)
         assert truncated.neg_log_likelihood == pytest.approx(dense.neg_log_likelihood, rel=1e-12)
+
+
+def test_truncated_path_at_tiny_sigma2_matches_dense_and_sizes_its_cells_by_the_reach():
+    # at sigma2 = 1e-12 every row's reach is its nearest distance (~1e-3), not the sigma2
+    # term (~1e-5): cells of the latter would make each row walk ~10^5 empty cells
+    from centrality_vision.registration._estep import _grid_for, _nearest, _reach_d2, _truncation_extra
+
+    rng = np.random.default_rng(21)
+    fixed = rng.random((3000, 2))
+    moving = fixed[rng.permutation(3000)] + rng.normal(0, 1e-3, (3000, 2))
+    for sigma2 in (1e-6, 1e-12):
+        dense = _e_step(moving, fixed, sigma2, 0.0, method="dense")
+        trunc = _e_step(moving, fixed, sigma2, 0.0, method="truncated")
+        for name in ("p1", "pt1", "px"):
+            np.testing.assert_allclose(getattr(trunc, name), getattr(dense, name), atol=1e-12)
+        assert trunc.neg_log_likelihood == pytest.approx(dense.neg_log_likelihood, rel=1e-12)
+        np.testing.assert_array_equal(trunc.best, dense.best)
+    d2 = _reach_d2(_nearest(moving, fixed)[0])
+    extra = _truncation_extra(1e-12, 40.0, None)
+    assert _grid_for(moving, d2, extra).cell >= np.sqrt(np.median(d2)) / 4 * (1 - 1e-12)
+    assert _grid_for(moving, d2, 1.0).cell == pytest.approx(0.25)  # the sigma2 term dominates: its cells
+
+
+class _Scripted:
+    """A fake clock and E-step: each path's calls take the scripted seconds in turn."""
+
+    def __init__(self, durations, setup):
+        self.now = 0.0
+        self.durations = {k: list(v) for k, v in durations.items()}
+        self.setup = setup
+        self.calls = []
+
+    def perf_counter(self):
+        return self.now
+
+    def run(self, path, *args):
+        self.calls.append(path)
+        self.now += self.durations[path].pop(0)
+        return path
+
+    def model_costs(self, *args):
+        return {"dense": 1.0, "truncated": 1.0}, {"setup": dict(self.setup)}
+
+
+def _scripted_planner(monkeypatch, durations, setup, **kwargs):
+    from centrality_vision.registration import _estep
+    from centrality_vision.registration._estep import EStepPlanner
+
+    fake = _Scripted(durations, setup)
+    monkeypatch.setattr(_estep, "time", fake)
+    monkeypatch.setattr(_estep, "_run", fake.run)
+    monkeypatch.setattr(_estep, "_model_costs", fake.model_costs)
+    planner = EStepPlanner(**kwargs)
+    big = np.zeros((1100, 2))  # above the 2^20 pairs below which only 'dense' runs
+    return planner, planner(big, big, 1e-3, 0.0), fake
+
+
+def test_planner_retimes_a_close_call_and_keeps_each_paths_least_time(monkeypatch):
+    # first timings: dense 10, truncated 12 (a load spike); again: truncated 8, dense 10
+    durations = {"dense": [10.0, 10.0], "truncated": [12.0, 8.0]}
+    planner, result, fake = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 0.0})
+    assert planner.winner == "truncated" and result == "truncated"
+    assert planner.timings == {"dense": 10.0, "truncated": 8.0}
+    assert sorted(fake.calls) == ["dense", "dense", "truncated", "truncated"]
+    # without re-timing the spike decides
+    planner, result, _ = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 0.0}, retime_factor=1.0)
+    assert planner.winner == "dense" and result == "dense"
+    # a clear gap is not re-timed
+    clear = {"dense": [10.0], "truncated": [30.0]}
+    planner, _, fake = _scripted_planner(monkeypatch, clear, {"dense": 0.0, "truncated": 0.0})
+    assert planner.winner == "dense" and len(fake.calls) == 2
+
+
+def test_planner_charges_each_path_the_setup_it_pays_outside_a_probe(monkeypatch):
+    # truncated runs in 8 s given the probe's nearest points and grid, which took 5 s to build
+    durations = {"dense": [10.0, 10.0], "truncated": [8.0, 8.0]}
+    planner, _, _ = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 5.0})
+    assert planner.winner == "dense"
+    assert planner.timings["truncated"] == pytest.approx(13.0)
