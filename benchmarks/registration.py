@@ -1064,17 +1064,20 @@ def run_estep(args):
     the first round is not repeated (its single time is marked ``*``: it cannot be the
     fastest). 'auto' is judged twice: its own calls' median over the fastest path's median,
     and the median of the path it picked over the fastest one (the same work, so the ratio
-    shows the choice apart from the timing noise of separate calls).
+    shows the choice apart from the timing noise of separate calls). 'carried' is one planner
+    per size called at every half decade of sigma2 from 1 down, as a fit shrinks sigma2: the
+    path it runs at each decade was chosen at its last probe, up to 10x sigma2 away.
     """
     from centrality_vision.registration._estep import EStepPlanner, _e_step
 
     paths = ("dense", "truncated", "fgt")
     print("E-step paths vs sigma2: uniform 2D points in the unit square, moving = fixed (permuted) + N(0, 0.001^2),")
     print(
-        "w = 0; milliseconds, median of %d or more interleaved rounds (as many as 0.25 s of the fastest path"
-        " takes, 25 at most; a path over 3x the fastest after round 1: its one time, *);"
+        "w = 0; milliseconds, median of %d or more interleaved rounds (as many as 1 s of the fastest path"
+        " takes, 40 at most; a path over 3x the fastest after round 1: its one time, *);"
         " auto = one EStepPlanner probed once at that sigma2, then timed like the others (its probe is amortised"
-        " over the iterations of a fit; probe ms = the probe call)" % args.repeat_estep
+        " over the iterations of a fit; probe ms = the probe call); carried = one planner per size called at"
+        " every half decade of sigma2 from 1 down, as in a fit: the path it runs at that sigma2" % args.repeat_estep
     )
     print(load_line())
     rows = []
@@ -1084,7 +1087,11 @@ def run_estep(args):
         moving = fixed[rng.permutation(n)] + rng.normal(0, 1e-3, (n, 2))
         _e_step(moving[:200], fixed[:200], 0.01, 0.0, method="truncated")
         _e_step(moving[:200], fixed[:200], 0.01, 0.0, method="fgt")
+        carried = EStepPlanner()
         for sigma2 in [10.0**-k for k in range(0, 13)]:
+            if sigma2 < 1.0:
+                carried(moving, fixed, sigma2 * math.sqrt(10.0), 0.0)
+            carried(moving, fixed, sigma2, 0.0)
             planner = EStepPlanner()
             start = time.perf_counter()
             planner(moving, fixed, sigma2, 0.0)
@@ -1111,7 +1118,7 @@ def run_estep(args):
                     first = min(times[m][0] for m in paths)
                     active = [m for m in active if m == "auto" or times[m][0] <= 3 * first]
                     # short calls suffer most from a busy machine's time slices: more rounds
-                    rounds = max(rounds, min(25, math.ceil(0.25 / max(first, 1e-9))))
+                    rounds = max(rounds, min(40, math.ceil(1.0 / max(first, 1e-9))))
                 round_ += 1
             ms = {m: 1e3 * statistics.median(times[m]) for m in calls}
             single = [m for m in paths if len(times[m]) == 1 and rounds > 1]
@@ -1128,12 +1135,15 @@ def run_estep(args):
                 "fastest": fastest_path,
                 "auto_over_fastest": ms["auto"] / fastest,
                 "picked_over_fastest": ms[planner.winner] / fastest,
+                "carried": carried.winner,
+                "carried_over_fastest": ms[carried.winner] / fastest,
+                "carried_probes": carried.probes,
                 "load": os.getloadavg()[0],
             }
             rows.append(row)
             print(
                 "  n=%d sigma2=%.0e  %s  probe %.1f  auto picked %s (fastest %s): auto %.2fx,"
-                " picked path %.2fx  load %.1f"
+                " picked path %.2fx; carried %s %.2fx  load %.1f"
                 % (
                     n,
                     sigma2,
@@ -1143,6 +1153,8 @@ def run_estep(args):
                     fastest_path,
                     row["auto_over_fastest"],
                     row["picked_over_fastest"],
+                    row["carried"],
+                    row["carried_over_fastest"],
                     row["load"],
                 ),
                 flush=True,
@@ -1158,6 +1170,8 @@ def run_estep(args):
             r["fastest"],
             "%.2f" % r["auto_over_fastest"],
             "%.2f" % r["picked_over_fastest"],
+            r["carried"],
+            "%.2f" % r["carried_over_fastest"],
             "%.1f" % r["load"],
         ]
         for r in rows
@@ -1177,6 +1191,8 @@ def run_estep(args):
                 "fastest",
                 "auto/fastest",
                 "picked/fastest",
+                "carried took",
+                "carried/fastest",
                 "load 1 min",
             ],
             body,
@@ -1185,11 +1201,14 @@ def run_estep(args):
     for n in args.estep_sizes:
         sub = [r for r in rows if r["n"] == n]
         print(
-            "n=%d: worst auto/fastest %.2f, worst picked/fastest %.2f; sigma2 values with auto/fastest > 1.25: %s"
+            "n=%d: worst auto/fastest %.2f, worst picked/fastest %.2f, worst carried/fastest %.2f"
+            " (the carried planner probed %d times over 25 sigma2 values); sigma2 values with auto/fastest > 1.25: %s"
             % (
                 n,
                 max(r["auto_over_fastest"] for r in sub),
                 max(r["picked_over_fastest"] for r in sub),
+                max(r["carried_over_fastest"] for r in sub),
+                sub[-1]["carried_probes"],
                 ", ".join("%.0e" % r["sigma2"] for r in sub if r["auto_over_fastest"] > 1.25) or "none",
             )
         )

@@ -335,3 +335,18 @@ def test_planner_charges_each_path_the_setup_it_pays_outside_a_probe(monkeypatch
     planner, _, _ = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 5.0})
     assert planner.winner == "dense"
     assert planner.timings["truncated"] == pytest.approx(13.0)
+
+
+def test_planner_probes_again_when_another_path_is_predicted_faster(monkeypatch):
+    # probe at sigma2 = 1e-3: dense 10 s, truncated 12 s (measured twice, a close call)
+    durations = {"dense": [10.0, 10.0, 10.0, 10.0], "truncated": [12.0, 12.0, 3.0, 3.0]}
+    planner, _, fake = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 0.0})
+    assert planner.winner == "dense" and planner.probes == 1
+    big = np.zeros((1100, 2))
+    # 2D: the truncated path's work scales as sigma2; at 0.9e-3 it is predicted 10.8 s > 10 s
+    assert planner.predicted(0.9e-3, 2)["truncated"] == pytest.approx(10.8)
+    planner(big, big, 0.9e-3, 0.0)
+    assert planner.probes == 1 and fake.calls[-1] == "dense"
+    # at 0.5e-3 it is predicted 6 s < 10 s: probe again (well inside the 10x reprobe_factor)
+    planner(big, big, 0.5e-3, 0.0)
+    assert planner.probes == 2 and planner.winner == "truncated"
