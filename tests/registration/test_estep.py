@@ -282,7 +282,8 @@ def test_truncated_path_at_tiny_sigma2_matches_dense_and_sizes_its_cells_by_the_
 class _Scripted:
     """A fake clock and E-step: each path's calls take the scripted seconds in turn."""
 
-    def __init__(self, durations, setup):
+    def __init__(self, durations, setup, work=(100.0, 0.0, 1.0, 0.0)):
+        self.work = work  # truncated: candidates per row, median d_min^2, extra, row floor
         self.now = 0.0
         self.durations = {k: list(v) for k, v in durations.items()}
         self.setup = setup
@@ -297,14 +298,14 @@ class _Scripted:
         return path
 
     def model_costs(self, *args):
-        return {"dense": 1.0, "truncated": 1.0}, {"setup": dict(self.setup)}
+        return {"dense": 1.0, "truncated": 1.0}, {"setup": dict(self.setup), "truncated_work": self.work}
 
 
-def _scripted_planner(monkeypatch, durations, setup, **kwargs):
+def _scripted_planner(monkeypatch, durations, setup, work=(100.0, 0.0, 1.0, 0.0), **kwargs):
     from centrality_vision.registration import _estep
     from centrality_vision.registration._estep import EStepPlanner
 
-    fake = _Scripted(durations, setup)
+    fake = _Scripted(durations, setup, work)
     monkeypatch.setattr(_estep, "time", fake)
     monkeypatch.setattr(_estep, "_run", fake.run)
     monkeypatch.setattr(_estep, "_model_costs", fake.model_costs)
@@ -350,3 +351,30 @@ def test_planner_probes_again_when_another_path_is_predicted_faster(monkeypatch)
     # at 0.5e-3 it is predicted 6 s < 10 s: probe again (well inside the 10x reprobe_factor)
     planner(big, big, 0.5e-3, 0.0)
     assert planner.probes == 2 and planner.winner == "truncated"
+
+
+def test_planner_does_not_expect_a_saturated_truncated_path_to_keep_speeding_up(monkeypatch):
+    # the rows' reach is their nearest distance (d_min^2 = 1 >> extra = 1e-3) and the fixed
+    # cost per row dominates: the truncated path's time hardly depends on sigma2 any more
+    from centrality_vision.registration._estep import _COST_TRUNCATED
+
+    durations = {"dense": [10.0, 10.0, 10.0], "truncated": [12.0, 12.0]}
+    work = (1.0, 1.0, 1e-3, 100 * _COST_TRUNCATED)
+    planner, _, fake = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 0.0}, work)
+    assert planner.winner == "dense"
+    guess = planner.predicted(1e-3 / 5, 2)
+    assert guess["truncated"] == pytest.approx(12.0)  # at least one candidate per row
+    planner(np.zeros((1100, 2)), np.zeros((1100, 2)), 1e-3 / 5, 0.0)
+    assert planner.probes == 1 and fake.calls[-1] == "dense"
+
+
+def test_planner_takes_up_an_earlier_probe_when_sigma2_swings_back(monkeypatch):
+    durations = {"dense": [10.0, 10.0, 10.0, 10.0], "truncated": [12.0, 12.0, 1.0]}
+    planner, _, fake = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 0.0})
+    big = np.zeros((1100, 2))
+    assert planner.winner == "dense"
+    planner(big, big, 1e-6, 0.0)  # 1000x away: a new probe, where the truncated path wins
+    assert planner.probes == 2 and planner.winner == "truncated"
+    planner(big, big, 1.2e-3, 0.0)  # back near the first probe: its choice, without probing
+    assert planner.probes == 2 and planner.reused == 1
+    assert planner.winner == "dense" and fake.calls[-1] == "dense"

@@ -507,8 +507,9 @@ def _model_costs(moving_t, fixed, sigma2, prior, tau, eps):
     t_grid = time.perf_counter() - start
     rows = np.linspace(0, n_fixed - 1, min(256, n_fixed)).astype(np.int64)
     visited = K.count_candidates(fixed, rows, grid.keys, grid.origin, grid.cell, grid.dims, d2_min, extra)
-    per_row = _COST_TRUNCATED * max(float(visited.mean()), 1.0) + _COST_TRUNCATED_ROW * math.log2(n_moving + 1)
-    costs["truncated"] = per_row * n_fixed
+    candidates = max(float(visited.mean()), 1.0)
+    row_floor = _COST_TRUNCATED_ROW * math.log2(n_moving + 1)
+    costs["truncated"] = (_COST_TRUNCATED * candidates + row_floor) * n_fixed
     if prior is None or prior.scale == 0:
         # rows whose transformed sum falls below the transform's error bound, 1e4 eps M, are
         # redone exactly (see _fgt); the sum is at most M times its largest term
@@ -522,7 +523,9 @@ def _model_costs(moving_t, fixed, sigma2, prior, tau, eps):
     # what the paths reuse was built here: a probe adds its time to theirs, as their own
     # calls outside a probe build it themselves
     setup = {"dense": 0.0, "truncated": t_nearest + t_grid, "fgt": t_nearest}
-    return costs, {"nearest": nearest, "grid": grid, "setup": setup}
+    # what the truncated path's cost at another sigma2 follows (see EStepPlanner.predicted)
+    work = (candidates, float(np.median(d2_min)), extra, row_floor)
+    return costs, {"nearest": nearest, "grid": grid, "setup": setup, "truncated_work": work}
 
 
 def _choose(moving_t, fixed, sigma2, prior, tau, eps):
@@ -564,7 +567,10 @@ class EStepPlanner:
     ``reprobe_factor`` times away from the sigma2 of the last probe, or ``reprobe_calls``
     calls have passed. (Without the prediction, a fit whose sigma2 shrinks 10x between
     probes kept the FGT where dense had become 6x faster, or dense where the truncated path
-    had become 2.8x faster; measured at 3,000 and 20,000 points.)
+    had become 2.8x faster; measured at 3,000 and 20,000 points.) When sigma2 swings back
+    and forth over decades (a fit near its end can), one of the last probes within
+    ``sqrt(reprobe_factor)`` of the current sigma2 and fewer than ``reprobe_calls`` calls
+    ago decides instead, if it still would.
 
     A probe skips a path predicted slower than ``skip_factor`` times the fastest time
     measured in it: the prediction is the cost model scaled by that path's last measured
@@ -604,22 +610,56 @@ class EStepPlanner:
         self._sigma2 = None
         self._calls = 0
         self._at_probe = {}  # path -> seconds at the last probe (measured, or predicted if skipped)
+        self._truncated_work = None  # (candidates per row, median d_min^2, extra, row floor) then
+        self._recent = []  # the last probes' states, to take up again when sigma2 swings back
+        self._total = 0  # calls so far
+        self.reused = 0  # calls that took up an earlier probe's choice instead of probing
 
     def predicted(self, sigma2, n_dims):
         """Each path's time at ``sigma2`` extrapolated from the last probe by how its work
-        scales with sigma2: dense not at all, the truncated path's neighbourhoods as
-        sigma2^(D/2), the FGT's boxes as sigma2^(-D/2)."""
+        scales with sigma2: dense not at all; the FGT's box count as sigma2^(-D/2); the
+        truncated path's candidates per row with the volume of its reach,
+        ``(d_min^2 + extra)^(D/2)`` (``extra`` proportional to sigma2, ``d_min^2`` the probe's
+        median), at least one, plus its fixed cost per row, so a path whose rows hold only
+        their nearest point is not predicted to keep getting faster."""
         ratio = sigma2 / self._sigma2
-        return {path: t * ratio ** (_SIGMA2_POWER[path] * n_dims / 2) for path, t in self._at_probe.items()}
+        out = {}
+        for path, t in self._at_probe.items():
+            if path == "truncated" and self._truncated_work is not None:
+                candidates, d2, extra, floor = self._truncated_work
+                reach = ((d2 + extra * ratio) / max(d2 + extra, 1e-300)) ** (n_dims / 2)
+                before = _COST_TRUNCATED * candidates + floor
+                out[path] = t * (_COST_TRUNCATED * max(candidates * reach, 1.0) + floor) / before
+            else:
+                out[path] = t * ratio ** (_SIGMA2_POWER[path] * n_dims / 2)
+        return out
+
+    def _fits(self, sigma2, n_dims, factor):
+        """Whether the last probe still decides at ``sigma2``: within ``factor`` of its sigma2
+        and no other path predicted to have become the faster one."""
+        if abs(math.log(sigma2 / self._sigma2)) > math.log(factor):
+            return False
+        guess = self.predicted(sigma2, n_dims)
+        return min(guess.values()) >= guess[self.winner]
 
     def _due(self, sigma2, n_dims):
         if self.winner is None or self._calls >= self.reprobe_calls:
             return True
-        if abs(math.log(sigma2 / self._sigma2)) > math.log(self.reprobe_factor):
-            return True
-        # probe again as soon as another path is predicted to have become the faster one
-        guess = self.predicted(sigma2, n_dims)
-        return min(guess.values()) < guess[self.winner]
+        if self._fits(sigma2, n_dims, self.reprobe_factor):
+            return False
+        # sigma2 may swing back and forth over decades (a fit near its end): a recent probe
+        # near this sigma2 is taken up again rather than probing anew
+        for state in reversed(self._recent):
+            if self._total - state[-1] >= self.reprobe_calls:
+                break
+            self._restore(state)
+            if self._fits(sigma2, n_dims, math.sqrt(self.reprobe_factor)):
+                self.reused += 1
+                return False
+        return True
+
+    def _restore(self, state):
+        self._sigma2, self.winner, self._at_probe, self._truncated_work, _ = state
 
     def __call__(self, moving_t, fixed, sigma2, w, prior=None, *, tau=None, eps=1e-8):
         """One E-step (see :func:`_e_step` for the arguments) by the path the planner picks."""
@@ -627,6 +667,7 @@ class EStepPlanner:
         if moving_t.shape[0] * fixed.shape[0] <= _PLAN_PAIRS:
             self.winner = "dense"
             return _run("dense", moving_t, fixed, sigma2, w, prior, tau, eps, {})
+        self._total += 1
         if not self._due(sigma2, moving_t.shape[1]):
             self._calls += 1
             return _run(self.winner, moving_t, fixed, sigma2, w, prior, tau, eps, {})
@@ -666,9 +707,11 @@ class EStepPlanner:
         self.winner = min(measured, key=measured.get)
         self.timings.update(measured)
         self._at_probe = {**at_probe, **measured}
+        self._truncated_work = cached.get("truncated_work")
         self.probes += 1
         self._sigma2 = sigma2
         self._calls = 1
+        self._recent = [*self._recent[-7:], (sigma2, self.winner, self._at_probe, self._truncated_work, self._total)]
         return results[self.winner]
 
 
