@@ -64,7 +64,15 @@ from typing import Any
 CENTRALITIES = ("betweenness", "closeness", "eigenvector", "eccentricity")
 LIBRARIES = ("ours", "ours-csr", "networkx", "networkit", "rustworkx", "igraph", "scipy")
 COMPILED = ("networkit", "rustworkx", "igraph", "scipy")
-SHORT = {"ours-csr": "ours-csr", "networkit": "nk", "rustworkx": "rx", "igraph": "ig", "scipy": "sp", "networkx": "nx", "ours": "ours"}
+SHORT = {
+    "ours-csr": "ours-csr",
+    "networkit": "nk",
+    "rustworkx": "rx",
+    "igraph": "ig",
+    "scipy": "sp",
+    "networkx": "nx",
+    "ours": "ours",
+}
 
 # name -> (kind, target size)
 GRAPHS = {
