@@ -193,17 +193,17 @@ def _length_stats(indptr, indices, data, progress: bool, desc: str):
     return [np.concatenate(p) for p in zip(*parts)]
 
 
-def _distance_stats(prep: _Prepared, weights: bool, progress: bool, desc: str, inward: bool, graph=None):
+def _distance_stats(prep: _Prepared, weights: bool, progress: bool, desc: str, inward: bool, grid_graph=None):
     """Per node: sum of distances, sum of inverse distances, eccentricity, nodes reached.
 
     ``inward``: distances to the node (closeness, harmonic); else from it (eccentricity).
-    The two coincide on undirected graphs. With lengths, a ``graph`` that is a pixel graph
-    of its mask is searched on the pixel grid.
+    The two coincide on undirected graphs. With lengths, ``grid_graph`` (the same graph,
+    given only where :func:`_on_pixel_grid` holds) is searched on the pixel grid.
     """
-    if weights and graph is not None and _on_pixel_grid(graph):
+    if weights and grid_graph is not None:
         from ._grid import grid_length_stats
 
-        return grid_length_stats(graph, progress, desc)  # node order already
+        return grid_length_stats(grid_graph, progress, desc)  # node order of the graph itself
     if weights:
         # Per-source searches give distances from the source: reverse the arcs for inward.
         indptr, indices, data = prep.transposed() if inward else (prep.indptr, prep.indices, prep.data)
@@ -362,7 +362,8 @@ def betweenness(
     >>> betweenness(path)
     array([0., 1., 0.])
     """
-    prep = _prepare(graph)
+    on_grid = _on_pixel_grid(graph)
+    prep = _prepare(graph, reorder=not on_grid)  # the grid path walks the mask, not these lists
     weights = _check_flag(weights, "weights")
     normalized = _check_flag(normalized, "normalized")
     progress = _check_flag(progress, "progress")
@@ -374,55 +375,56 @@ def betweenness(
         from ._approx import sample_betweenness
 
         epsilon, delta = _check_epsilon(epsilon, delta)
-        if _on_pixel_grid(graph):
-            from ._grid import _Grid
+        from ._grid import _Grid
 
-            values, info = sample_betweenness(prep, epsilon, delta, seed, progress, grid=_Grid(graph))
-        else:
-            values, info = sample_betweenness(prep, epsilon, delta, seed, progress)
-            values = prep.unpermute(values)  # normalised
+        grid = _Grid(graph) if on_grid else None
+        values, info = sample_betweenness(prep, epsilon, delta, seed, progress, grid=grid)
+        values = prep.unpermute(values)  # normalised
         if not normalized:
             values = values * pairs
-    elif _on_pixel_grid(graph):
-        from ._grid import grid_betweenness
-
-        values, info = grid_betweenness(graph, weights, progress)
-        values = values * 0.5  # every unordered pair was counted from both ends
-        if normalized:
-            values = values / pairs if n > 2 else np.zeros(n)
-        info = {"samples": 0, "bound": 0.0, **info}
     else:
-        classes = prep.classes() if weights else None
+        if on_grid:
+            from ._grid import grid_betweenness
 
-        def task(lo, hi):
-            sources = np.arange(lo, hi, dtype=np.int64)
-            if classes is not None:
-                ones = np.ones(sources.size)
-                return _kernels.class_brandes(
-                    prep.indptr,
-                    prep.indices,
-                    classes[0],
-                    classes[1],
-                    sources,
-                    _kernels.TIE_RTOL,
-                    False,
-                    False,
-                    *_kernels.NO_GRID,
-                    ones,
-                )[0]
-            return _kernels.brandes(prep.indptr, prep.indices, prep.data, sources, weights, _kernels.TIE_RTOL, False)[0]
-
-        values = np.zeros(n)
-        for _, _, part in run_chunks(task, n, progress=progress, desc="betweenness"):
-            values += part
+            values, info = grid_betweenness(graph, weights, progress)
+        else:
+            values, info = _list_betweenness(prep, weights, progress), {"searches": n}
         values = prep.unpermute(values)
         if not prep.directed:
             values *= 0.5  # every unordered pair was counted from both ends
         if normalized:
             values = values / pairs if n > 2 else np.zeros(n)
-        info = {"samples": 0, "searches": n, "bound": 0.0}
+        info = {"samples": 0, "bound": 0.0, **info}
     out = _finish(values, prep.labels, as_dict)
     return (out, info) if _check_flag(return_info, "return_info") else out
+
+
+def _list_betweenness(prep: _Prepared, weights: bool, progress: bool) -> np.ndarray:
+    """Ordered-pair betweenness sums (node order of ``prep``) on the adjacency lists."""
+    classes = prep.classes() if weights else None
+
+    def task(lo, hi):
+        sources = np.arange(lo, hi, dtype=np.int64)
+        if classes is not None:
+            ones = np.ones(sources.size)
+            return _kernels.class_brandes(
+                prep.indptr,
+                prep.indices,
+                classes[0],
+                classes[1],
+                sources,
+                _kernels.TIE_RTOL,
+                False,
+                False,
+                *_kernels.NO_GRID,
+                ones,
+            )[0]
+        return _kernels.brandes(prep.indptr, prep.indices, prep.data, sources, weights, _kernels.TIE_RTOL, False)[0]
+
+    values = np.zeros(prep.n)
+    for _, _, part in run_chunks(task, prep.n, progress=progress, desc="betweenness"):
+        values += part
+    return values
 
 
 def edge_betweenness(
@@ -588,8 +590,9 @@ def closeness(
 
 def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc):
     """(n, sum of distances, sum of inverse distances, largest, reached, info) to each node."""
-    prep = _prepare(graph)
     weights = _check_flag(weights, "weights")
+    on_grid = weights and epsilon is None and _on_pixel_grid(graph)
+    prep = _prepare(graph, reorder=not on_grid)  # the grid search walks the mask, not these lists
     progress = _check_flag(progress, "progress")
     if epsilon is not None:
         if weights or prep.directed:
@@ -600,7 +603,7 @@ def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc):
         total, inverse, largest, reached, info = sample_sources(prep, epsilon, delta, seed, progress, desc)
         stats = [prep.unpermute(v) for v in (total, inverse, largest, reached)]
     else:
-        stats = _distance_stats(prep, weights, progress, desc, inward=True, graph=graph)
+        stats = _distance_stats(prep, weights, progress, desc, inward=True, grid_graph=graph if on_grid else None)
         info = {"searches": prep.n, "samples": 0}
     info["labels"] = prep.labels
     return (prep.n, *stats, info)
@@ -756,7 +759,8 @@ def eccentricity(
         if largest is not None:
             largest = prep.unpermute(largest)
     if largest is None:
-        largest = _distance_stats(prep, weights, progress, "eccentricity", inward=False, graph=graph)[2]
+        grid_graph = graph if weights and _on_pixel_grid(graph) else None
+        largest = _distance_stats(prep, weights, progress, "eccentricity", inward=False, grid_graph=grid_graph)[2]
         searches += prep.n if weights else int(math.ceil(prep.n / 64))
     if normalized:
         top = largest.max()

@@ -60,7 +60,8 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
     """Normalised betweenness estimates (node order of ``prep``) and an info dict.
 
     With ``grid`` (a :class:`._grid._Grid` of the same graph) the searches walk the pixel
-    grid, and the estimates come in the node order of the graph itself (not ``prep``'s).
+    grid, and the estimates come in the node order of the graph itself (prepare it
+    without reordering).
     """
     n = prep.n
     rng = as_generator(seed)  # validated even when there is nothing to sample

@@ -53,10 +53,7 @@ def grid_brandes(foreground, offs, sources, weights):
     coef = np.zeros(size)
     lists = np.empty(0, dtype=np.int64)  # no adjacency lists: the grid mode
     heads = np.empty(0, dtype=np.int32)
-    n_pixels = 0
-    for i in range(size):
-        if foreground[i]:
-            n_pixels += 1
+    n_pixels = np.count_nonzero(foreground)
     succ = np.empty(n_pixels * offs.shape[0], dtype=np.int64)
     first = np.empty(n_pixels + 1, dtype=np.int64)
     n_log = 0

@@ -574,10 +574,7 @@ def _walk_workspace(indptr, kind, n_classes, offs, foreground):
         n = indptr.shape[0] - 1
         return n, grid, _class_workspace(n, kind, n_classes, 1)
     n = foreground.shape[0]
-    n_pixels = 0
-    for i in range(n):
-        if foreground[i]:
-            n_pixels += 1
+    n_pixels = np.count_nonzero(foreground)
     counts, dist, done, qstart, qnode = _class_workspace(n, kind, n_classes, n_pixels)
     for i in range(n):
         done[i] = not foreground[i]
