@@ -40,6 +40,7 @@ from ..transforms import (
 )
 from ._estep import (
     E_STEP_METHODS,
+    PRECISIONS,
     CentralityPrior,
     EStepPlanner,
     _e_step,
@@ -285,6 +286,7 @@ class _CPD(BaseEstimator):
         landmark_weight=10.0,
         method="auto",
         n_neighbors=None,
+        precision="float64",
         callback=None,
         progress=False,
         random_state=None,
@@ -298,6 +300,7 @@ class _CPD(BaseEstimator):
         self.landmark_weight = landmark_weight
         self.method = method
         self.n_neighbors = n_neighbors
+        self.precision = precision
         self.callback = callback
         self.progress = progress
         self.random_state = random_state
@@ -315,6 +318,7 @@ class _CPD(BaseEstimator):
             check_float(self.sigma2, name=f"{name}.sigma2", low=0.0, low_open=True)
         check_float(self.landmark_weight, name=f"{name}.landmark_weight", low=0.0, low_open=True)
         check_choice(self.method, E_STEP_METHODS, name=f"{name}.method")
+        check_choice(self.precision, PRECISIONS, name=f"{name}.precision")
         if self.n_neighbors is not None:
             check_int(self.n_neighbors, name=f"{name}.n_neighbors", low=1)
             if self.method not in ("auto", "dense"):
@@ -575,7 +579,7 @@ class _CPD(BaseEstimator):
         """``e_step(moving_t, sigma2, w, prior) -> Posteriors`` of this fit: CPD's or the k-NN model's."""
         if self.n_neighbors is None:
             return lambda moving_t, sigma2, w, prior: _e_step(
-                moving_t, fixed, sigma2, w, prior, method=self.method, planner=planner
+                moving_t, fixed, sigma2, w, prior, method=self.method, planner=planner, precision=self.precision
             )
         from scipy.spatial import cKDTree
 
@@ -690,8 +694,8 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         E-step path: every pair ('dense'); for each fixed point only the moving points whose
         term is above exp(-36.8)/M of its largest ('truncated', a cell grid: equal to dense to
         rounding); a fast Gauss transform ('fgt', about 1e-8 of the total weight; CPD only,
-        not GPD). 'auto' takes the cheapest by a cost model at each iteration (always dense
-        below 4 million pairs).
+        not GPD). 'auto' takes the fastest by timing the paths during the fit
+        (``registration._estep.EStepPlanner``; always dense below 2^20 pairs).
     n_neighbors : int, optional
         None (default): CPD's model, every moving point may explain every fixed point.
         An int k: the k-nearest-neighbour model (the E-step of biocpd, our own code): each
@@ -708,6 +712,12 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         the start is far from the answer it is worse: the CPD fish pair 0.051 against 0.0061
         dense (``outlier_weight.py --models``), the fish rotated by 45 degrees with clutter
         75% success against 100%.
+    precision : {'float64', 'float32'}, default='float64'
+        'float32' takes the dense E-step's exponentials in float32 (scores, maxima and sums
+        stay in float64): each posterior within 1.1e-5 of its float64 value relative, plus
+        ``3.4e-38 (M + 1)`` (the bound is ``registration._estep.PRECISIONS``'). Measured on
+        uniform 2D points, one E-step: 1.15-1.4x faster than float64 at 1,000 to 10,000
+        points. The truncated, FGT and ``n_neighbors`` E-steps ignore it.
     callback : callable, optional
         Called with an :class:`IterationInfo` after each E-step; return ``True`` to stop.
     progress : bool, default=False
@@ -787,6 +797,7 @@ class RigidCPD(_CPD):
         landmark_weight=10.0,
         method="auto",
         n_neighbors=None,
+        precision="float64",
         callback=None,
         progress=False,
         random_state=None,
@@ -801,6 +812,7 @@ class RigidCPD(_CPD):
             landmark_weight=landmark_weight,
             method=method,
             n_neighbors=n_neighbors,
+            precision=precision,
             callback=callback,
             progress=progress,
             random_state=random_state,
@@ -933,6 +945,7 @@ class NonRigidCPD(_CPD):
         landmark_weight=10.0,
         method="auto",
         n_neighbors=None,
+        precision="float64",
         callback=None,
         progress=False,
         random_state=None,
@@ -947,6 +960,7 @@ class NonRigidCPD(_CPD):
             landmark_weight=landmark_weight,
             method=method,
             n_neighbors=n_neighbors,
+            precision=precision,
             callback=callback,
             progress=progress,
             random_state=random_state,

@@ -27,6 +27,7 @@ from numba.extending import intrinsic
 
 __all__ = [
     "fast_exp",
+    "fast_exp_single",
     "exp_array",
     "dense_rows",
     "grid_keys",
@@ -38,7 +39,7 @@ __all__ = [
 # Terms more than this far below a row's largest one are below exp(-50) ~ 2e-22 of it and
 # are skipped when accumulating (they change no sum at double precision).
 _SKIP = np.exp(-50.0)
-# Exponents are clamped here before ``exp`` (see dense_scores).
+# Exponents are clamped here before ``exp`` (see _exp_row).
 _FLOOR = -700.0
 
 
@@ -182,22 +183,6 @@ def _max(row, n):
     return out
 
 
-@njit(nogil=True, cache=True, fastmath=_CONTRACT)
-def _first(row, n, value):
-    """The first ``m < n`` with ``row[m] == value`` (``n - 1`` if none), 32 at a time."""
-    k = 0
-    while k + 32 <= n:
-        hit = 0
-        for i in range(32):
-            hit += 1 if row[k + i] == value else 0
-        if hit:
-            break
-        k += 32
-    while k < n - 1 and row[k] != value:
-        k += 1
-    return k
-
-
 @njit(nogil=True, cache=True, fastmath=_REDUCE)
 def _sum(row, a, b):
     total = 0.0
@@ -212,37 +197,6 @@ def _exp_shifted(row, a, b, shift):
     normal (exp(-700) ~ 1e-304 adds nothing to a sum whose largest term is 1)."""
     for m in range(a, b):
         row[m] = fast_exp(max(row[m] - shift, _FLOOR))
-
-
-@njit(nogil=True, cache=True, fastmath=_CONTRACT)
-def dense_rows(
-    x, yt, lo, hi, inv2s2, log_c, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, row, p1, pxt, pt1, log_den, best
-):
-    """The whole E-step for fixed points ``lo <= n < hi`` against every moving point.
-
-    ``yt`` is the moving set transposed (D x M), ``row`` a scratch buffer of M values;
-    ``p1`` and ``pxt`` (D x M) are added to, ``pt1``, ``log_den`` and ``best`` written at ``n``.
-    """
-    n_dims, n_moving = yt.shape
-    has_prior = log_weight.shape[0] > 0
-    for n in range(lo, hi):
-        _scores(x, n, yt, inv2s2, row)
-        if has_prior:
-            vn = v_fixed[n]
-            for m in range(n_moving):
-                dv = vn - v_moving[m]
-                row[m] += prior_scale * (log_weight[m] - dv * dv * inv2phi2)
-        smax = _max(row, n_moving)
-        arg = _first(row, n_moving, smax)
-        r = max(smax, log_c)
-        best[n] = arg if smax >= log_c else -1
-        _exp_shifted(row, 0, n_moving, r)
-        total = _sum(row, 0, n_moving)
-        den = total + np.exp(log_c - r)
-        inv = 1.0 / den
-        log_den[n] = r + np.log(den)
-        pt1[n] = total * inv
-        _accumulate(row, inv, x, n, p1, pxt)
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
@@ -277,36 +231,193 @@ def _scores(x, n, yt, inv2s2, row):
             row[m] *= -inv2s2
 
 
+# ---------------------------------------------------------------------------------------------
+# The dense E-step. Per row of fixed points: the scores (and the prior) into a buffer, their
+# maximum and its first position, the exponentials into a second buffer and their sum, each
+# one vectorised loop over the row (held in L1); the rows are then added into the sufficient
+# statistics four at a time, so that P1 and P X are read and written once per four rows. The
+# exponential dominates (measured on one core: 0.6 ns a term, against 0.15-0.2 for a score,
+# 0.14 for the maximum, 0.07 for its position, 0.04 for the sum and 0.13 for the
+# accumulation). Scores and exponentials are not fused into one loop: that needs each row's
+# shift beforehand (its nearest moving point, from a k-d tree), and the tree's query alone
+# costs more than the passes it would save below about 10,000 points (0.65 ns a pair at
+# 1,000 points, 0.14 at 3,000), while a score-and-exponential loop costs as much as the two
+# loops (0.81 against 0.77 ns a term).
+
+_GROUP = 4  # rows accumulated together
+
+
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
-def _accumulate(row, inv, x, n, p1, pxt):
-    """``p1 += row inv`` and ``pxt[d] += row inv x[n, d]``, one pass for D = 2 and 3."""
+def _first_equal(row, value):
+    """The first ``m`` with ``row[m] == value`` (``M - 1`` if none), as a vectorised minimum."""
+    n = row.shape[0]
+    first = n
+    for m in range(n):
+        first = min(first, m if row[m] == value else n)
+    return first if first < n else n - 1
+
+
+@njit(nogil=True, cache=True, fastmath=_CONTRACT)
+def _exp_row(scores, shift, out):
+    """``out[m] = exp(max(scores[m] - shift, -700))`` by :func:`fast_exp`."""
+    for m in range(scores.shape[0]):
+        out[m] = fast_exp(max(scores[m] - shift, _FLOOR))
+
+
+# ---------------------------------------------------------------------------------------------
+# A float32 exponential for -87 <= x <= 0, the same scheme as fast_exp: k = round(x / ln 2),
+# |r| <= ln(2) / 2, exp(r) by its Taylor polynomial of degree 7 (truncation error
+# 0.347^8 / 8! < 6e-9), 2^k from its bits (k >= -126: a normal float32).
+
+_FLOOR_SINGLE = -87.0  # exp(-87) ~ 1.6e-38, near float32's least normal number: the clamp
+
+_F = np.float32
+_LOG2E_S = _F(1.4426950408889634)
+_LN2_HI_S = _F(0.693359375)  # ln 2 split so that k * _LN2_HI_S is exact for |k| < 2^11
+_LN2_LO_S = _F(-2.12194440e-4)
+_ROUND_S = _F(12582912.0)  # 1.5 * 2^23
+_S = [_F(c) for c in _C[:8]]
+_S0, _S1, _S2, _S3, _S4, _S5, _S6, _S7 = _S
+
+
+@intrinsic
+def _int_bits_as_float32(typingctx, bits):
+    """Reinterpret the 32 bits of an int32 as a float32 (no conversion)."""
+    sig = types.float32(types.int32)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitcast(args[0], context.get_value_type(types.float32))
+
+    return sig, codegen
+
+
+@njit(nogil=True, cache=True, inline="always")
+def fast_exp_single(x):
+    """``exp(x)`` of a float32 ``-87 <= x <= 0`` to a relative error below 2e-7 (measured
+    7.6e-8), in float32 throughout; callers compile with ``fastmath=_CONTRACT`` at most."""
+    k = (x * _LOG2E_S + _ROUND_S) - _ROUND_S
+    r = (x - k * _LN2_HI_S) - k * _LN2_LO_S
+    p = _S7
+    p = p * r + _S6
+    p = p * r + _S5
+    p = p * r + _S4
+    p = p * r + _S3
+    p = p * r + _S2
+    p = p * r + _S1
+    p = p * r + _S0
+    return p * _int_bits_as_float32((np.int32(k) + np.int32(127)) << np.int32(23))
+
+
+@njit(nogil=True, cache=True, fastmath=_CONTRACT)
+def _exp_row_single(scores, shift, out):
+    """``out[m] = exp(max(t, -87))`` in float32 by :func:`fast_exp_single`, ``t = scores[m] -
+    shift`` taken in float64 and rounded to float32 (an absolute error of at most
+    ``87 * 2^-24 = 5.2e-6`` in ``t``)."""
+    for m in range(scores.shape[0]):
+        out[m] = fast_exp_single(_F(max(scores[m] - shift, _FLOOR_SINGLE)))
+
+
+@njit(nogil=True, cache=True, fastmath=_CONTRACT)
+def dense_rows(
+    x,
+    yt,
+    lo,
+    hi,
+    inv2s2,
+    log_c,
+    log_weight,
+    v_moving,
+    v_fixed,
+    prior_scale,
+    inv2phi2,
+    single,
+    scores,
+    rows,
+    coef,
+    p1,
+    pxt,
+    pt1,
+    log_den,
+    best,
+):
+    """The whole E-step for fixed points ``lo <= n < hi`` against every moving point.
+
+    ``yt`` is the moving set transposed (D x M); scratch: ``scores`` (M float64), ``rows``
+    (4 x M zeros: float64, or float32 with ``single``) and ``coef`` (D + 1 x 4). ``p1`` and
+    ``pxt`` (D x M) are added to, ``pt1``, ``log_den`` and ``best`` written at ``n``.
+
+    Per row: scores ``s_m = -|x_n - y_m|^2 inv2s2`` (plus the prior), their maximum ``smax``
+    (``best[n]`` its first position, or -1 when ``smax < log c``), the shift
+    ``r = max(smax, log c)``, the terms ``e_m = exp(max(s_m - r, -700))`` (every term <= 1)
+    and the denominator ``den = sum_m e_m + exp(log c - r)``: ``P[m, n] = e_m / den``. With
+    ``single`` the terms are :func:`_exp_row_single`'s float32 ones (clamped at ``exp(-87)``),
+    every sum still in float64.
+    """
+    n_dims, n_moving = yt.shape
+    has_prior = log_weight.shape[0] > 0
+    for g in range(lo, hi, _GROUP):
+        size = min(_GROUP, hi - g)
+        coef[:, :] = 0.0
+        for j in range(size):
+            n = g + j
+            _scores(x, n, yt, inv2s2, scores)
+            if has_prior:
+                vn = v_fixed[n]
+                for m in range(n_moving):
+                    dv = vn - v_moving[m]
+                    scores[m] += prior_scale * (log_weight[m] - dv * dv * inv2phi2)
+            smax = _max(scores, n_moving)
+            r = max(smax, log_c)
+            best[n] = _first_equal(scores, smax) if smax >= log_c else -1
+            if single:
+                _exp_row_single(scores, r, rows[j])
+            else:
+                _exp_row(scores, r, rows[j])
+            total = _sum(rows[j], 0, n_moving)
+            den = total + np.exp(log_c - r)
+            inv = 1.0 / den
+            log_den[n] = r + np.log(den)
+            pt1[n] = total * inv
+            coef[0, j] = inv
+            for d in range(n_dims):
+                coef[d + 1, j] = x[n, d] * inv
+        _accumulate_group(rows, coef, p1, pxt)
+
+
+@njit(nogil=True, cache=True, fastmath=_CONTRACT)
+def _accumulate_group(rows, coef, p1, pxt):
+    """``p1 += sum_j coef[0, j] rows[j]`` and ``pxt[d] += sum_j coef[d + 1, j] rows[j]`` over
+    the four rows, in one pass for D = 2 and 3 (a row with zero coefficients adds nothing)."""
     n_dims, n_moving = pxt.shape
+    r0, r1, r2, r3 = rows[0], rows[1], rows[2], rows[3]
+    c0, c1, c2, c3 = coef[0, 0], coef[0, 1], coef[0, 2], coef[0, 3]
     if n_dims == 2:
-        x0, x1 = x[n, 0], x[n, 1]
+        a0, a1, a2, a3 = coef[1, 0], coef[1, 1], coef[1, 2], coef[1, 3]
+        b0, b1, b2, b3 = coef[2, 0], coef[2, 1], coef[2, 2], coef[2, 3]
         q0, q1 = pxt[0], pxt[1]
         for m in range(n_moving):
-            e = row[m] * inv
-            p1[m] += e
-            q0[m] += e * x0
-            q1[m] += e * x1
+            e0, e1, e2, e3 = np.float64(r0[m]), np.float64(r1[m]), np.float64(r2[m]), np.float64(r3[m])
+            p1[m] += (e0 * c0 + e1 * c1) + (e2 * c2 + e3 * c3)
+            q0[m] += (e0 * a0 + e1 * a1) + (e2 * a2 + e3 * a3)
+            q1[m] += (e0 * b0 + e1 * b1) + (e2 * b2 + e3 * b3)
     elif n_dims == 3:
-        x0, x1, x2 = x[n, 0], x[n, 1], x[n, 2]
+        a0, a1, a2, a3 = coef[1, 0], coef[1, 1], coef[1, 2], coef[1, 3]
+        b0, b1, b2, b3 = coef[2, 0], coef[2, 1], coef[2, 2], coef[2, 3]
+        z0, z1, z2, z3 = coef[3, 0], coef[3, 1], coef[3, 2], coef[3, 3]
         q0, q1, q2 = pxt[0], pxt[1], pxt[2]
         for m in range(n_moving):
-            e = row[m] * inv
-            p1[m] += e
-            q0[m] += e * x0
-            q1[m] += e * x1
-            q2[m] += e * x2
+            e0, e1, e2, e3 = np.float64(r0[m]), np.float64(r1[m]), np.float64(r2[m]), np.float64(r3[m])
+            p1[m] += (e0 * c0 + e1 * c1) + (e2 * c2 + e3 * c3)
+            q0[m] += (e0 * a0 + e1 * a1) + (e2 * a2 + e3 * a3)
+            q1[m] += (e0 * b0 + e1 * b1) + (e2 * b2 + e3 * b3)
+            q2[m] += (e0 * z0 + e1 * z1) + (e2 * z2 + e3 * z3)
     else:
-        for m in range(n_moving):
-            row[m] *= inv
-            p1[m] += row[m]
-        for d in range(n_dims):
-            xd = x[n, d]
-            acc = pxt[d]
+        for t in range(n_dims + 1):
+            acc = p1 if t == 0 else pxt[t - 1]
+            c0, c1, c2, c3 = coef[t, 0], coef[t, 1], coef[t, 2], coef[t, 3]
             for m in range(n_moving):
-                acc[m] += row[m] * xd
+                e0, e1, e2, e3 = np.float64(r0[m]), np.float64(r1[m]), np.float64(r2[m]), np.float64(r3[m])
+                acc[m] += (e0 * c0 + e1 * c1) + (e2 * c2 + e3 * c3)
 
 
 @njit(nogil=True, cache=True)

@@ -1,0 +1,176 @@
+"""The dense E-step kernel (rows grouped by four) against a plain numpy reference, and its
+float32 option against float64 within the bound stated in ``_estep.PRECISIONS``."""
+
+import math
+
+import numpy as np
+import pytest
+
+from centrality_vision.exceptions import InputError
+from centrality_vision.registration import GPD, AffineCPD, NonRigidCPD, RigidCPD
+from centrality_vision.registration._estep import (
+    CentralityPrior,
+    _dense,
+    _e_step,
+    log_outlier_constant,
+)
+
+
+def _reference(moving_t, fixed, sigma2, w, prior=None):
+    """Every statistic from the full (M, N) matrix, each row shifted by its maximum and the
+    exponent clamped at -700 as the kernel does; ``best`` by ``argmax`` (its first maximum)."""
+    n_moving, n_dims = moving_t.shape
+    n_fixed = fixed.shape[0]
+    d2 = np.sum((fixed[None, :, :] - moving_t[:, None, :]) ** 2, axis=2)
+    s = -d2 * (1.0 / (2.0 * sigma2))
+    if prior is not None:
+        s = s + prior.matrix()
+    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    smax = s.max(axis=0)
+    r = np.maximum(smax, log_c)
+    e = np.exp(np.maximum(s - r, -700.0))
+    den = e.sum(axis=0) + np.exp(log_c - r)
+    p = e / den
+    best = np.where(smax >= log_c, np.argmax(s, axis=0), -1)
+    log_den = r + np.log(den)
+    return p.sum(axis=1), p @ fixed, p.sum(axis=0), log_den, best
+
+
+def _cases():
+    rng = np.random.default_rng(7)
+    for n_dims in (2, 3, 5):
+        for n_moving, n_fixed in ((1, 1), (5, 3), (37, 53), (130, 97)):
+            for sigma2 in (1.0, 1e-2, 1e-5, 1e-12):
+                for w in (0.0, 0.2):
+                    yield rng.random((n_moving, n_dims)), rng.random((n_fixed, n_dims)), sigma2, w
+
+
+@pytest.mark.parametrize("single", [False, True])
+def test_dense_matches_reference(single):
+    """float64: every statistic to 1e-13 relative (of each array's largest entry) and the same
+    ``best``; float32: within its stated bound."""
+    for moving_t, fixed, sigma2, w in _cases():
+        log_c = log_outlier_constant(sigma2, w, fixed.shape[1], moving_t.shape[0], fixed.shape[0])
+        got = _dense(moving_t, fixed, 1.0 / (2.0 * sigma2), log_c, None, single)
+        want = _reference(moving_t, fixed, sigma2, w)
+        _check(got, want, fixed, single)
+
+
+def _check(got, want, fixed, single):
+    p1, px, pt1, log_den, best = got
+    r_p1, r_px, r_pt1, r_log_den, r_best = want
+    n_moving, n_fixed = p1.size, pt1.size
+    if not single:
+        for a, b in ((p1, r_p1), (px, r_px), (pt1, r_pt1), (log_den, r_log_den)):
+            scale = max(float(np.max(np.abs(b))), 1e-300)
+            assert np.max(np.abs(a - b)) <= 1e-13 * scale + 1e-290
+        np.testing.assert_array_equal(best, r_best)
+        return
+    tiny = 3.4e-38 * (n_moving + 1) * n_fixed
+    assert np.all(np.abs(p1 - r_p1) <= 1.1e-5 * r_p1 + tiny)
+    assert np.all(np.abs(pt1 - r_pt1) <= 1.1e-5 * r_pt1 + tiny)
+    # P X against P |X| (the reference's p @ |fixed| from p1 and px is not at hand: bound it by max |X|)
+    assert np.all(np.abs(px - r_px) <= 1.1e-5 * r_p1[:, None] * np.max(np.abs(fixed)) + tiny * np.max(np.abs(fixed)))
+    # log den = r + log(sum): the bound is on the log of the sum, plus the rounding of adding r
+    assert np.all(np.abs(log_den - r_log_den) <= 5.5e-6 + 1.7e-38 * n_moving + 4e-16 * np.abs(r_log_den))
+    np.testing.assert_array_equal(best, r_best)  # the scores and their maxima stay in float64
+
+
+@pytest.mark.parametrize("single", [False, True])
+def test_far_apart_sets_every_term_below_the_outlier_constant(single):
+    """Sets 100 apart at sigma2 = 1e-3: every score is ~1e7 below log c. Each row is shifted by
+    log c, its terms are all clamped (exp(-700) in float64, exp(-87) in float32), the outlier
+    term takes the whole row (Pt1 ~ 0, log den = log c) and ``best`` is -1 everywhere."""
+    rng = np.random.default_rng(3)
+    moving_t = rng.random((70, 2))
+    fixed = rng.random((40, 2)) + 100.0
+    sigma2, w = 1e-3, 0.1
+    log_c = log_outlier_constant(sigma2, w, 2, 70, 40)
+    p1, px, pt1, log_den, best = _dense(moving_t, fixed, 1.0 / (2.0 * sigma2), log_c, None, single)
+    floor = math.exp(-87.0) if single else math.exp(-700.0)
+    np.testing.assert_allclose(pt1, 70 * floor / (1 + 70 * floor), rtol=1e-6)
+    np.testing.assert_allclose(p1, 40 * floor, rtol=1e-6)
+    np.testing.assert_allclose(log_den, log_c + math.log1p(70 * floor), rtol=1e-15)
+    assert np.all(best == -1)
+    assert np.all(np.isfinite(px))
+
+
+def test_duplicates_and_ties_take_the_first_maximum():
+    """Duplicated moving points tie exactly: ``best`` is the first of them, in both precisions;
+    a fixed point on a moving point's duplicate pair and midway between two points too."""
+    moving_t = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 0.0], [1.0, 0.0], [5.0, 5.0]])
+    fixed = np.array([[0.0, 0.0], [1.0, 0.0], [0.5, 0.0], [5.0, 5.0], [5.0, 5.0]])
+    for single in (False, True):
+        out = _dense(moving_t, fixed, 1.0 / (2.0 * 0.01), -math.inf, None, single)
+        assert out[4].tolist() == [0, 1, 0, 4, 4]
+        # ties share the posterior equally
+        assert out[0][0] == pytest.approx(out[0][2], rel=1e-12)
+        assert out[0][1] == pytest.approx(out[0][3], rel=1e-12)
+    big = np.random.default_rng(0).random((300, 2))
+    moving_big = np.vstack([big, big])  # 600 points, each twice: the first copy wins
+    got = _dense(moving_big, big, 1.0 / (2.0 * 1e-6), -math.inf, None, False)
+    np.testing.assert_array_equal(got[4], np.arange(300))
+
+
+def test_prior_matches_reference():
+    """GPD's centrality prior: the same kernel, scores plus prior before the maximum."""
+    rng = np.random.default_rng(5)
+    for n_dims in (2, 3):
+        moving_t, fixed = rng.random((61, n_dims)), rng.random((45, n_dims))
+        prior = CentralityPrior(np.log(rng.random(61) + 0.1), rng.random(61), rng.random(45), 3.0, 0.7)
+        for sigma2 in (1.0, 1e-3):
+            log_c = log_outlier_constant(sigma2, 0.1, n_dims, 61, 45)
+            for single in (False, True):
+                got = _dense(moving_t, fixed, 1.0 / (2.0 * sigma2), log_c, prior, single)
+                _check(got, _reference(moving_t, fixed, sigma2, 0.1, prior), fixed, single)
+
+
+def test_threads_do_not_change_the_result():
+    """Above 2^20 pairs the rows are split over the pool; the chunks do not depend on it."""
+    from centrality_vision._parallel import get_num_threads, set_num_threads
+
+    rng = np.random.default_rng(11)
+    moving_t, fixed = rng.random((1100, 2)), rng.random((1000, 2))
+    before = get_num_threads()
+    try:
+        set_num_threads(1)
+        one = _e_step(moving_t, fixed, 0.01, 0.1, method="dense", precision="float32")
+        set_num_threads(2)
+        two = _e_step(moving_t, fixed, 0.01, 0.1, method="dense", precision="float32")
+    finally:
+        set_num_threads(before)
+    np.testing.assert_array_equal(one.p1, two.p1)
+    np.testing.assert_array_equal(one.px, two.px)
+    assert one.neg_log_likelihood == two.neg_log_likelihood
+
+
+def test_float32_registration_matches_float64():
+    """A whole fit in float32 ends where float64 does (rigid and non-rigid)."""
+    rng = np.random.default_rng(2)
+    y = rng.random((150, 2))
+    angle = 0.4
+    rot = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    x = y @ rot.T + 0.2 + 0.005 * rng.standard_normal(y.shape)
+    for make in (lambda p: RigidCPD(tol=1e-8, precision=p), lambda p: NonRigidCPD(tol=1e-6, precision=p)):
+        a, b = make("float64").fit(y, x), make("float32").fit(y, x)
+        assert np.max(np.abs(a.moving_transformed_ - b.moving_transformed_)) < 1e-4
+        assert abs(a.n_iter_ - b.n_iter_) <= 2
+        assert a.history_["method"][0] == "dense"
+
+
+@pytest.mark.parametrize("bad", ["float16", "double", None, 32, np.float32])
+def test_bad_precision_is_refused(bad):
+    y = np.random.default_rng(0).random((10, 2))
+    for estimator in (RigidCPD(precision=bad), AffineCPD(precision=bad), NonRigidCPD(precision=bad)):
+        with pytest.raises(InputError, match="precision"):
+            estimator.fit(y, y)
+    with pytest.raises(InputError, match="precision"):
+        GPD(RigidCPD(precision=bad)).fit(y, y)
+    with pytest.raises(InputError, match="precision"):
+        _e_step(y, y, 1.0, 0.0, precision=bad)
+
+
+def test_precision_is_an_estimator_parameter():
+    reg = NonRigidCPD(precision="float32")
+    assert reg.get_params()["precision"] == "float32"
+    assert RigidCPD().get_params()["precision"] == "float64"
