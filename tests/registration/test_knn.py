@@ -115,3 +115,39 @@ def test_bad_n_neighbors(fish, bad):
 def test_n_neighbors_refuses_another_e_step_path(fish):
     with pytest.raises(InputError, match="n_neighbors"):
         RigidCPD(n_neighbors=10, method="fgt").fit(fish, fish)
+
+
+def test_the_frame_is_the_moving_sets_so_clutter_does_not_widen_beta(fish_pair):
+    # Under n_neighbors the unit of beta is the moving set's RMS radius: clutter far away
+    # from the shape (nobody's neighbour) leaves the fit unchanged, while the frame of the
+    # dense model (both sets' radius) grows with it.
+    from centrality_vision.registration._cpd import _Frame
+
+    y, x = fish_pair.moving, fish_pair.fixed
+    rng = np.random.default_rng(3)
+    clutter = rng.uniform(-1.0, 1.0, (200, 2)) * 40.0 + [60.0, 0.0]
+    cluttered = np.vstack([x, clutter])
+    radius = math.sqrt(np.mean(np.sum((y - y.mean(0)) ** 2, axis=1)))
+    for fixed in (x, cluttered):
+        frame, moving_n, _ = _Frame.of(y, fixed, True, same_centre=True, moving_scale=True)
+        assert frame.scale == pytest.approx(radius, rel=1e-12)
+    pooled, _, _ = _Frame.of(y, cluttered, True, same_centre=True)
+    assert pooled.scale > 5 * radius
+    a = NonRigidCPD(n_neighbors=8, tol=1e-9).fit(y, x)
+    b = NonRigidCPD(n_neighbors=8, tol=1e-9).fit(y, cluttered[rng.permutation(len(cluttered))])
+    # the clutter moves the fixed set's mean, so the start differs by that shift only
+    shift = cluttered.mean(0) - x.mean(0)
+    assert np.linalg.norm(shift) > 10
+    np.testing.assert_allclose(b.moving_transformed_, a.moving_transformed_, atol=1e-4)
+
+
+def test_moving_frame_falls_back_to_both_sets_radius():
+    from centrality_vision.registration._cpd import _Frame
+
+    one_point = np.zeros((5, 2))
+    fixed = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 2.0]])
+    frame, _, _ = _Frame.of(one_point, fixed, True, same_centre=True, moving_scale=True)
+    assert frame.scale > 0 and np.isfinite(frame.scale)
+    tiny = np.array([[0.0, 0.0], [1e-9, 0.0], [0.0, 1e-9]])
+    frame, moving_n, fixed_n = _Frame.of(tiny, fixed * 1e9, True, same_centre=True, moving_scale=True)
+    assert np.all(np.abs(fixed_n) < 10) and np.all(np.isfinite(moving_n))

@@ -15,7 +15,11 @@ Conventions every variant shares:
   frame, which makes their defaults unit-free; every fitted transform, point set, variance
   and history entry is mapped back to the caller's units. Because the sets start with their
   means on top of each other, the initial pose is "centroids aligned" rather than the
-  identity (pass ``init=`` to start elsewhere).
+  identity (pass ``init=`` to start elsewhere). The k-nearest-neighbour E-step
+  (``n_neighbors``) trusts the caller's pose instead: both sets are centred on the fixed
+  set's mean and divided by the moving set's RMS radius alone, so that clutter in the
+  fixed set does not widen ``beta`` (on the fish with as many uniform outliers as points,
+  mean error 0.0104 against 0.0127 with the radius of both sets).
 """
 
 from __future__ import annotations
@@ -56,6 +60,9 @@ __all__ = ["RigidCPD", "AffineCPD", "NonRigidCPD", "IterationInfo", "Snapshots",
 _SIGMA2_FLOOR = 1e-14
 # The common scale factor must keep sigma2 = scale^2 sigma2_normalised representable.
 _SCALE_RANGE = (1e-150, 1e150)
+# With ``moving_scale`` the frame's scale is the moving set's RMS radius unless the fixed
+# set's is this many times larger (then both sets' radius: the coordinates stay moderate).
+_FRAME_RATIO = 1e6
 # A transformed moving set whose RMS radius falls below this fraction of both sets' radii
 # has collapsed to a blob.
 _COLLAPSE_RADIUS = 0.05
@@ -150,24 +157,36 @@ class _Frame:
     scale: float
 
     @staticmethod
-    def of(moving: np.ndarray, fixed: np.ndarray, normalize: bool, *, same_centre: bool = False):
+    def of(
+        moving: np.ndarray, fixed: np.ndarray, normalize: bool, *, same_centre: bool = False, moving_scale: bool = False
+    ):
         """The frame and both sets in it (the identity frame without ``normalize``).
 
+        The common scale is the RMS radius of all M + N points about their centres, or
+        with ``moving_scale`` the moving set's alone (the model's: clutter or missing parts
+        of the fixed set then do not change what ``beta`` means), except where the moving
+        set is one point repeated or the fixed set's radius exceeds ``_FRAME_RATIO`` times
+        the moving set's (so that no coordinate can overflow).
         ``same_centre`` centres both sets on the fixed set's mean (a start pose unchanged).
         """
         dim = moving.shape[1]
         if not normalize:
             return _Frame(np.zeros(dim), np.zeros(dim), 1.0), moving, fixed
         mu_x, xc = centred(fixed)
+        mu_own, y_own = centred(moving)
         if same_centre:
             mu_y = mu_x
             unit = max(power_of_two_scale(moving), power_of_two_scale(mu_x[None, :]))
             yc = ((moving / unit) - (mu_x / unit)) * unit
         else:
-            mu_y, yc = centred(moving)
-        unit = max(power_of_two_scale(yc), power_of_two_scale(xc))
-        total = float(np.sum((yc / unit) ** 2) + np.sum((xc / unit) ** 2))
-        scale = unit * math.sqrt(total / (moving.shape[0] + fixed.shape[0]))
+            mu_y, yc = mu_own, y_own
+        r_moving, r_fixed = (_safe_rms(y_own), _safe_rms(xc)) if moving_scale else (0.0, 0.0)
+        if moving_scale and r_moving > 0.0 and r_fixed <= _FRAME_RATIO * r_moving:
+            scale = r_moving
+        else:
+            unit = max(power_of_two_scale(yc), power_of_two_scale(xc))
+            total = float(np.sum((yc / unit) ** 2) + np.sum((xc / unit) ** 2))
+            scale = unit * math.sqrt(total / (moving.shape[0] + fixed.shape[0]))
         if scale == 0.0:
             scale = 1.0  # every point of both sets is the same point: only a translation is left
         elif not _SCALE_RANGE[0] <= scale <= _SCALE_RANGE[1]:
@@ -212,6 +231,14 @@ class _Frame:
         if is_similarity:
             return SimilarityTransform(transform_n.rotation, translation, transform_n.scale)
         return AffineTransform(transform_n.linear, translation)
+
+
+def _safe_rms(centred_points: np.ndarray) -> float:
+    """RMS norm of the rows, without overflow for coordinates near 1e308."""
+    if centred_points.shape[0] == 0:
+        return 0.0
+    unit = power_of_two_scale(centred_points)
+    return unit * math.sqrt(float(np.sum((centred_points / unit) ** 2)) / centred_points.shape[0])
 
 
 def _rms_radius(points: np.ndarray) -> float:
@@ -392,7 +419,9 @@ class _CPD(BaseEstimator):
             raise TypeError(f"`prior` must be a CentralityPrior, a callable or None; got {prior!r}.")
         # the k-NN model trusts the start: both sets keep the caller's relative pose
         same_centre = self.n_neighbors is not None
-        frame, moving_n, fixed_n = _Frame.of(moving, fixed, bool(self.normalize), same_centre=same_centre)
+        frame, moving_n, fixed_n = _Frame.of(
+            moving, fixed, bool(self.normalize), same_centre=same_centre, moving_scale=same_centre
+        )
         true_n = None if true_moving is None else frame.fixed_in(true_moving)
         start = self._start(moving_n, fixed_n, frame)
         self._run(moving, moving_n, fixed_n, frame, true_n, start, landmarks, prior)
@@ -679,8 +708,9 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         ``sum |x_n - T0(y_m)|^2 / (D M N)`` for the starting pose T0.
     normalize : bool, default=True
         Run EM on both sets centred and divided by their common RMS radius (see the module
-        notes); results are equivariant under translating or scaling both inputs. False
-        runs on the raw coordinates, where ``beta``, ``sigma2`` and ``w`` have units.
+        notes; the moving set's radius alone under ``n_neighbors``); results are
+        equivariant under translating or scaling both inputs. False runs on the raw
+        coordinates, where ``beta``, ``sigma2`` and ``w`` have units.
     init : None, transform or 'global', default=None
         The starting pose: None (centroids aligned under ``normalize``, else the identity),
         a transform in the caller's units, or 'global' (a rotation search over the whole
@@ -703,8 +733,9 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         E-step (see ``registration._estep.knn_posterior``); clutter far from the shape is
         nobody's neighbour and is ignored whatever ``w``. It trusts the start, so under
         ``normalize`` both sets are centred on the fixed set's mean (the caller's pose, or
-        ``init``, is the start, not "centroids aligned"): use it when the sets start roughly
-        aligned, not for large rotations. k >= N is the dense model. Measured
+        ``init``, is the start, not "centroids aligned") and divided by the moving set's
+        RMS radius, so that clutter does not widen ``beta``: use it when the sets start
+        roughly aligned, not for large rotations. k >= N is the dense model. Measured
         (``benchmarks/registration_suite.py``, Chui-Rangarajan families, 100 pairs per
         level, non-rigid, k=10): fish with as many uniform outliers as points, mean error
         0.205 dense, 0.013 with k=10, 0.0056 with k=10 and w='auto'; 30% occluded, 0.124
