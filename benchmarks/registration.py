@@ -21,6 +21,7 @@ library     calls (all with w = 0, the same numeric ``--tol`` and ``--max-iter``
 ==========  =================================================================================
 ours        ``RigidCPD(scale=True, w=0, tol, max_iter).fit(Y, X)``,
             ``NonRigidCPD(beta, lam, low_rank="auto", w=0, tol, max_iter).fit(Y, X)``
+ours32      the same with ``precision="float32"`` (the dense E-step's exponentials in float32)
 pycpd       ``RigidRegistration(X=X, Y=Y, tolerance, max_iterations, w=0).register()``,
             ``DeformableRegistration(X=X, Y=Y, alpha=lam, beta=beta, ...).register()``
 cycpd       ``rigid_registration(X=X, Y=Y, scale=True, tolerance, max_iterations, w=0,
@@ -106,7 +107,7 @@ from pathlib import Path
 import numpy as np
 from _common import fmt_s, load_line, table
 
-LIBRARIES = ("ours", "rustcpd", "biocpd", "probreg", "pycpd", "cycpd")
+LIBRARIES = ("ours", "ours32", "rustcpd", "biocpd", "probreg", "pycpd", "cycpd")
 CASES = ("rigid", "nonrigid")
 DEFAULT_SIZES = (1000, 5000)
 QUICK_SIZES = (500,)
@@ -343,6 +344,7 @@ biocpd, _biocpd_err = _try_import("biocpd")
 probreg_cpd, _probreg_err = _try_import("probreg.cpd")
 IMPORT_ERRORS = {
     "ours": _ours_err,
+    "ours32": _ours_err,
     "pycpd": _pycpd_err,
     "cycpd": _cycpd_err,
     "rustcpd": _rustcpd_err,
@@ -351,6 +353,7 @@ IMPORT_ERRORS = {
 }
 AVAILABLE = {
     "ours": OURS is not None,
+    "ours32": OURS is not None,
     "pycpd": pycpd is not None,
     "cycpd": cycpd is not None,
     "rustcpd": rustcpd is not None,
@@ -482,14 +485,17 @@ _CYCPD_RIGID = None
 def make_runner(lib, case, n, args, method="auto"):
     """(callable(Y, X) -> (TY, n_iter, stop), parameters dict)."""
     tol, max_iter = args.tol, args.max_iter
-    if lib == "ours":
+    if lib in ("ours", "ours32"):
         _, RigidCPD, NonRigidCPD, ConvergenceWarning = OURS
+        precision = "float32" if lib == "ours32" else "float64"
         if case == "rigid":
 
             def make():
-                return RigidCPD(scale=True, w=0.0, tol=args.ours_tol, max_iter=max_iter, method=method)
+                return RigidCPD(
+                    scale=True, w=0.0, tol=args.ours_tol, max_iter=max_iter, method=method, precision=precision
+                )
 
-            params = {"scale": True, "w": 0.0, "tol": args.ours_tol, "max_iter": max_iter}
+            params = {"scale": True, "w": 0.0, "tol": args.ours_tol, "max_iter": max_iter, "precision": precision}
         else:
 
             def make():
@@ -501,6 +507,7 @@ def make_runner(lib, case, n, args, method="auto"):
                     tol=args.ours_tol,
                     max_iter=max_iter,
                     method=method,
+                    precision=precision,
                 )
 
             params = {
@@ -511,6 +518,7 @@ def make_runner(lib, case, n, args, method="auto"):
                 "w": 0.0,
                 "tol": args.ours_tol,
                 "max_iter": max_iter,
+                "precision": precision,
             }
 
         def run(y, x):
@@ -764,7 +772,7 @@ def warm_up(libs, cases, args):
     for case in cases:
         prob = make_problem(case, 60, small)
         for lib in libs:
-            methods = ("dense", "truncated") if lib == "ours" else ("auto",)
+            methods = ("dense", "truncated") if lib in ("ours", "ours32") else ("auto",)
             for method in methods:
                 try:
                     run, _ = make_runner(lib, case, 60, small, method=method)
