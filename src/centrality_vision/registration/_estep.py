@@ -157,9 +157,13 @@ def _reduce_rows(work, n_rows, n_moving, n_dims):
     The chunks depend only on ``n_rows`` (:data:`_CHUNKS` of them), each fills its own zeroed
     partial sums, and the partials are added in chunk order as soon as their predecessors are
     in: the same additions in the same order whatever the number of threads, so results are
-    bit-identical for any thread count; only a few partials are alive at a time.
+    bit-identical for any thread count; only a few partials are alive at a time. Below
+    :data:`_SERIAL_PAIRS` pairs (the calling thread, whatever the thread count) all rows are
+    one chunk: 16 chunks' partial sums and calls cost 6% of an E-step at 1,000 points and
+    33% at 300 (measured).
     """
-    n_chunks = min(n_rows, _CHUNKS)
+    serial = n_rows * n_moving < _SERIAL_PAIRS
+    n_chunks = 1 if serial else min(n_rows, _CHUNKS)
     edges = [i * n_rows // n_chunks for i in range(n_chunks + 1)]
     total_p1 = np.zeros(n_moving)
     total_pxt = np.zeros((n_dims, n_moving))
@@ -180,8 +184,8 @@ def _reduce_rows(work, n_rows, n_moving, n_dims):
                     np.add(total_pxt, b, out=total_pxt)
                     state["next"] += 1
 
-    if n_rows * n_moving < _SERIAL_PAIRS:
-        task(0, n_chunks)  # the same chunks in the same order, on this thread
+    if serial:
+        task(0, n_chunks)
     else:
         run_chunks(task, n_chunks)
     return total_p1, total_pxt
