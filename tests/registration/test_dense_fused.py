@@ -174,3 +174,22 @@ def test_precision_is_an_estimator_parameter():
     reg = NonRigidCPD(precision="float32")
     assert reg.get_params()["precision"] == "float32"
     assert RigidCPD().get_params()["precision"] == "float64"
+
+
+def test_float32_exponential_is_within_its_bound():
+    """``fast_exp_single`` on float32 inputs in [-87, 0]: relative error below 2e-7."""
+    from numba import njit
+
+    from centrality_vision.registration._kernels import fast_exp_single
+
+    @njit
+    def apply(values, out):
+        for i in range(values.shape[0]):
+            out[i] = fast_exp_single(values[i])
+
+    t = np.linspace(-87.0, 0.0, 200_001).astype(np.float32)
+    out = np.empty_like(t)
+    apply(t, out)
+    rel = np.abs(out.astype(float) / np.exp(t.astype(float)) - 1.0)
+    assert rel.max() < 2e-7
+    assert out[-1] == 1.0

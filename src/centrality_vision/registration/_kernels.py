@@ -1,14 +1,16 @@
 """Compiled pieces of the CPD/GPD E-step (numba, serial, GIL-free).
 
-The dense path is one fused pass per row of fixed points ``n`` (everything stays in an
-L1-sized row buffer):
+The dense path (:func:`dense_rows`) takes each row of fixed points ``n`` in a few
+vectorised loops over row buffers that stay in L1:
 
-1. scores ``s_mn = -|x_n - T(y_m)|^2 / (2 sigma2) + prior_mn`` and ``ref_n = max(max_m s_mn, log c)``;
+1. scores ``s_mn = -|x_n - T(y_m)|^2 / (2 sigma2) + prior_mn``, their maximum and its first
+   position, and ``ref_n = max(max_m s_mn, log c)``;
 2. ``e_mn = exp(s_mn - ref_n)`` by :func:`fast_exp` (a vectorisable exponential, relative
-   error below 4e-16; numba's scalar ``exp`` is a libm call that does not vectorise) and the
-   row sum, so every term is <= 1 and the largest is exactly 1;
-3. the row normalised by ``sum_m e_mn + c exp(-ref_n)`` and added into the sufficient
-   statistics ``P1``, ``P X``, ``P^T 1`` and ``log den``.
+   error below 4e-16; numba's scalar ``exp`` is a libm call that does not vectorise), or in
+   float32 by :func:`fast_exp_single`, and the row sum, so every term is <= 1 and the
+   largest is exactly 1;
+3. the rows, four at a time, normalised by ``sum_m e_mn + c exp(-ref_n)`` and added into
+   the sufficient statistics ``P1`` and ``P X``; ``P^T 1`` and ``log den`` per row.
 
 The truncated path visits, for each fixed point, only the moving points within
 ``sqrt(d_min^2 + 2 sigma2 tau')`` of it (a uniform grid of cells, searched by sorted cell
