@@ -109,6 +109,13 @@ ROTATION_METHODS = (
     "icp+global",
 ) + PEERS
 SHAPES_2D = ("fish", "dog1")
+# A method whose code changed since its units were stored gets a revision in its unit key,
+# so that a re-run computes it anew instead of reusing the stored result.
+REVISION = {"cpd-knn": "moving-frame", "cpd-knn-auto": "moving-frame"}
+
+
+def _method_key(method):
+    return f"{method}@{REVISION[method]}" if method in REVISION else method
 
 
 # ----------------------------------------------------------------------------- data
@@ -371,7 +378,8 @@ def build_units(args):
             for level in FAMILIES[family]:
                 for method in args.methods_nonrigid:
                     key = json.dumps(
-                        ["syn", family, shape, level, method, args.pairs, FAMILY_W[family], settings], sort_keys=True
+                        ["syn", family, shape, level, _method_key(method), args.pairs, FAMILY_W[family], settings],
+                        sort_keys=True,
                     )
                     units.append(
                         Unit(
@@ -394,7 +402,8 @@ def build_units(args):
             for degrees in args.angles:
                 for method in args.methods_rotation:
                     key = json.dumps(
-                        ["rot", shape, degrees, method, args.trials, args.bunny, rsettings], sort_keys=True
+                        ["rot", shape, degrees, _method_key(method), args.trials, args.bunny, rsettings],
+                        sort_keys=True,
                     )
                     units.append(
                         Unit(
@@ -841,7 +850,7 @@ def main(argv=None):
     args.methods_nonrigid = [m for m in NONRIGID_METHODS if chosen is None or m in chosen]
     args.methods_rotation = [m for m in ROTATION_METHODS if chosen is None or m in chosen]
 
-    from centrality_vision.experiments._runner import load_results, run_units
+    from centrality_vision.experiments._runner import load_results, run_units, unit_id
 
     units = build_units(args)
     path = Path(args.out + ".jsonl")
@@ -849,8 +858,8 @@ def main(argv=None):
     print(f"{len(units)} units; {len(load_results(path))} finished lines in {path}", flush=True)
     if args.report_only:
         done = load_results(path)
-        units = [u for u in units if u.key in done]
-        results = {u.key: done[u.key] for u in units}
+        units = [u for u in units if unit_id(u) in done]  # stored under their ids (key and digest)
+        results = {u.key: done[unit_id(u)] for u in units}
         args.families = [
             f
             for f in args.families
