@@ -113,6 +113,22 @@ def test_multiscale_nonrigid_composes_fields_and_the_refinement_gets_closer():
     np.testing.assert_allclose(fine.transform(y), fine.moving_transformed_)
 
 
+@pytest.mark.parametrize("units", [1e-3, 1e4])
+def test_multiscale_is_unit_free(units):
+    # each level starts at the previous level's sigma2 read in its own (normalised) frame,
+    # so the same data in other units gives the same levels and the same registration
+    rng = np.random.default_rng(8)
+    y = rng.random((2000, 2))
+    x = (y @ _rotation(0.5).T + 0.05 * rng.normal(size=y.shape))[rng.permutation(2000)]
+    make = lambda: MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(200, 2000), refine_iter=4)  # noqa: E731
+    a, b = make().fit(y, x), make().fit(units * y, units * x)
+    assert [lv["n_iter"] for lv in b.levels_] == [lv["n_iter"] for lv in a.levels_]
+    np.testing.assert_allclose(
+        [lv["sigma2"] for lv in b.levels_], [units**2 * lv["sigma2"] for lv in a.levels_], rtol=1e-6
+    )
+    np.testing.assert_allclose(b.moving_transformed_ / units, a.moving_transformed_, rtol=0, atol=1e-8)
+
+
 @pytest.mark.parametrize(
     ("kwargs", "match"),
     [

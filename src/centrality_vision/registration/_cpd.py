@@ -417,15 +417,17 @@ class _CPD(BaseEstimator):
         landmarks = _as_landmarks(landmarks, moving.shape[0], fixed.shape[0])
         if prior is not None and not (isinstance(prior, CentralityPrior) or callable(prior)):
             raise TypeError(f"`prior` must be a CentralityPrior, a callable or None; got {prior!r}.")
-        # the k-NN model trusts the start: both sets keep the caller's relative pose
-        same_centre = self.n_neighbors is not None
-        frame, moving_n, fixed_n = _Frame.of(
-            moving, fixed, bool(self.normalize), same_centre=same_centre, moving_scale=same_centre
-        )
+        frame, moving_n, fixed_n = self._frame(moving, fixed)
         true_n = None if true_moving is None else frame.fixed_in(true_moving)
         start = self._start(moving_n, fixed_n, frame)
         self._run(moving, moving_n, fixed_n, frame, true_n, start, landmarks, prior)
         return self
+
+    def _frame(self, moving, fixed):
+        """``(frame, moving_n, fixed_n)``: the normalised frame ``fit`` runs in, and both sets in it."""
+        # the k-NN model trusts the start: both sets keep the caller's relative pose
+        knn = self.n_neighbors is not None
+        return _Frame.of(moving, fixed, bool(self.normalize), same_centre=knn, moving_scale=knn)
 
     def _validate(self, moving, fixed, true_moving):
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
