@@ -1100,8 +1100,8 @@ def run_estep(args):
         rng = np.random.default_rng([args.seed, n])
         fixed = rng.random((n, 2))
         moving = fixed[rng.permutation(n)] + rng.normal(0, 1e-3, (n, 2))
-        _e_step(moving[:200], fixed[:200], 0.01, 0.0, method="truncated")
-        _e_step(moving[:200], fixed[:200], 0.01, 0.0, method="fgt")
+        for m in ("dense", "truncated", "fgt"):  # numba compiles (or loads) each path's kernels
+            _e_step(moving[:200], fixed[:200], 0.01, 0.0, method=m)
         carried = EStepPlanner()
         for sigma2 in [10.0**-k for k in range(0, 13)]:
             if sigma2 < 1.0:
