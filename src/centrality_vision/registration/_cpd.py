@@ -748,7 +748,7 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
     precision : {'float64', 'float32'}, default='float64'
         'float32' takes the dense E-step's exponentials in float32 (scores, maxima and sums
         stay in float64): each posterior within 1.1e-5 of its float64 value relative, plus
-        ``3.4e-38 (M + 1)`` (the bound is ``registration._estep.PRECISIONS``'). Measured on
+        ``3.4e-38 (M + 1)`` (derived in ``registration._estep.PRECISIONS``). Measured on
         uniform 2D points, one E-step: 1.15-1.4x faster than float64 at 1,000 to 10,000
         points. The truncated, FGT and ``n_neighbors`` E-steps ignore it.
     callback : callable, optional
