@@ -222,22 +222,6 @@ def parse_args(argv=None):
         help="instead: time each E-step path and 'auto' (the planner) against sigma2 (--estep-sizes)",
     )
     p.add_argument("--estep-sizes", type=int, nargs="+", default=[3000, 20000])
-    p.add_argument(
-        "--million",
-        action="store_true",
-        help="instead: ours (MultiscaleCPD) at --million-n points, 2D and 3D, rigid/affine/non-rigid, "
-        "plus plain and multiscale at --compare-n against each other",
-    )
-    p.add_argument("--million-n", type=int, default=1_000_000)
-    p.add_argument("--compare-n", type=int, default=100_000)
-    p.add_argument("--compare-nonrigid-n", type=int, default=20_000)
-    p.add_argument(
-        "--million-sizes",
-        type=int,
-        nargs="+",
-        default=[20_000, 100_000],
-        help="MultiscaleCPD levels (default: %(default)s)",
-    )
     p.add_argument("--repeat-estep", type=int, default=5)
     p.add_argument(
         "--figure",
@@ -1231,13 +1215,8 @@ def run_estep(args):
     return rows
 
 
-# --------------------------------------------------------------------------- a million points
-
-
-def _peak_mib():
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+# --------------------------------------------------------------------------- uniform data at scale
+# (registration_large.py's hard case)
 
 
 def _scaled_problem(n, dim, case, seed):
@@ -1262,103 +1241,6 @@ def _scaled_problem(n, dim, case, seed):
         true = y + 0.15 * field
     fixed = true + rng.normal(0.0, NOISE * 3.0, true.shape)
     return np.ascontiguousarray(y), np.ascontiguousarray(fixed[rng.permutation(n)]), true
-
-
-def run_million(args):
-    import tracemalloc
-
-    from centrality_vision.registration import AffineCPD, MultiscaleCPD, NonRigidCPD, RigidCPD
-
-    print("ours at scale (uniform points in a 3-unit square/cube, noise sigma %.3g, rows of X shuffled)" % (NOISE * 3))
-    print(load_line())
-    rows = []
-
-    def one(label, n, dim, case, make, full=False):
-        y, x, true = _scaled_problem(n, dim, case, args.seed)
-        tracemalloc.start()
-        t0 = time.perf_counter()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            est = make().fit(y, x)
-        sec = time.perf_counter() - t0
-        _, peak = tracemalloc.get_traced_memory()
-        tracemalloc.stop()
-        err = rms(true, est.moving_transformed_)
-        levels = getattr(est, "levels_", None)
-        row = {
-            "label": label,
-            "n": n,
-            "dim": dim,
-            "case": case,
-            "seconds": sec,
-            "rms": err,
-            "traced_peak_mib": peak / 2**20,
-            "maxrss_mib": _peak_mib(),
-            "levels": levels,
-            "n_iter": getattr(est, "n_iter_", None),
-            "moving_transformed": est.moving_transformed_,
-        }
-        rows.append(row)
-        print(
-            "  %-34s n=%8d D=%d  %7.2f s  RMS %.3e  traced peak %7.1f MiB  (levels: %s)"
-            % (
-                label,
-                n,
-                dim,
-                sec,
-                err,
-                row["traced_peak_mib"],
-                ", ".join("%d pts %d it %.1fs" % (lv["n_moving"], lv["n_iter"], lv["seconds"]) for lv in levels)
-                if levels
-                else "full, %s iterations" % row["n_iter"],
-            ),
-            flush=True,
-        )
-        return row
-
-    tol = args.ours_tol
-    sizes = tuple(args.million_sizes)
-    m = args.compare_n
-    # full resolution against coarse-to-fine where a full run fits
-    full = one("RigidCPD full resolution", m, 2, "rigid", lambda: RigidCPD(tol=tol, max_iter=args.max_iter))
-    ms = one("MultiscaleCPD(RigidCPD)", m, 2, "rigid", lambda: MultiscaleCPD(RigidCPD(tol=tol), sizes=sizes))
-    print(
-        "    multiscale vs full at n=%d: max |difference| of T(Y) %.3e"
-        % (m, np.abs(full["moving_transformed"] - ms["moving_transformed"]).max())
-    )
-    nfull = one(
-        "NonRigidCPD full resolution",
-        args.compare_nonrigid_n,
-        2,
-        "nonrigid",
-        lambda: NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol, max_iter=args.max_iter),
-    )
-    nms = one(
-        "MultiscaleCPD(NonRigidCPD)",
-        args.compare_nonrigid_n,
-        2,
-        "nonrigid",
-        lambda: MultiscaleCPD(NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol), sizes=sizes),
-    )
-    print(
-        "    multiscale vs full at n=%d: max |difference| of T(Y) %.3e"
-        % (args.compare_nonrigid_n, np.abs(nfull["moving_transformed"] - nms["moving_transformed"]).max())
-    )
-    big = args.million_n
-    for dim in (2, 3):
-        one("MultiscaleCPD(RigidCPD)", big, dim, "rigid", lambda: MultiscaleCPD(RigidCPD(tol=tol), sizes=sizes))
-        one("MultiscaleCPD(AffineCPD)", big, dim, "affine", lambda: MultiscaleCPD(AffineCPD(tol=tol), sizes=sizes))
-    one(
-        "MultiscaleCPD(NonRigidCPD)",
-        big,
-        2,
-        "nonrigid",
-        lambda: MultiscaleCPD(NonRigidCPD(beta=args.beta, lam=args.lam, tol=tol), sizes=sizes),
-    )
-    print(load_line())
-    for r in rows:
-        r.pop("moving_transformed")
-    return rows
 
 
 # --------------------------------------------------------------------------- figure
@@ -1399,13 +1281,10 @@ def entry(args):
         rows = [r for path in args.from_json for r in json.loads(Path(path).read_text())["rows"]]
         figure(rows, args.figure or "results/benchmarks/registration-scaling.png")
         return 0
-    if args.estep or args.million:
+    if args.estep:
         blas_limit, _ = _limit_blas(args.blas_threads)
         out = {"machine": machine_info(args), "args": vars(args)}
-        if args.estep:
-            out["estep"] = run_estep(args)
-        if args.million:
-            out["million"] = run_million(args)
+        out["estep"] = run_estep(args)
         if args.json:
             Path(args.json).parent.mkdir(parents=True, exist_ok=True)
             Path(args.json).write_text(json.dumps(out, indent=2, default=str))
