@@ -322,12 +322,15 @@ def _brandes_source_bfs(indptr, indices, offs, grid, s, hops, order, sigma, coef
     head = 0
     tail = 1
     m = 0
+    ok = True
     while head < tail:
         v = order[head]
         first[head] = m
         head += 1
         nxt = hops[v] + 1
-        sv = sigma[v]
+        sv = sigma[v]  # final: every predecessor was settled before v
+        if sv > _OVERFLOW:
+            ok = False
         lo, hi = _span(indptr, offs, grid, v)
         for j in range(lo, hi):
             w = _neighbour(indices, offs, grid, v, j)
@@ -344,14 +347,11 @@ def _brandes_source_bfs(indptr, indices, offs, grid, s, hops, order, sigma, coef
                 succ[m] = w
                 m += 1
     first[tail] = m
-    ok = sigma[order[tail - 1]] <= _OVERFLOW
-    if ok:
-        for q in range(tail):
-            if sigma[order[q]] > _OVERFLOW:
-                ok = False
-                break
     if ok:
         # coef[w] = (1 + delta[w]) / sigma[w]; delta[v] = sigma[v] * sum of coef over successors.
+        # A successor comes later in ``order``, so its coef is written (for this source)
+        # before it is read: coef needs no reset; the backward pass reads no hop count, so
+        # the hop counts are reset on the way.
         for q in range(tail - 1, 0, -1):
             v = order[q]
             acc = 0.0
@@ -360,9 +360,11 @@ def _brandes_source_bfs(indptr, indices, offs, grid, s, hops, order, sigma, coef
             delta_v = acc * sigma[v]
             bc[v] += weight * delta_v
             coef[v] = (1.0 + delta_v) / sigma[v]
-    for q in range(tail):
-        hops[order[q]] = -1
-        coef[order[q]] = 0.0
+            hops[v] = -1
+        hops[s] = -1
+    else:
+        for q in range(tail):
+            hops[order[q]] = -1
     return ok
 
 
