@@ -22,6 +22,8 @@ library     calls (all with w = 0, the same numeric ``--tol`` and ``--max-iter``
 ours        ``RigidCPD(scale=True, w=0, tol, max_iter).fit(Y, X)``,
             ``NonRigidCPD(beta, lam, low_rank="auto", w=0, tol, max_iter).fit(Y, X)``
 ours32      the same with ``precision="float32"`` (the dense E-step's exponentials in float32)
+ours-acc    ``ours`` with ``accelerate=True`` (SQUAREM extrapolation of the EM iterates);
+            ``ours32-acc`` both
 pycpd       ``RigidRegistration(X=X, Y=Y, tolerance, max_iterations, w=0).register()``,
             ``DeformableRegistration(X=X, Y=Y, alpha=lam, beta=beta, ...).register()``
 cycpd       ``rigid_registration(X=X, Y=Y, scale=True, tolerance, max_iterations, w=0,
@@ -107,7 +109,8 @@ from pathlib import Path
 import numpy as np
 from _common import fmt_s, load_line, table
 
-LIBRARIES = ("ours", "ours32", "rustcpd", "biocpd", "probreg", "pycpd", "cycpd")
+OURS_LIBS = ("ours", "ours32", "ours-acc", "ours32-acc")
+LIBRARIES = (*OURS_LIBS, "rustcpd", "biocpd", "probreg", "pycpd", "cycpd")
 CASES = ("rigid", "nonrigid")
 DEFAULT_SIZES = (1000, 5000)
 QUICK_SIZES = (500,)
@@ -329,6 +332,8 @@ probreg_cpd, _probreg_err = _try_import("probreg.cpd")
 IMPORT_ERRORS = {
     "ours": _ours_err,
     "ours32": _ours_err,
+    "ours-acc": _ours_err,
+    "ours32-acc": _ours_err,
     "pycpd": _pycpd_err,
     "cycpd": _cycpd_err,
     "rustcpd": _rustcpd_err,
@@ -338,6 +343,8 @@ IMPORT_ERRORS = {
 AVAILABLE = {
     "ours": OURS is not None,
     "ours32": OURS is not None,
+    "ours-acc": OURS is not None,
+    "ours32-acc": OURS is not None,
     "pycpd": pycpd is not None,
     "cycpd": cycpd is not None,
     "rustcpd": rustcpd is not None,
@@ -469,17 +476,31 @@ _CYCPD_RIGID = None
 def make_runner(lib, case, n, args, method="auto"):
     """(callable(Y, X) -> (TY, n_iter, stop), parameters dict)."""
     tol, max_iter = args.tol, args.max_iter
-    if lib in ("ours", "ours32"):
+    if lib in OURS_LIBS:
         _, RigidCPD, NonRigidCPD, ConvergenceWarning = OURS
-        precision = "float32" if lib == "ours32" else "float64"
+        precision = "float32" if lib.startswith("ours32") else "float64"
+        accelerate = lib.endswith("-acc")
         if case == "rigid":
 
             def make():
                 return RigidCPD(
-                    scale=True, w=0.0, tol=args.ours_tol, max_iter=max_iter, method=method, precision=precision
+                    scale=True,
+                    w=0.0,
+                    tol=args.ours_tol,
+                    max_iter=max_iter,
+                    method=method,
+                    precision=precision,
+                    accelerate=accelerate,
                 )
 
-            params = {"scale": True, "w": 0.0, "tol": args.ours_tol, "max_iter": max_iter, "precision": precision}
+            params = {
+                "scale": True,
+                "w": 0.0,
+                "tol": args.ours_tol,
+                "max_iter": max_iter,
+                "precision": precision,
+                "accelerate": accelerate,
+            }
         else:
 
             def make():
@@ -492,6 +513,7 @@ def make_runner(lib, case, n, args, method="auto"):
                     max_iter=max_iter,
                     method=method,
                     precision=precision,
+                    accelerate=accelerate,
                 )
 
             params = {
@@ -503,6 +525,7 @@ def make_runner(lib, case, n, args, method="auto"):
                 "tol": args.ours_tol,
                 "max_iter": max_iter,
                 "precision": precision,
+                "accelerate": accelerate,
             }
 
         def run(y, x):
@@ -756,7 +779,7 @@ def warm_up(libs, cases, args):
     for case in cases:
         prob = make_problem(case, 60, small)
         for lib in libs:
-            methods = ("dense", "truncated") if lib in ("ours", "ours32") else ("auto",)
+            methods = ("dense", "truncated") if lib in OURS_LIBS else ("auto",)
             for method in methods:
                 try:
                     run, _ = make_runner(lib, case, 60, small, method=method)

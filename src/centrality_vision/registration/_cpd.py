@@ -41,6 +41,7 @@ from ..transforms import (
     SimilarityTransform,
     centred,
     power_of_two_scale,
+    proper_rotation,
 )
 from ._estep import (
     E_STEP_METHODS,
@@ -314,6 +315,7 @@ class _CPD(BaseEstimator):
         method="auto",
         n_neighbors=None,
         precision="float64",
+        accelerate=False,
         callback=None,
         progress=False,
         random_state=None,
@@ -328,6 +330,7 @@ class _CPD(BaseEstimator):
         self.method = method
         self.n_neighbors = n_neighbors
         self.precision = precision
+        self.accelerate = accelerate
         self.callback = callback
         self.progress = progress
         self.random_state = random_state
@@ -346,6 +349,8 @@ class _CPD(BaseEstimator):
         check_float(self.landmark_weight, name=f"{name}.landmark_weight", low=0.0, low_open=True)
         check_choice(self.method, E_STEP_METHODS, name=f"{name}.method")
         check_choice(self.precision, PRECISIONS, name=f"{name}.precision")
+        if not isinstance(self.accelerate, (bool, np.bool_)):
+            raise TypeError(f"`{name}.accelerate` must be a bool; got {self.accelerate!r}.")
         if self.n_neighbors is not None:
             check_int(self.n_neighbors, name=f"{name}.n_neighbors", low=1)
             if self.method not in ("auto", "dense"):
@@ -386,6 +391,14 @@ class _CPD(BaseEstimator):
 
     def _apply(self, state, moving):
         return state(moving)
+
+    def _vector(self, state) -> np.ndarray:
+        """The parameters of ``state`` as one vector (what ``accelerate`` extrapolates)."""
+        raise NotImplementedError
+
+    def _from_vector(self, vector, state):
+        """``(state, T(Y))`` from an extrapolated vector, projected back onto the model."""
+        raise NotImplementedError
 
     # ----------------------------------------------------------------- the loop
     def fit(self, moving, fixed, *, true_moving=None, landmarks=None, prior=None):
@@ -485,6 +498,10 @@ class _CPD(BaseEstimator):
         current_prior = None
         planner = EStepPlanner()  # method='auto': the E-step path by timing, per fit
         e_step = self._e_step_of(fixed, planner)
+        # accelerate: the last EM iterates as vectors, and a pending extrapolated jump
+        # (the plain step to fall back on, and the objective the jump must not exceed)
+        squarem = bool(self.accelerate) and landmarks is None and not auto_w and not callable(prior)
+        chain, pending = [], None
         bar = None
         if self.progress:
             from tqdm.auto import tqdm
@@ -500,6 +517,12 @@ class _CPD(BaseEstimator):
                     w_e = odds / (1.0 + odds)
                 post = e_step(moving_t, sigma2, w_e, current_prior)
                 objective = post.neg_log_likelihood + self._penalty(state)
+                if pending is not None:
+                    fallback, limit = pending
+                    pending = None
+                    if not objective <= limit + 1e-12 * abs(limit):  # the jump did worse: the plain step
+                        state, moving_t, sigma2 = fallback
+                        continue
                 error = None if true_n is None else float(np.linalg.norm(true_n - moving_t))
                 history["objective"].append(objective + n_fixed * n_dims * log_s)
                 history["sigma2"].append(sigma2)
@@ -540,6 +563,7 @@ class _CPD(BaseEstimator):
                         post, fixed, landmarks, float(self.landmark_weight) * post.n_p / landmarks.shape[0]
                     )
                 )
+                previous_state = state
                 new_state, new_moving_t, new_sigma2 = self._m_step(m_post, self._work, fixed, state, sigma2)
                 if landmarks is not None:
                     new_sigma2 = _data_sigma2(post, fixed, new_moving_t)
@@ -553,6 +577,20 @@ class _CPD(BaseEstimator):
                 state, moving_t, sigma2 = new_state, new_moving_t, new_sigma2
                 if not math.isfinite(sigma2) or sigma2 <= floor:
                     sigma2 = floor
+                if squarem:
+                    if chain is None:
+                        chain = []  # the step after a jump steadies it; the next cycle starts from its result
+                    else:
+                        if not chain:
+                            chain.append(np.append(self._vector(previous_state), sigma2_used))
+                        chain.append(np.append(self._vector(state), sigma2))
+                        if len(chain) == 3:
+                            jump = self._extrapolate(chain, state, floor)
+                            chain = []
+                            if jump is not None:
+                                pending = ((state, moving_t, sigma2), objective)
+                                state, moving_t, sigma2 = jump
+                                chain = None
                 if auto_w:
                     # from CPD's posterior: a centrality prior's histogram weights lower the
                     # inlier mass and would inflate the estimate
@@ -605,6 +643,29 @@ class _CPD(BaseEstimator):
         )
         # the normalised state, for posterior(): c depends on sigma2 in the frame's units
         self._posterior_state = (moving_t, fixed, sigma2, w_e, current_prior)
+
+    def _extrapolate(self, chain, state, floor):
+        """SQUAREM's jump from the iterates ``t0, t1, t2`` (parameters then sigma2):
+        ``(state, T(Y), sigma2)``, or None when it would not move or leaves the model."""
+        t0, t1, t2 = chain
+        r = t1 - t0
+        v = t2 - 2.0 * t1 + t0
+        norm_v = float(np.linalg.norm(v))
+        if norm_v == 0.0:
+            return None
+        a = min(-float(np.linalg.norm(r)) / norm_v, -1.0)
+        if a == -1.0:
+            return None  # the jump is the plain step itself
+        jump = t0 - 2.0 * a * r + a * a * v
+        if not np.all(np.isfinite(jump)):
+            return None
+        try:
+            new_state, moving_t = self._from_vector(jump[:-1], state)
+        except (InputError, ValueError, np.linalg.LinAlgError):
+            return None
+        if not np.all(np.isfinite(moving_t)):
+            return None
+        return new_state, moving_t, max(float(jump[-1]), floor)
 
     def _e_step_of(self, fixed, planner):
         """``e_step(moving_t, sigma2, w, prior) -> Posteriors`` of this fit: CPD's or the k-NN model's."""
@@ -751,6 +812,17 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         ``3.4e-38 (M + 1)`` (derived in ``registration._estep.PRECISIONS``). Measured on
         uniform 2D points, one E-step: 1.15-1.4x faster than float64 at 1,000 to 10,000
         points. The truncated, FGT and ``n_neighbors`` E-steps ignore it.
+    accelerate : bool, default=False
+        Squared extrapolation of the EM iterates (SQUAREM, Varadhan and Roland 2008): after
+        every two EM steps the parameters (transform and sigma2) jump along the extrapolated
+        path, ``t0 - 2 a r + a^2 v`` with ``r = t1 - t0``, ``v = t2 - 2 t1 + t0`` and
+        ``a = -|r| / |v|`` (at most -1), projected back onto the model (a proper rotation
+        by SVD); the jump is kept only if the E-step there is no worse than the last
+        plain one, else the plain step is taken. Same fixed points as plain EM, in fewer
+        E-steps (2.1-2.8x fewer at 1,000-3,000 points, rigid and non-rigid, measured by
+        ``benchmarks/registration.py``); a rejected jump costs one E-step more. Not used
+        with ``w='auto'``, ``landmarks`` or a scheduled GPD prior (the EM map then changes
+        between steps); off by default so that iteration counts are CPD's own.
     callback : callable, optional
         Called with an :class:`IterationInfo` after each E-step; return ``True`` to stop.
     progress : bool, default=False
@@ -831,6 +903,7 @@ class RigidCPD(_CPD):
         method="auto",
         n_neighbors=None,
         precision="float64",
+        accelerate=False,
         callback=None,
         progress=False,
         random_state=None,
@@ -846,6 +919,7 @@ class RigidCPD(_CPD):
             method=method,
             n_neighbors=n_neighbors,
             precision=precision,
+            accelerate=accelerate,
             callback=callback,
             progress=progress,
             random_state=random_state,
@@ -875,6 +949,20 @@ class RigidCPD(_CPD):
     def _m_step(self, post, moving, fixed, state, sigma2):
         transform, sigma2 = rigid_m_step(post, moving, fixed, scale=bool(self.scale))
         return transform, transform(moving), sigma2
+
+    def _vector(self, state):
+        scale = [state.scale] if self.scale else []
+        return np.concatenate([state.rotation.ravel(), state.translation, scale])
+
+    def _from_vector(self, vector, state):
+        dim = state.translation.shape[0]
+        rotation = proper_rotation(vector[: dim * dim].reshape(dim, dim))[0]
+        translation = vector[dim * dim : dim * dim + dim]
+        if self.scale:
+            new = SimilarityTransform(rotation, translation, max(float(vector[-1]), 1e-300))
+        else:
+            new = RigidTransform(rotation, translation)
+        return new, new(self._work)
 
     def _make_transform(self, state, moving, frame):
         return frame.linear_out(state)
@@ -912,6 +1000,14 @@ class AffineCPD(_CPD):
     def _m_step(self, post, moving, fixed, state, sigma2):
         transform, sigma2 = affine_m_step(post, moving, fixed)
         return transform, transform(moving), sigma2
+
+    def _vector(self, state):
+        return np.concatenate([state.linear.ravel(), state.translation])
+
+    def _from_vector(self, vector, state):
+        dim = state.translation.shape[0]
+        new = AffineTransform(vector[: dim * dim].reshape(dim, dim), vector[dim * dim :])
+        return new, new(self._work)
 
     def _make_transform(self, state, moving, frame):
         return frame.linear_out(state)
@@ -979,6 +1075,7 @@ class NonRigidCPD(_CPD):
         method="auto",
         n_neighbors=None,
         precision="float64",
+        accelerate=False,
         callback=None,
         progress=False,
         random_state=None,
@@ -994,6 +1091,7 @@ class NonRigidCPD(_CPD):
             method=method,
             n_neighbors=n_neighbors,
             precision=precision,
+            accelerate=accelerate,
             callback=callback,
             progress=progress,
             random_state=random_state,
@@ -1053,6 +1151,15 @@ class NonRigidCPD(_CPD):
     def _m_step(self, post, moving, fixed, state, sigma2):
         coefficients, moved, sigma2 = nonrigid_m_step(post, moving, fixed, state["kernel"], self.lam, sigma2)
         return {"kernel": state["kernel"], "coefficients": coefficients}, moved, sigma2
+
+    def _vector(self, state):
+        return state["coefficients"].ravel()
+
+    def _from_vector(self, vector, state):
+        kernel = state["kernel"]
+        coefficients = vector.reshape(state["coefficients"].shape)
+        field = kernel.apply(coefficients) if isinstance(kernel, LowRankKernel) else kernel @ coefficients
+        return {"kernel": kernel, "coefficients": coefficients}, self._work + field
 
     def _make_transform(self, state, moving, frame):
         kernel, coefficients = state["kernel"], state["coefficients"]
