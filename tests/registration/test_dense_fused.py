@@ -125,12 +125,14 @@ def test_prior_matches_reference():
                 _check(got, _reference(moving_t, fixed, sigma2, 0.1, prior), fixed, single)
 
 
-def test_threads_do_not_change_the_result():
-    """Above 2^20 pairs the rows are split over the pool; the chunks do not depend on it."""
+@pytest.mark.parametrize("sizes", [(1100, 1000), (600, 500)])
+def test_threads_do_not_change_the_result(sizes):
+    """Above 2^20 pairs the rows are split over the pool, from 2^18 in two halves (one on
+    the calling thread); the chunks do not depend on the thread count."""
     from centrality_vision._parallel import get_num_threads, set_num_threads
 
     rng = np.random.default_rng(11)
-    moving_t, fixed = rng.random((1100, 2)), rng.random((1000, 2))
+    moving_t, fixed = rng.random((sizes[0], 2)), rng.random((sizes[1], 2))
     before = get_num_threads()
     try:
         set_num_threads(1)
@@ -139,6 +141,8 @@ def test_threads_do_not_change_the_result():
         two = _e_step(moving_t, fixed, 0.01, 0.1, method="dense", precision="float32")
     finally:
         set_num_threads(before)
+    reference = _reference(moving_t, fixed, 0.01, 0.1, None)
+    np.testing.assert_allclose(two.p1, reference[0], rtol=2e-5, atol=1e-30)
     np.testing.assert_array_equal(one.p1, two.p1)
     np.testing.assert_array_equal(one.px, two.px)
     assert one.neg_log_likelihood == two.neg_log_likelihood

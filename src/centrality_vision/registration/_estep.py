@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._parallel import get_num_threads, run_chunks
+from .._parallel import _pool, get_num_threads, run_chunks
 from .._validation import check_choice
 from ..exceptions import InputError
 from . import _kernels as K
@@ -69,6 +69,11 @@ _CHUNKS = 16
 # sub-millisecond job to the pool costs more than it saves, badly so on a busy machine
 # (measured: 500 points, load 20 on 2 cores, 1.7 s per fit with 2 threads, 1.0 s with 1).
 _SERIAL_PAIRS = 1 << 20
+# From this many pairs up to _SERIAL_PAIRS the rows are two halves: the calling thread runs
+# one, a pool thread the other if it starts in time (measured at 1,000 points: an E-step
+# 1.28 ms on one thread, see benchmarks/registration.py); the halves are added in order, so
+# results do not depend on the thread count.
+_PAIR_PAIRS = 1 << 19
 
 
 @dataclass(frozen=True)
@@ -163,7 +168,8 @@ def _reduce_rows(work, n_rows, n_moving, n_dims):
     33% at 300 (measured).
     """
     serial = n_rows * n_moving < _SERIAL_PAIRS
-    n_chunks = 1 if serial else min(n_rows, _CHUNKS)
+    pair = serial and n_rows >= 2 and n_rows * n_moving >= _PAIR_PAIRS
+    n_chunks = (2 if pair else 1) if serial else min(n_rows, _CHUNKS)
     edges = [i * n_rows // n_chunks for i in range(n_chunks + 1)]
     total_p1 = np.zeros(n_moving)
     total_pxt = np.zeros((n_dims, n_moving))
@@ -184,11 +190,34 @@ def _reduce_rows(work, n_rows, n_moving, n_dims):
                     np.add(total_pxt, b, out=total_pxt)
                     state["next"] += 1
 
-    if serial:
+    if pair and get_num_threads() > 1:
+        _two_halves(task)
+    elif serial:
         task(0, n_chunks)
     else:
         run_chunks(task, n_chunks)
     return total_p1, total_pxt
+
+
+def _two_halves(task):
+    """``task(0, 1)`` on the calling thread and ``task(1, 2)`` on a pool thread, or on the
+    calling thread too when the pool has not started it by then (a busy machine), so that
+    the caller never waits for a thread the system has not scheduled."""
+    claimed = [False]
+    lock = threading.Lock()
+
+    def second():
+        with lock:
+            if claimed[0]:
+                return False
+            claimed[0] = True
+        task(1, 2)
+        return True
+
+    future = _pool(get_num_threads()).submit(second)
+    task(0, 1)
+    if not second():  # the pool thread took the second half: wait for it
+        future.result()
 
 
 def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False):
