@@ -125,9 +125,9 @@ def test_prior_matches_reference():
                 _check(got, _reference(moving_t, fixed, sigma2, 0.1, prior), fixed, single)
 
 
-@pytest.mark.parametrize("sizes", [(1100, 1000), (600, 500)])
+@pytest.mark.parametrize("sizes", [(1100, 1000), (800, 700)])
 def test_threads_do_not_change_the_result(sizes):
-    """Above 2^20 pairs the rows are split over the pool, from 2^18 in two halves (one on
+    """Above 2^20 pairs the rows are split over the pool, from 2^19 in two halves (one on
     the calling thread); the chunks do not depend on the thread count."""
     from centrality_vision._parallel import get_num_threads, set_num_threads
 
