@@ -480,53 +480,23 @@ def make_runner(lib, case, n, args, method="auto"):
         _, RigidCPD, NonRigidCPD, ConvergenceWarning = OURS
         precision = "float32" if lib.startswith("ours32") else "float64"
         accelerate = lib.endswith("-acc")
+        kwargs = {
+            "w": 0.0,
+            "tol": args.ours_tol,
+            "max_iter": max_iter,
+            "precision": precision,
+            "accelerate": accelerate,
+        }
         if case == "rigid":
-
-            def make():
-                return RigidCPD(
-                    scale=True,
-                    w=0.0,
-                    tol=args.ours_tol,
-                    max_iter=max_iter,
-                    method=method,
-                    precision=precision,
-                    accelerate=accelerate,
-                )
-
-            params = {
-                "scale": True,
-                "w": 0.0,
-                "tol": args.ours_tol,
-                "max_iter": max_iter,
-                "precision": precision,
-                "accelerate": accelerate,
-            }
+            kwargs = {"scale": True, **kwargs}
+            params = dict(kwargs)
         else:
+            kwargs = {"beta": args.beta, "lam": args.lam, "low_rank": args.low_rank, **kwargs}
+            params = {**kwargs, "rank_used": _ours_rank(n, args) or "exact"}
+        cls = RigidCPD if case == "rigid" else NonRigidCPD
 
-            def make():
-                return NonRigidCPD(
-                    beta=args.beta,
-                    lam=args.lam,
-                    low_rank=args.low_rank,
-                    w=0.0,
-                    tol=args.ours_tol,
-                    max_iter=max_iter,
-                    method=method,
-                    precision=precision,
-                    accelerate=accelerate,
-                )
-
-            params = {
-                "beta": args.beta,
-                "lam": args.lam,
-                "low_rank": args.low_rank,
-                "rank_used": _ours_rank(n, args) or "exact",
-                "w": 0.0,
-                "tol": args.ours_tol,
-                "max_iter": max_iter,
-                "precision": precision,
-                "accelerate": accelerate,
-            }
+        def make():
+            return cls(method=method, **kwargs)
 
         def run(y, x):
             with warnings.catch_warnings():
