@@ -36,7 +36,8 @@ succeeds when the rotation error is below 5 degrees (the rotation of each method
 is read by a least-squares fit of its transformed moving points, so every library's
 convention is handled alike).
 
-Methods. Ours: ``NonRigidCPD`` / ``RigidCPD(scale=False)`` (``cpd``: CPD's dense model), the same
+Methods. Ours: ``NonRigidCPD`` / ``RigidCPD(scale=False)`` (``cpd``: CPD's dense model; ``cpd-acc``
+the same with ``accelerate=True``), the same
 with ``n_neighbors=10`` (``cpd-knn``: the k-nearest-neighbour E-step, biocpd's model and k) and
 with ``n_neighbors=10, w="auto"`` (``cpd-knn-auto``), ``GPD`` over the dense one with
 each centrality on Delaunay graphs (``gpd-<centrality>``; only closeness in the rotation
@@ -97,7 +98,7 @@ PEERS = ("pycpd", "cycpd", "probreg", "rustcpd", "biocpd")
 # ours: CPD's dense model with the family's w ("cpd"), the k-nearest-neighbour model with the
 # same w ("cpd-knn", n_neighbors=KNN, biocpd's k) and with w="auto" ("cpd-knn-auto")
 KNN = 10
-OURS_CPD = ("cpd", "cpd-knn", "cpd-knn-auto")
+OURS_CPD = ("cpd", "cpd-acc", "cpd-knn", "cpd-knn-auto")
 NONRIGID_METHODS = OURS_CPD + tuple(f"gpd-{c}" for c in CENTRALITIES) + ("icp",) + PEERS
 ROTATION_METHODS = (
     "cpd",
@@ -230,6 +231,8 @@ def run_method(method, y, x, *, rigid, w, seed):
         if base == "icp":
             return ICP(max_iter=max_iter, tol=tol).fit(start, x).moving_transformed_, info
         model = {"n_neighbors": KNN} if base.startswith("cpd-knn") else {}
+        if base == "cpd-acc":
+            model = {"accelerate": True}
         if base == "cpd-knn-auto":
             w = "auto"
         if rigid:
@@ -469,7 +472,8 @@ def report(args, units, results):
     )
     lines.append(
         "settings per library (non-rigid): cpd = NonRigidCPD(beta, lam, w, tol, max_iter) [dense model]; "
-        f"cpd-knn = the same with n_neighbors={KNN}; cpd-knn-auto = n_neighbors={KNN}, w='auto'; "
+        f"cpd-acc = the same with accelerate=True; cpd-knn = the same with n_neighbors={KNN}; "
+        f"cpd-knn-auto = n_neighbors={KNN}, w='auto'; "
         "gpd-* = GPD(cpd, centrality, graph='delaunay'); pycpd DeformableRegistration(alpha=lam, beta, w, "
         "tolerance, max_iterations); cycpd deformable_registration(alpha=lam, beta, low_rank, num_eig=M-1, w); "
         "probreg registration_cpd('nonrigid', beta, lmd=lam, w, maxiter, tol); rustcpd register_deformable("
