@@ -112,7 +112,7 @@ ROTATION_METHODS = (
 SHAPES_2D = ("fish", "dog1")
 # A method whose code changed since its units were stored gets a revision in its unit key,
 # so that a re-run computes it anew instead of reusing the stored result.
-REVISION = {"cpd-knn": "moving-frame", "cpd-knn-auto": "moving-frame"}
+REVISION = {"cpd-knn": "moving-frame", "cpd-knn-auto": "moving-frame", "cpd-acc": "log-sigma2"}
 
 
 def _method_key(method):
