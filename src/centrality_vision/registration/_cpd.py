@@ -176,14 +176,15 @@ class _Frame:
         if not normalize:
             return _Frame(np.zeros(dim), np.zeros(dim), 1.0), moving, fixed
         mu_x, xc = centred(fixed)
-        mu_own, y_own = centred(moving)
         if same_centre:
             mu_y = mu_x
             unit = max(power_of_two_scale(moving), power_of_two_scale(mu_x[None, :]))
             yc = ((moving / unit) - (mu_x / unit)) * unit
         else:
-            mu_y, yc = mu_own, y_own
-        r_moving, r_fixed = (_safe_rms(y_own), _safe_rms(xc)) if moving_scale else (0.0, 0.0)
+            mu_y, yc = centred(moving)
+        r_moving = r_fixed = 0.0
+        if moving_scale:  # the moving set's radius about its own mean
+            r_moving, r_fixed = _safe_rms(centred(moving)[1] if same_centre else yc), _safe_rms(xc)
         if moving_scale and r_moving > 0.0 and r_fixed <= _FRAME_RATIO * r_moving:
             scale = r_moving
         else:
@@ -245,10 +246,7 @@ def _safe_rms(centred_points: np.ndarray) -> float:
 
 
 def _rms_radius(points: np.ndarray) -> float:
-    if points.shape[0] == 0:
-        return 0.0
-    c = points - points.mean(axis=0)
-    return float(np.sqrt(np.mean(np.sum(c * c, axis=1))))
+    return _safe_rms(centred(points)[1]) if points.shape[0] else 0.0
 
 
 def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
