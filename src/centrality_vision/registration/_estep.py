@@ -163,9 +163,10 @@ def _reduce_rows(work, n_rows, n_moving, n_dims):
     partial sums, and the partials are added in chunk order as soon as their predecessors are
     in: the same additions in the same order whatever the number of threads, so results are
     bit-identical for any thread count; only a few partials are alive at a time. Below
-    :data:`_SERIAL_PAIRS` pairs (the calling thread, whatever the thread count) all rows are
-    one chunk: 16 chunks' partial sums and calls cost 6% of an E-step at 1,000 points and
-    33% at 300 (measured).
+    :data:`_SERIAL_PAIRS` pairs the pool's 16 chunks cost more than they save (6% of an
+    E-step at 1,000 points, 33% at 300, measured): from :data:`_PAIR_PAIRS` the rows are
+    two halves (:func:`_two_halves`: the calling thread and one pool thread), below it one
+    chunk on the calling thread.
     """
     serial = n_rows * n_moving < _SERIAL_PAIRS
     pair = serial and n_rows >= 2 and n_rows * n_moving >= _PAIR_PAIRS

@@ -34,6 +34,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import ConvergenceWarning, InputError
 from ..transforms import NonRigidTransform
+from ._estep import _nearest
 from ._lowrank import PivotedCholesky, nystrom_field
 
 __all__ = ["MultiscaleCPD", "ComposedTransform", "compress_field"]
@@ -231,9 +232,7 @@ def _start_sigma2(est, moved, sub_moving, sub_fixed, previous):
     its nearest transformed moving point, per dimension, capped by the previous level's
     variance (so that a refinement never starts coarser than the level before it).
     """
-    from scipy.spatial import cKDTree
-
-    d2 = cKDTree(moved).query(sub_fixed, workers=-1)[0] ** 2
+    d2 = _nearest(moved, sub_fixed)[0]
     sigma2 = min(float(np.mean(d2)) / moved.shape[1], previous)
     scale = est._frame(sub_moving, sub_fixed)[0].scale  # the normalised frame under ``normalize``
     return max(sigma2, np.finfo(float).tiny) / scale**2
