@@ -127,8 +127,8 @@ def test_prior_matches_reference():
 
 @pytest.mark.parametrize("sizes", [(1100, 1000), (800, 700)])
 def test_threads_do_not_change_the_result(sizes):
-    """Above 2^20 pairs the rows are split over the pool, from 2^19 in two halves (one on
-    the calling thread); the chunks do not depend on the thread count."""
+    """Above 2^20 pairs the rows are split over the pool, from 2^19 into chunks shared by
+    the calling thread and the pool; the chunks do not depend on the thread count."""
     from centrality_vision._parallel import get_num_threads, set_num_threads
 
     rng = np.random.default_rng(11)
@@ -139,13 +139,45 @@ def test_threads_do_not_change_the_result(sizes):
         one = _e_step(moving_t, fixed, 0.01, 0.1, method="dense", precision="float32")
         set_num_threads(2)
         two = _e_step(moving_t, fixed, 0.01, 0.1, method="dense", precision="float32")
+        set_num_threads(3)
+        three = _e_step(moving_t, fixed, 0.01, 0.1, method="dense", precision="float32")
     finally:
         set_num_threads(before)
     reference = _reference(moving_t, fixed, 0.01, 0.1, None)
     np.testing.assert_allclose(two.p1, reference[0], rtol=2e-5, atol=1e-30)
-    np.testing.assert_array_equal(one.p1, two.p1)
-    np.testing.assert_array_equal(one.px, two.px)
-    assert one.neg_log_likelihood == two.neg_log_likelihood
+    for other in (two, three):
+        np.testing.assert_array_equal(one.p1, other.p1)
+        np.testing.assert_array_equal(one.px, other.px)
+        assert one.neg_log_likelihood == other.neg_log_likelihood
+
+
+def test_a_busy_pool_does_not_hold_up_the_e_step():
+    """With every pool thread busy elsewhere, the calling thread takes all the chunks and
+    returns at once (the queued helpers are cancelled), with the same statistics."""
+    import threading
+    import time
+
+    from centrality_vision._parallel import _pool, get_num_threads, set_num_threads
+
+    rng = np.random.default_rng(12)
+    moving_t, fixed = rng.random((800, 2)), rng.random((700, 2))
+    before = get_num_threads()
+    release = threading.Event()
+    try:
+        set_num_threads(1)
+        one = _e_step(moving_t, fixed, 0.01, 0.1, method="dense")
+        set_num_threads(2)
+        blockers = [_pool(2).submit(release.wait, 30.0) for _ in range(2)]
+        start = time.perf_counter()
+        busy = _e_step(moving_t, fixed, 0.01, 0.1, method="dense")
+        elapsed = time.perf_counter() - start
+    finally:
+        release.set()
+        set_num_threads(before)
+    assert all(b.result() for b in blockers)
+    assert elapsed < 10.0
+    np.testing.assert_array_equal(one.p1, busy.p1)
+    np.testing.assert_array_equal(one.px, busy.px)
 
 
 def test_float32_registration_matches_float64():

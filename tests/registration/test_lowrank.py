@@ -28,6 +28,19 @@ def test_pivoted_cholesky_error_is_within_its_residual_trace(dim, beta):
         assert len(set(pc.pivots.tolist())) == len(pc.pivots)
 
 
+def test_pivoted_cholesky_past_its_first_width_equals_the_plain_factorisation():
+    """L is stored 64 columns wide at first and widened when full: a factorisation of more
+    columns equals plain Cholesky on its pivots (L[S] is the Cholesky factor of G[S, S])."""
+    y = np.random.default_rng(5).random((200, 1))
+    pc = PivotedCholesky(y, 0.004, max_rank=150, tol=0.0)
+    assert pc.factor.shape == (150, 200)
+    g = _kernel(y, y, 0.004)
+    s = pc.pivots
+    chol = np.linalg.cholesky(g[np.ix_(s, s)])
+    np.testing.assert_allclose(pc.factor[:, s].T, chol, atol=1e-10)
+    np.testing.assert_allclose(pc.factor.T @ pc.factor[:, s], g[:, s], atol=1e-10)
+
+
 def test_pivoted_cholesky_stops_at_its_tolerance():
     y = np.random.default_rng(0).random((300, 2))
     pc = PivotedCholesky(y, 1.0, max_rank=300, tol=1e-6)
