@@ -127,8 +127,8 @@ def test_prior_matches_reference():
 
 @pytest.mark.parametrize("sizes", [(1100, 1000), (800, 700)])
 def test_threads_do_not_change_the_result(sizes):
-    """Above 2^20 pairs the rows are split over the pool, from 2^19 into chunks shared by
-    the calling thread and the pool; the chunks do not depend on the thread count."""
+    """Above 2^20 pairs the rows are split over the pool, from 2^19 in two halves (one on
+    the calling thread); the chunks do not depend on the thread count."""
     from centrality_vision._parallel import get_num_threads, set_num_threads
 
     rng = np.random.default_rng(11)
@@ -152,8 +152,8 @@ def test_threads_do_not_change_the_result(sizes):
 
 
 def test_a_busy_pool_does_not_hold_up_the_e_step():
-    """With every pool thread busy elsewhere, the calling thread takes all the chunks and
-    returns at once (the queued helpers are cancelled), with the same statistics."""
+    """With every pool thread busy elsewhere, the calling thread runs both halves and
+    returns at once, with the same statistics."""
     import threading
     import time
 

@@ -1149,24 +1149,18 @@ class NonRigidCPD(_CPD):
         kernel = (
             gaussian_kernel(self._work, self._work, beta) if rank is None else LowRankKernel(self._work, beta, rank)
         )
-        return {"kernel": kernel, "coefficients": np.zeros_like(moving)}
+        return {"kernel": kernel, "coefficients": np.zeros_like(moving), "g_term": 0.0}
 
     def _apply(self, state, moving):
         return moving.copy()
 
     def _penalty(self, state) -> float:
-        coefficients, kernel = state["coefficients"], state["kernel"]
-        if not np.any(coefficients):
-            return 0.0
-        if isinstance(kernel, LowRankKernel):
-            g_term = kernel.penalty(coefficients)
-        else:
-            g_term = float(np.sum(coefficients * (kernel @ coefficients)))
-        return 0.5 * self.lam * g_term
+        # tr(W^T G W), kept by the step that made W (it had G W at hand)
+        return 0.5 * self.lam * state["g_term"]
 
     def _m_step(self, post, moving, fixed, state, sigma2):
-        coefficients, moved, sigma2 = nonrigid_m_step(post, moving, fixed, state["kernel"], self.lam, sigma2)
-        return {"kernel": state["kernel"], "coefficients": coefficients}, moved, sigma2
+        coefficients, moved, sigma2, g_term = nonrigid_m_step(post, moving, fixed, state["kernel"], self.lam, sigma2)
+        return {"kernel": state["kernel"], "coefficients": coefficients, "g_term": g_term}, moved, sigma2
 
     def _vector(self, state):
         return state["coefficients"].ravel()
@@ -1175,7 +1169,8 @@ class NonRigidCPD(_CPD):
         kernel = state["kernel"]
         coefficients = vector.reshape(state["coefficients"].shape)
         field = kernel.apply(coefficients) if isinstance(kernel, LowRankKernel) else kernel @ coefficients
-        return {"kernel": kernel, "coefficients": coefficients}, self._work + field
+        g_term = float(np.sum(coefficients * field))
+        return {"kernel": kernel, "coefficients": coefficients, "g_term": g_term}, self._work + field
 
     def _make_transform(self, state, moving, frame):
         kernel, coefficients = state["kernel"], state["coefficients"]

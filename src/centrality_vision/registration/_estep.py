@@ -16,7 +16,6 @@ References
 
 from __future__ import annotations
 
-import itertools
 import math
 import threading
 import time
@@ -70,13 +69,11 @@ _CHUNKS = 16
 # sub-millisecond job to the pool costs more than it saves, badly so on a busy machine
 # (measured: 500 points, load 20 on 2 cores, 1.7 s per fit with 2 threads, 1.0 s with 1).
 _SERIAL_PAIRS = 1 << 20
-# From this many pairs up to _SERIAL_PAIRS the rows are _TEAM_CHUNKS chunks that the calling
-# thread and the pool's threads claim one at a time (see _team): a pool thread that wakes
-# late takes fewer chunks instead of making the caller wait for a fixed half (measured at
-# 1,000 points: an E-step 1.28 ms on one thread, 0.72-0.98 ms in two fixed halves); the
-# chunks are added in order, so results do not depend on the thread count.
+# From this many pairs up to _SERIAL_PAIRS the rows are two halves: the calling thread runs
+# one, a pool thread the other if it starts in time (measured at 1,000 points: an E-step
+# 1.28 ms on one thread, see benchmarks/registration.py); the halves are added in order, so
+# results do not depend on the thread count.
 _PAIR_PAIRS = 1 << 19
-_TEAM_CHUNKS = 8
 
 
 @dataclass(frozen=True)
@@ -162,18 +159,18 @@ def _reduce_rows(work, n_rows, n_moving, n_dims):
     """Run ``work(lo, hi, p1, pxt)`` over chunks of rows on the thread pool and return the
     summed ``p1`` (M,) and ``pxt`` (D, M).
 
-    The chunks depend only on ``n_rows`` and ``n_moving``, each fills its own zeroed
+    The chunks depend only on ``n_rows`` (:data:`_CHUNKS` of them), each fills its own zeroed
     partial sums, and the partials are added in chunk order as soon as their predecessors are
     in: the same additions in the same order whatever the number of threads, so results are
     bit-identical for any thread count; only a few partials are alive at a time. Below
     :data:`_SERIAL_PAIRS` pairs the pool's 16 chunks cost more than they save (6% of an
     E-step at 1,000 points, 33% at 300, measured): from :data:`_PAIR_PAIRS` the rows are
-    :data:`_TEAM_CHUNKS` chunks shared by the calling thread and the pool (:func:`_team`),
-    below it one chunk on the calling thread.
+    two halves (:func:`_two_halves`: the calling thread and one pool thread), below it one
+    chunk on the calling thread.
     """
     serial = n_rows * n_moving < _SERIAL_PAIRS
-    team = serial and n_rows * n_moving >= _PAIR_PAIRS
-    n_chunks = min(n_rows, _TEAM_CHUNKS if team else 1 if serial else _CHUNKS)
+    pair = serial and n_rows >= 2 and n_rows * n_moving >= _PAIR_PAIRS
+    n_chunks = (2 if pair else 1) if serial else min(n_rows, _CHUNKS)
     edges = [i * n_rows // n_chunks for i in range(n_chunks + 1)]
     total_p1 = np.zeros(n_moving)
     total_pxt = np.zeros((n_dims, n_moving))
@@ -194,8 +191,8 @@ def _reduce_rows(work, n_rows, n_moving, n_dims):
                     np.add(total_pxt, b, out=total_pxt)
                     state["next"] += 1
 
-    if team and get_num_threads() > 1:
-        _team(task, n_chunks)
+    if pair and get_num_threads() > 1:
+        _two_halves(task)
     elif serial:
         task(0, n_chunks)
     else:
@@ -203,25 +200,25 @@ def _reduce_rows(work, n_rows, n_moving, n_dims):
     return total_p1, total_pxt
 
 
-def _team(task, n_chunks):
-    """``task(c, c + 1)`` for every chunk ``c < n_chunks``, each claimed by the next free
-    thread of a team: the calling thread and ``get_num_threads() - 1`` pool threads. A pool
-    thread that has not started when the caller runs out of chunks is cancelled, so the
-    caller never waits for a thread the system has not scheduled (a busy machine)."""
-    claim = itertools.count()  # next() of a count is atomic under the GIL
+def _two_halves(task):
+    """``task(0, 1)`` on the calling thread and ``task(1, 2)`` on a pool thread, or on the
+    calling thread too when the pool has not started it by then (a busy machine), so that
+    the caller never waits for a thread the system has not scheduled."""
+    claimed = [False]
+    lock = threading.Lock()
 
-    def run():
-        while (c := next(claim)) < n_chunks:
-            task(c, c + 1)
+    def second():
+        with lock:
+            if claimed[0]:
+                return False
+            claimed[0] = True
+        task(1, 2)
+        return True
 
-    pool = _pool(get_num_threads())
-    helpers = [pool.submit(run) for _ in range(min(get_num_threads(), n_chunks) - 1)]
-    try:
-        run()
-    finally:
-        for future in helpers:
-            if not future.cancel():
-                future.result()
+    future = _pool(get_num_threads()).submit(second)
+    task(0, 1)
+    if not second():  # the pool thread took the second half: wait for it
+        future.result()
 
 
 def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False):

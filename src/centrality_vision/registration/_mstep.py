@@ -90,17 +90,13 @@ class LowRankKernel:
         """``G w``."""
         return self.vectors @ (self.values[:, None] * (self.vectors.T @ w))
 
-    def penalty(self, w: np.ndarray) -> float:
-        """``tr(w^T G w)``."""
-        qw = self.vectors.T @ w
-        return float(np.sum(self.values[:, None] * qw * qw))
-
 
 def nonrigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, kernel, lam: float, sigma2: float):
     """Non-rigid M-step: solve ``(d(P1) G + lam sigma2 I) W = P X - d(P1) Y``.
 
     ``kernel`` is the dense ``G`` (exact) or a :class:`LowRankKernel` (the Woodbury form of
-    the CPD paper's section 5). Returns ``(W, T(Y), sigma2_new)``.
+    the CPD paper's section 5). Returns ``(W, T(Y), sigma2_new, tr(W^T G W))``; the last is
+    the smoothness penalty's trace, from the ``G W`` the step computes anyway.
     """
     n_dims = moving.shape[1]
     p1 = post.p1
@@ -110,15 +106,16 @@ def nonrigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, ker
         q, values = kernel.vectors, kernel.values
         dpq = p1[:, None] * q
         inner = ls2 * np.diag(1.0 / values) + q.T @ dpq
-        w = (rhs - dpq @ linalg.solve(inner, q.T @ rhs, assume_a="sym")) / ls2
-        moved = moving + kernel.apply(w)
+        w = (rhs - dpq @ linalg.solve(inner, q.T @ rhs, assume_a="sym", check_finite=False)) / ls2
+        field = kernel.apply(w)
     else:
         system = p1[:, None] * kernel
         system[np.diag_indices_from(system)] += ls2
         w = linalg.solve(system, rhs, overwrite_a=True, check_finite=False)
-        moved = moving + kernel @ w
+        field = kernel @ w
+    moved = moving + field
     x_px = float(post.pt1 @ np.einsum("ij,ij->i", fixed, fixed))
     y_py = float(p1 @ np.einsum("ij,ij->i", moved, moved))
     tr_pxy = float(np.sum(moved * post.px))
     sigma2_new = (x_px - 2 * tr_pxy + y_py) / (post.n_p * n_dims)
-    return w, moved, float(sigma2_new)
+    return w, moved, float(sigma2_new), float(np.sum(w * field))
