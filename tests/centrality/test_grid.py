@@ -33,8 +33,9 @@ def _close(a, b):
     mask=arrays(bool, st.tuples(st.integers(1, 9), st.integers(1, 9))),
     connectivity=st.sampled_from([4, 8]),
     mirror=st.sampled_from([None, 0, 1, "both", "transpose"]),
+    spacing=st.sampled_from([None, (1.0, 1.5)]),
 )
-def test_grid_equals_adjacency_lists_on_any_mask(mask, connectivity, mirror):
+def test_grid_equals_adjacency_lists_on_any_mask(mask, connectivity, mirror, spacing):
     # Symmetric masks (made so half the time) take the orbit path; others the plain grid path.
     if mirror in (0, 1):
         mask = mask | np.flip(mask, mirror)
@@ -45,10 +46,14 @@ def test_grid_equals_adjacency_lists_on_any_mask(mask, connectivity, mirror):
         mask = mask[:k, :k] | mask[:k, :k].T
     if not mask.any():
         return
-    graph, _ = pixel_graph(mask, connectivity=connectivity)
+    # lengths: 1 (4-neighbour), 1 and sqrt 2 (8-neighbour), 1 and 1.5 (4-neighbour with
+    # spacing), three lengths (8-neighbour with spacing): the two-length kernel and the
+    # general one, against the adjacency lists
+    graph, _ = pixel_graph(mask, connectivity=connectivity, spacing=spacing)
     _close(cen.betweenness(graph, normalized=True), cen.betweenness(_plain(graph), normalized=True))
     _close(cen.betweenness(graph, weights=True), cen.betweenness(_plain(graph), weights=True))
-    _close(cen.closeness(graph, weights=True), cen.closeness(_plain(graph), weights=True))
+    for name in ("closeness", "harmonic", "eccentricity"):
+        _close(cen.compute(graph, name, weights=True), cen.compute(_plain(graph), name, weights=True))
 
 
 @pytest.mark.parametrize("connectivity", [26, 18, 6])

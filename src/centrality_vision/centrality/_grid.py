@@ -186,14 +186,122 @@ def grid_betweenness(graph, weights: bool = False, progress: bool = False) -> tu
     return sums[crop], {"searches": int(sources.size), "symmetries": len(group), "log_searches": n_log}
 
 
+@njit(cache=True, nogil=True)
+def two_length_stats(foreground, offs, kind, lengths, sources):
+    """Sum of distances, of inverse distances, largest distance and nodes reached from each
+    of ``sources`` (padded-raster indices) when every step is one of two lengths (one class
+    also works: class 1 is then never used).
+
+    Dijkstra with one FIFO queue per class, specialised: a distance is kept as its integer
+    counts ``(a, b)`` of each length (packed in one int64) and its value ``a L0 + b L1``
+    rounded once, so equal lengths tie exactly. A node is pushed at most once per queue (a
+    later push into the same queue comes from a node settled later, so it is no shorter),
+    which bounds each queue by the pixel count. A settled node's distance is stored as
+    ``-2 - d``, and a background pixel's as -1: both are below every candidate, so relaxing
+    an arc is one comparison, and a queue entry is stale when its distance is negative.
+    """
+    size = foreground.shape[0]
+    n_pixels = 0
+    dist = np.empty(size)
+    for i in range(size):
+        if foreground[i]:
+            dist[i] = np.inf
+            n_pixels += 1
+        else:
+            dist[i] = -1.0
+    counts = np.zeros(size, dtype=np.int64)  # (a << 32) | b
+    queue0 = np.empty(n_pixels, dtype=np.int64)
+    queue1 = np.empty(n_pixels, dtype=np.int64)
+    order = np.empty(n_pixels, dtype=np.int64)
+    n_offs = offs.shape[0]
+    len0 = lengths[0]
+    len1 = lengths[1] if lengths.shape[0] > 1 else lengths[0]
+    one_a = np.int64(1) << 32
+    low = (np.int64(1) << 32) - 1
+    k = sources.shape[0]
+    total = np.zeros(k)
+    inverse = np.zeros(k)
+    largest = np.zeros(k)
+    reached = np.zeros(k, dtype=np.int64)
+    for i in range(k):
+        s = sources[i]
+        counts[s] = 0
+        head0 = tail0 = head1 = tail1 = 0
+        count = 0
+        t = 0.0
+        h = 0.0
+        v = s
+        dv = 0.0
+        while True:
+            dist[v] = -2.0 - dv
+            order[count] = v
+            count += 1
+            if count > 1:
+                t += dv
+                h += 1.0 / dv
+            cv = counts[v]
+            a = cv >> 32
+            b = cv & low
+            via0 = (a + 1) * len0 + b * len1
+            via1 = a * len0 + (b + 1) * len1
+            for j in range(n_offs):
+                w = v + offs[j]
+                if kind[j] == 0:
+                    if via0 < dist[w]:
+                        dist[w] = via0
+                        counts[w] = cv + one_a
+                        queue0[tail0] = w
+                        tail0 += 1
+                elif via1 < dist[w]:
+                    dist[w] = via1
+                    counts[w] = cv + 1
+                    queue1[tail1] = w
+                    tail1 += 1
+            # the next node: the queue head of least current distance (see _class_search)
+            d0 = np.inf
+            while head0 < tail0:
+                d0 = dist[queue0[head0]]
+                if d0 >= 0.0:
+                    break
+                head0 += 1
+                d0 = np.inf
+            d1 = np.inf
+            while head1 < tail1:
+                d1 = dist[queue1[head1]]
+                if d1 >= 0.0:
+                    break
+                head1 += 1
+                d1 = np.inf
+            if d0 <= d1 and d0 < np.inf:
+                v = queue0[head0]
+                head0 += 1
+                dv = d0
+            elif d1 < np.inf:
+                v = queue1[head1]
+                head1 += 1
+                dv = d1
+            else:
+                break
+        total[i] = t
+        inverse[i] = h
+        largest[i] = dv
+        reached[i] = count
+        for q in range(count):
+            dist[order[q]] = np.inf
+    return total, inverse, largest, reached
+
+
 def grid_length_stats(graph, progress: bool, desc: str) -> list[np.ndarray]:
     """Per node (node order of ``graph``), by edge length: sum of distances, of inverse
-    distances, largest distance, nodes reached: one grid-mode FIFO-queue search per node."""
+    distances, largest distance, nodes reached: one grid-mode FIFO-queue search per node
+    (:func:`two_length_stats` when the steps have at most two lengths, as in 2D)."""
     grid = _Grid(graph)
     empty_lists = np.empty(0, dtype=np.int64)
     empty_heads = np.empty(0, dtype=np.int32)
 
     def task(lo, hi):
+        if grid.lengths.shape[0] <= 2:
+            return two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, grid.raster[lo:hi])
         return _kernels.class_stats(
             empty_lists, empty_heads, grid.kind, grid.lengths, grid.raster[lo:hi], grid.offs, grid.foreground
         )
