@@ -515,6 +515,7 @@ class _CPD(BaseEstimator):
                 if auto_w and w_fraction > 0:
                     odds = w_fraction / (1.0 - w_fraction) * n_fixed / box
                     w_e = odds / (1.0 + odds)
+                planner.hold = pending is not None  # a jump's E-step: no probing
                 post = e_step(moving_t, sigma2, w_e, current_prior)
                 objective = post.neg_log_likelihood + self._penalty(state)
                 jumped = pending is not None
