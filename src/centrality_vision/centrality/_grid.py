@@ -186,6 +186,18 @@ def grid_betweenness(graph, weights: bool = False, progress: bool = False) -> tu
     return sums[crop], {"searches": int(sources.size), "symmetries": len(group), "log_searches": n_log}
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _live_head(queue, head, tail, dist):
+    """The first entry of ``queue[head:tail]`` not yet settled (negative distance) and its
+    distance, or ``tail`` and inf."""
+    while head < tail:
+        d = dist[queue[head]]
+        if d >= 0.0:
+            return head, d
+        head += 1
+    return tail, np.inf
+
+
 @njit(cache=True, nogil=True)
 def two_length_stats(foreground, offs, kind, lengths, sources):
     """Sum of distances, of inverse distances, largest distance and nodes reached from each
@@ -258,20 +270,8 @@ def two_length_stats(foreground, offs, kind, lengths, sources):
                     queue1[tail1] = w
                     tail1 += 1
             # the next node: the queue head of least current distance (see _class_search)
-            d0 = np.inf
-            while head0 < tail0:
-                d0 = dist[queue0[head0]]
-                if d0 >= 0.0:
-                    break
-                head0 += 1
-                d0 = np.inf
-            d1 = np.inf
-            while head1 < tail1:
-                d1 = dist[queue1[head1]]
-                if d1 >= 0.0:
-                    break
-                head1 += 1
-                d1 = np.inf
+            head0, d0 = _live_head(queue0, head0, tail0, dist)
+            head1, d1 = _live_head(queue1, head1, tail1, dist)
             if d0 <= d1 and d0 < np.inf:
                 v = queue0[head0]
                 head0 += 1
