@@ -53,7 +53,7 @@ from ._estep import (
     knn_posterior,
     knn_posterior_matrix,
 )
-from ._mstep import LowRankKernel, affine_m_step, gaussian_kernel, nonrigid_m_step, rigid_m_step
+from ._mstep import LowRankKernel, affine_m_step, gaussian_kernel, kernel_times, nonrigid_m_step, rigid_m_step
 
 __all__ = ["RigidCPD", "AffineCPD", "NonRigidCPD", "IterationInfo", "Snapshots", "initial_sigma2", "alignment_error"]
 
@@ -1169,7 +1169,7 @@ class NonRigidCPD(_CPD):
     def _from_vector(self, vector, state):
         kernel = state["kernel"]
         coefficients = vector.reshape(state["coefficients"].shape)
-        field = kernel.apply(coefficients) if isinstance(kernel, LowRankKernel) else kernel @ coefficients
+        field = kernel_times(kernel, coefficients)
         g_term = float(np.sum(coefficients * field))
         return {"kernel": kernel, "coefficients": coefficients, "g_term": g_term}, self._work + field
 

@@ -18,7 +18,7 @@ from scipy import linalg
 from ..transforms import AffineTransform, RigidTransform, SimilarityTransform, proper_rotation
 from ._estep import Posteriors
 
-__all__ = ["rigid_m_step", "affine_m_step", "nonrigid_m_step", "gaussian_kernel", "LowRankKernel"]
+__all__ = ["rigid_m_step", "affine_m_step", "nonrigid_m_step", "kernel_times", "gaussian_kernel", "LowRankKernel"]
 
 
 def _moments(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
@@ -91,6 +91,11 @@ class LowRankKernel:
         return self.vectors @ (self.values[:, None] * (self.vectors.T @ w))
 
 
+def kernel_times(kernel, w: np.ndarray) -> np.ndarray:
+    """``G w`` for the dense ``G`` or a :class:`LowRankKernel`."""
+    return kernel.apply(w) if isinstance(kernel, LowRankKernel) else kernel @ w
+
+
 def nonrigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, kernel, lam: float, sigma2: float):
     """Non-rigid M-step: solve ``(d(P1) G + lam sigma2 I) W = P X - d(P1) Y``.
 
@@ -108,12 +113,11 @@ def nonrigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, ker
         inner = ls2 * np.diag(1.0 / values) + q.T @ dpq
         # (K x K, K <= a few hundred: NumPy's LU costs a third of scipy's checked solve here)
         w = (rhs - dpq @ np.linalg.solve(inner, q.T @ rhs)) / ls2
-        field = kernel.apply(w)
     else:
         system = p1[:, None] * kernel
         system[np.diag_indices_from(system)] += ls2
         w = linalg.solve(system, rhs, overwrite_a=True, check_finite=False)
-        field = kernel @ w
+    field = kernel_times(kernel, w)
     moved = moving + field
     x_px = float(post.pt1 @ np.einsum("ij,ij->i", fixed, fixed))
     y_py = float(p1 @ np.einsum("ij,ij->i", moved, moved))
