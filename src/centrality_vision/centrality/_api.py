@@ -331,7 +331,15 @@ def betweenness(
         holds for every node, and at the latest after the Riondato-Kornaropoulos size
         :math:`\frac{c}{\epsilon^2}(\lfloor \log_2(VD - 2) \rfloor + 1 + \ln\frac{2}{\delta})`
         with :math:`c = 0.5` and the vertex-diameter bound ``VD`` of one search per
-        component (``delta`` is split between the two rules). Hop counts only.
+        component (``delta`` is split between the two rules). Hop counts only. On a
+        pixel graph each pair's search visits only pixels that can lie on one of its
+        shortest paths, as an A* search would: a pixel is left out when its hops from the
+        source plus a lower bound on its hops to the target exceed the distance, the bound
+        being the larger of the unobstructed-grid distance and the landmark bound
+        :math:`\max_L |d(L, w) - d(L, t)|` over 8 landmarks chosen farthest-first; a
+        search that misses the target (a detour around holes or bends) runs again with a
+        larger allowance. On an open region that is the parallelogram of shortest paths
+        instead of two balls: on a megapixel silhouette 3.5x fewer visits, 2.7x less time.
     delta : float in (0, 1), default=0.1
         Failure probability of the approximation.
     seed : int, numpy.random.Generator or None
@@ -342,7 +350,9 @@ def betweenness(
         Return ``{node: value}`` keyed by the node labels.
     return_info : bool, default=False
         Also return a dict: ``"samples"`` (paths drawn; 0 when exact), ``"searches"``,
-        ``"bound"`` (the guaranteed error of the normalised values, 0 when exact).
+        ``"bound"`` (the guaranteed error of the normalised values, 0 when exact); when
+        sampled also ``"visited"`` (nodes the searches visited) and ``"retries"`` (pixel
+        searches run again with a larger allowance).
 
     Returns
     -------

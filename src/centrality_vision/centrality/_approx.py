@@ -1,7 +1,9 @@
 """Sampling approximations with stated guarantees (hop distances).
 
 - Betweenness: Riondato-Kornaropoulos path sampling, stopped early by an empirical
-  Bernstein bound checked at geometric checkpoints.
+  Bernstein bound checked at geometric checkpoints. On pixel grids each pair's search is
+  pruned to the pixels that can lie on its shortest paths (grid and landmark bounds,
+  :func:`._sampling._pruned_bfs`); each thread keeps its work arrays across chunks.
 - Closeness and harmonic: Eppstein-Wang source sampling with Hoeffding's bound.
 
 The guarantees are stated on the public functions (:func:`.betweenness`,
@@ -11,10 +13,11 @@ The guarantees are stated on the public functions (:func:`.betweenness`,
 from __future__ import annotations
 
 import math
+import queue
 
 import numpy as np
 
-from .._parallel import run_chunks
+from .._parallel import get_num_threads, run_chunks
 from .._seeding import as_generator
 from . import _kernels, _sampling
 
@@ -22,6 +25,7 @@ __all__ = ["sample_betweenness", "sample_sources"]
 
 RK_CONSTANT = 0.5  # the universal constant c of the VC-dimension sample bound
 _GROWTH = 1.5  # checkpoint sizes grow geometrically by this factor
+_LANDMARKS = 8  # pixel grids: landmarks whose hop counts bound the distance to a target
 
 
 def _largest_eccentricity_bound(prep) -> int:
@@ -40,6 +44,36 @@ def _largest_eccentricity_bound(prep) -> int:
         best = max(best, 2 * int(dist[members].max()))
         dist[members] = -1
     return best
+
+
+def _drain(pool):
+    """Every item of a SimpleQueue (no task running), put back."""
+    items = []
+    while not pool.empty():
+        items.append(pool.get())
+    for item in items:
+        pool.put(item)
+    return items
+
+
+def _grid_guides(grid, reach):
+    """Connected-component labels of the padded raster (int32) and the hop counts from
+    :data:`_LANDMARKS` landmarks chosen farthest-first in the largest component (uint16
+    where they fit): what lets the pruned searches skip impossible pairs and bound the
+    distance to a target around holes and bends."""
+    from scipy import ndimage
+
+    structure = ndimage.generate_binary_structure(grid.padded.ndim, reach)
+    labels, count = ndimage.label(grid.padded, structure=structure)
+    labels = labels.ravel().astype(np.int32)
+    largest = np.argmax(np.bincount(labels)[1:]) + 1
+    start = int(np.flatnonzero(labels == largest)[0])
+    marks = _sampling.landmark_hops(grid.foreground, grid.offs, _LANDMARKS, start)
+    if marks.size == 0 or marks.max() <= np.iinfo(np.uint16).max:
+        marks = marks.astype(np.uint16)  # less memory traffic in the searches
+    else:
+        marks = np.array(marks)  # allocated by NumPy (huge pages), like the searches' arrays
+    return labels, marks
 
 
 def rk_sample_size(vertex_diameter: int, epsilon: float, delta: float) -> int:
@@ -66,7 +100,7 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
     n = prep.n
     rng = as_generator(seed)  # validated even when there is nothing to sample
     if n < 3:
-        return np.zeros(n), {"samples": 0, "searches": 0, "bound": 0.0, "visited": 0}
+        return np.zeros(n), {"samples": 0, "searches": 0, "bound": 0.0, "visited": 0, "retries": 0}
     # E[hits / k] = b / (n (n - 1)) over ordered pairs; normalised b is that times n / (n - 2).
     target = epsilon * (n - 2) / n
     if prep.directed:
@@ -87,27 +121,57 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
     stream = int(rng.integers(0, 2**63 - 1))
     t_indptr, t_indices, _ = prep.transposed()
     offs, foreground = _kernels.NO_GRID
+    steps, shape, reach = np.empty((0, 0), dtype=np.int64), np.empty(0, dtype=np.int64), 0
+    marks = np.empty((0, 0), dtype=np.int32)
+    labels = np.empty(0, dtype=np.int32)
     indptr, indices = prep.indptr, prep.indices
     if grid is not None:
         offs, foreground = grid.offs, grid.foreground
         indptr = t_indptr = np.empty(0, dtype=np.int64)
         indices = t_indices = np.empty(0, dtype=np.int32)
         pairs = grid.raster[pairs]
-    hits = np.zeros(foreground.size if grid is not None else n, dtype=np.int64)
+        steps = np.array(grid.steps, dtype=np.int64)
+        shape = np.array(grid.padded.shape, dtype=np.int64)
+        reach = int(np.abs(steps).sum(axis=1).max())
+        labels, marks = _grid_guides(grid, reach)
+    scratch = queue.SimpleQueue()
+    size = foreground.size if grid is not None else n
+    for _ in range(max(1, min(get_num_threads(), cap))):
+        scratch.put(_sampling.new_scratch(size, foreground, grid is not None))
     done = 0
     bound = math.inf
     visited = 0
+    retries = 0
     for k in checkpoints:
 
         def task(lo, hi, first=done):
-            return _sampling.sample_paths(
-                indptr, indices, t_indptr, t_indices, pairs, stream, first + lo, first + hi, offs, foreground
-            )
+            arrays = scratch.get()  # one thread's work arrays; results do not depend on which
+            try:
+                return _sampling.sample_paths(
+                    indptr,
+                    indices,
+                    t_indptr,
+                    t_indices,
+                    pairs,
+                    stream,
+                    first + lo,
+                    first + hi,
+                    offs,
+                    steps,
+                    shape,
+                    reach,
+                    marks,
+                    labels,
+                    arrays,
+                )
+            finally:
+                scratch.put(arrays)
 
-        for _, _, (part, work) in run_chunks(task, k - done, progress=progress, desc="betweenness samples"):
-            hits += part
+        for _, _, (work, n_retries) in run_chunks(task, k - done, progress=progress, desc="betweenness samples"):
             visited += work
+            retries += n_retries
         done = k
+        hits = sum(arrays[-1] for arrays in _drain(scratch))
         bound = _bernstein(hits, k, log_term) if k > 1 else math.inf
         if bound <= target:
             break
@@ -120,6 +184,7 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
         "searches": done,
         "bound": bound * n / (n - 2),
         "visited": visited,
+        "retries": retries,
     }
 
 

@@ -1,0 +1,160 @@
+"""The pruned path sampler of pixel grids: every drawn path is a shortest path, drawn
+uniformly, whatever the mask, connectivity or dimension."""
+
+import networkx as nx
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from scipy.sparse.csgraph import shortest_path
+
+from centrality_vision.centrality import _approx, _sampling
+from centrality_vision.centrality._grid import _Grid
+from centrality_vision.graphs import pixel_graph
+
+EMPTY = np.empty(0, dtype=np.int64)
+EMPTY32 = np.empty(0, dtype=np.int32)
+
+
+def _setup(mask, connectivity, landmarks=True):
+    graph, _ = pixel_graph(mask, connectivity=connectivity)
+    grid = _Grid(graph)
+    steps = np.array(grid.steps, dtype=np.int64)
+    shape = np.array(grid.padded.shape, dtype=np.int64)
+    reach = int(np.abs(steps).sum(axis=1).max())
+    labels, marks = _approx._grid_guides(grid, reach)
+    if not landmarks:
+        marks = np.zeros((grid.foreground.size, 0), dtype=np.int32)
+    return graph, grid, steps, shape, reach, labels, marks
+
+
+def _draw(setup, pairs, seed=11, reach=None):
+    """Hits and squares of one sample per row of ``pairs`` (node indices), node order."""
+    graph, grid, steps, shape, own_reach, labels, marks = setup
+    scratch = _sampling.new_scratch(grid.foreground.size, grid.foreground, True)
+    raster_pairs = grid.raster[np.asarray(pairs, dtype=np.int64)]
+    work, retries = _sampling.sample_paths(
+        EMPTY,
+        EMPTY32,
+        EMPTY,
+        EMPTY32,
+        raster_pairs,
+        seed,
+        0,
+        len(raster_pairs),
+        grid.offs,
+        steps,
+        shape,
+        own_reach if reach is None else reach,
+        marks,
+        labels,
+        scratch,
+    )
+    # Every work array is back at rest for the next call.
+    rest = np.where(grid.foreground, -1, _sampling._BLOCKED)
+    np.testing.assert_array_equal(scratch[0], rest)
+    np.testing.assert_array_equal(scratch[1], rest)
+    return scratch[8][grid.raster], work, retries
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(
+    mask=arrays(bool, st.tuples(st.integers(2, 12), st.integers(2, 12)), elements=st.booleans()),
+    connectivity=st.sampled_from([4, 8]),
+    landmarks=st.booleans(),
+    data=st.data(),
+)
+def test_each_drawn_path_is_a_shortest_path(mask, connectivity, landmarks, data):
+    if mask.sum() < 2:
+        mask[:2, 0] = True
+    setup = _setup(mask, connectivity, landmarks)
+    graph = setup[0]
+    n = graph.shape[0]
+    hops = shortest_path(graph, unweighted=True)
+    s = data.draw(st.integers(0, n - 1))
+    t = data.draw(st.integers(0, n - 1))
+    hits, _, _ = _draw(setup, [(s, t)])
+    if s == t or not np.isfinite(hops[s, t]):
+        assert hits.sum() == 0  # no inner node: the same node, or no path at all
+        return
+    d = int(hops[s, t])
+    inner = np.flatnonzero(hits)
+    assert hits.sum() == d - 1 and np.all(hits[inner] == 1)
+    # One inner node at each hop count 1 .. d - 1, each on a shortest s-t path, in a chain.
+    np.testing.assert_array_equal(np.sort(hops[s, inner]), np.arange(1, d))
+    np.testing.assert_array_equal(hops[s, inner] + hops[inner, t], d)
+    chain = [s, *inner[np.argsort(hops[s, inner])], t]
+    assert all(hops[a, b] == 1 for a, b in zip(chain, chain[1:]))
+
+
+@pytest.mark.parametrize(
+    ("shape", "connectivity"),
+    [((9, 13), 8), ((9, 13), 4), ((5, 6, 7), 26), ((5, 6, 7), 6), ((5, 6, 7), 18)],
+)
+@pytest.mark.parametrize("wall", [False, True])
+@pytest.mark.parametrize("reach", [None, 0])
+def test_paths_are_drawn_uniformly(shape, connectivity, wall, reach):
+    # The exact share of shortest s-t paths through each node against the frequency with
+    # which the drawn paths pass it, for pairs in several directions; with a wall, paths
+    # bend and the landmark bounds matter.
+    mask = np.ones(shape, dtype=bool)
+    if wall:
+        mask[(slice(2, -2), 4) + (slice(None),) * (len(shape) - 2)] = False
+    setup = _setup(mask, connectivity)
+    graph = setup[0]
+    g = nx.from_scipy_sparse_array(graph)
+    n = graph.shape[0]
+    rng = np.random.default_rng(len(shape) + connectivity)
+    k = 3000
+    for s, t in [(0, n - 1), (n - 1, n // 3), *rng.integers(0, n, size=(3, 2))]:
+        if s == t:
+            continue
+        paths = list(nx.all_shortest_paths(g, s, t))
+        share = np.zeros(n)
+        for path in paths:
+            share[path[1:-1]] += 1 / len(paths)
+        hits, _, retries = _draw(setup, np.tile([s, t], (k, 1)), seed=s * n + t, reach=reach)
+        share = np.clip(share, 0.0, 1.0)  # sums of 1 / len(paths) may pass 1 by a rounding
+        tolerance = 5 * np.sqrt(share * (1 - share) / k) + 1e-9
+        assert np.all(np.abs(hits / k - share) <= tolerance), (s, t)
+        if not wall and reach is None:
+            assert retries == 0  # on an open box the grid bound is the distance itself
+
+
+def test_pairs_in_different_parts_are_skipped_and_retries_are_counted():
+    mask = np.zeros((12, 30), dtype=bool)
+    mask[1:11, 1:12] = True
+    mask[1:11, 18:29] = True
+    mask[5, 12:18] = True  # a bridge: the far side is reached by a detour through it
+    mask[:, 25] = False  # ... and a separate strip
+    setup = _setup(mask, 8)
+    graph = setup[0]
+    hops = shortest_path(graph, unweighted=True)
+    n = graph.shape[0]
+    rng = np.random.default_rng(0)
+    pairs = rng.integers(0, n, size=(300, 2))
+    hits, work, retries = _draw(setup, pairs)
+    lengths = hops[pairs[:, 0], pairs[:, 1]]
+    connected = np.isfinite(lengths) & (pairs[:, 0] != pairs[:, 1])
+    assert hits.sum() == np.sum(lengths[connected] - 1)
+    assert work > 0 and retries >= 0
+
+
+def test_landmarks_are_hop_counts_from_far_apart_pixels():
+    mask = np.zeros((20, 20), dtype=bool)
+    mask[2:18, 2:5] = True
+    mask[15:18, 2:18] = True  # an L
+    graph, grid, *_ = _setup(mask, 8)
+    marks = _sampling.landmark_hops(grid.foreground, grid.offs, 3, int(grid.raster[0]))
+    hops = shortest_path(graph, unweighted=True)
+    found = []
+    for k in range(3):
+        column = marks[grid.raster, k]
+        source = np.flatnonzero(column == 0)
+        assert source.size == 1  # a landmark is at hop count 0 from itself alone
+        np.testing.assert_array_equal(column, hops[source[0]])
+        found.append(source[0])
+    # The first landmark is the pixel farthest from the start, the second farthest from it.
+    assert hops[0, found[0]] == hops[0].max()
+    assert hops[found[0], found[1]] == hops[found[0]].max()
