@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from scipy.sparse.csgraph import shortest_path
 
+from centrality_vision import centrality as cen
 from centrality_vision.centrality import _approx, _sampling
 from centrality_vision.centrality._grid import _Grid
 from centrality_vision.graphs import pixel_graph
@@ -158,3 +159,32 @@ def test_landmarks_are_hop_counts_from_far_apart_pixels():
     # The first landmark is the pixel farthest from the start, the second farthest from it.
     assert hops[0, found[0]] == hops[0].max()
     assert hops[found[0], found[1]] == hops[found[0]].max()
+
+
+def test_long_line_keeps_landmark_hops_exact_beyond_uint16():
+    # 70,000 pixels in a row: hop counts pass 65,535, so the landmarks stay int32; the
+    # sampled values keep their bound against the path graph's exact ones, i (n - 1 - i).
+    n = 70_000
+    graph, _ = pixel_graph(np.ones((1, n), dtype=bool))
+    grid = _Grid(graph)
+    labels, marks = _approx._grid_guides(grid, 2)
+    assert marks.dtype == np.int32 and marks.max() == n - 1
+    approx, info = cen.betweenness(graph, normalized=True, epsilon=0.1, seed=2, return_info=True)
+    i = np.arange(n)
+    exact = i * (n - 1 - i) / ((n - 1) * (n - 2) / 2)
+    assert np.abs(approx - exact).max() <= info["bound"] <= 0.1
+    assert info["retries"] == 0  # on a line the grid bound is the distance
+
+
+def test_sampled_betweenness_on_a_mask_in_parts_keeps_its_bound():
+    mask = np.zeros((16, 40), dtype=bool)
+    mask[1:15, 1:15] = True
+    mask[5:9, 15:30] = True  # a corridor to a second room
+    mask[1:15, 30:37] = True
+    mask[4:12, 8:12] = False  # a pillar
+    mask[2:6, 38:40] = True  # and a separate part
+    graph, _ = pixel_graph(mask)
+    exact = cen.betweenness(graph, normalized=True)
+    approx, info = cen.betweenness(graph, normalized=True, epsilon=0.03, seed=1, return_info=True)
+    assert np.abs(approx - exact).max() <= info["bound"] <= 0.03
+    assert info["retries"] > 0  # the pillar and the corridor make detours
