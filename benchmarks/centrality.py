@@ -1008,12 +1008,22 @@ def _scale_approx(built, cen, eps):
                 m,
                 "%.1f" % t,
                 infod["samples"],
+                "%.1f%%" % (100.0 * infod.get("counted", 0) / max(infod["samples"], 1)),
                 "%.4f" % infod["bound"],
                 err,
                 eps(infod["visited"] * 2 * m / n, t),
             ]
         )
-    print(table(["graph", "n", "edges", "seconds", "samples", "guaranteed error", "observed error", "edges/s"], rows))
+    print(
+        table(
+            ["graph", "n", "edges", "seconds", "samples", "counted", "guaranteed error", "observed error", "edges/s"],
+            rows,
+        )
+    )
+    print(
+        "  counted: pairs whose paths were counted column by column (distance as on the open grid), not searched;\n"
+        "  edges/s: (pixels visited + cells counted) x mean degree / seconds"
+    )
 
 
 def _scale_eccentricity(built, cen):

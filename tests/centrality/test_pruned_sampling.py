@@ -24,18 +24,21 @@ def _setup(mask, connectivity, landmarks=True):
     steps = np.array(grid.steps, dtype=np.int64)
     shape = np.array(grid.padded.shape, dtype=np.int64)
     reach = int(np.abs(steps).sum(axis=1).max())
-    labels, marks = _approx._grid_guides(grid, reach)
+    labels, marks, rasters = _approx._grid_guides(grid, reach)
     if not landmarks:
         marks = np.zeros((grid.foreground.size, 0), dtype=np.int32)
-    return graph, grid, steps, shape, reach, labels, marks
+    return graph, grid, steps, shape, reach, labels, marks, rasters
 
 
-def _draw(setup, pairs, seed=11, reach=None):
-    """Hits and squares of one sample per row of ``pairs`` (node indices), node order."""
-    graph, grid, steps, shape, own_reach, labels, marks = setup
+def _draw(setup, pairs, seed=11, reach=None, counting=True):
+    """Hits of one sample per row of ``pairs`` (node indices) in node order, the work and
+    the retries; ``counting=False``: no pair's paths are counted directly."""
+    graph, grid, steps, shape, own_reach, labels, marks, rasters = setup
+    if not counting:
+        rasters = _approx._NO_RASTERS
     scratch = _sampling.new_scratch(grid.foreground.size, grid.foreground, True)
     raster_pairs = grid.raster[np.asarray(pairs, dtype=np.int64)]
-    work, retries = _sampling.sample_paths(
+    work, retries, counted = _sampling.sample_paths(
         EMPTY,
         EMPTY32,
         EMPTY,
@@ -50,13 +53,15 @@ def _draw(setup, pairs, seed=11, reach=None):
         own_reach if reach is None else reach,
         marks,
         labels,
+        rasters,
         scratch,
     )
+    assert counting or counted == 0
     # Every work array is back at rest for the next call.
     rest = np.where(grid.foreground, -1, _sampling._BLOCKED)
     np.testing.assert_array_equal(scratch[0], rest)
     np.testing.assert_array_equal(scratch[1], rest)
-    return scratch[8][grid.raster], work, retries
+    return scratch[8][grid.raster], work, retries, counted
 
 
 @settings(max_examples=60, deadline=None, derandomize=True)
@@ -75,7 +80,7 @@ def test_each_drawn_path_is_a_shortest_path(mask, connectivity, landmarks, data)
     hops = shortest_path(graph, unweighted=True)
     s = data.draw(st.integers(0, n - 1))
     t = data.draw(st.integers(0, n - 1))
-    hits, _, _ = _draw(setup, [(s, t)])
+    hits, *_ = _draw(setup, [(s, t)])
     if s == t or not np.isfinite(hops[s, t]):
         assert hits.sum() == 0  # no inner node: the same node, or no path at all
         return
@@ -94,8 +99,8 @@ def test_each_drawn_path_is_a_shortest_path(mask, connectivity, landmarks, data)
     [((9, 13), 8), ((9, 13), 4), ((5, 6, 7), 26), ((5, 6, 7), 6), ((5, 6, 7), 18)],
 )
 @pytest.mark.parametrize("wall", [False, True])
-@pytest.mark.parametrize("reach", [None, 0])
-def test_paths_are_drawn_uniformly(shape, connectivity, wall, reach):
+@pytest.mark.parametrize(("reach", "counting"), [(None, True), (None, False), (0, False)])
+def test_paths_are_drawn_uniformly(shape, connectivity, wall, reach, counting):
     # The exact share of shortest s-t paths through each node against the frequency with
     # which the drawn paths pass it, for pairs in several directions; with a wall, paths
     # bend and the landmark bounds matter.
@@ -115,12 +120,18 @@ def test_paths_are_drawn_uniformly(shape, connectivity, wall, reach):
         share = np.zeros(n)
         for path in paths:
             share[path[1:-1]] += 1 / len(paths)
-        hits, _, retries = _draw(setup, np.tile([s, t], (k, 1)), seed=s * n + t, reach=reach)
+        hits, _, retries, counted = _draw(
+            setup, np.tile([s, t], (k, 1)), seed=s * n + t, reach=reach, counting=counting
+        )
         share = np.clip(share, 0.0, 1.0)  # sums of 1 / len(paths) may pass 1 by a rounding
         tolerance = 5 * np.sqrt(share * (1 - share) / k) + 1e-9
         assert np.all(np.abs(hits / k - share) <= tolerance), (s, t)
         if not wall and reach is None:
             assert retries == 0  # on an open box the grid bound is the distance itself
+        if not wall and counting and connectivity == 8:
+            assert counted == k  # a clear view: paths counted column by column, no search
+        elif not counting:
+            assert counted == 0
 
 
 def test_pairs_in_different_parts_are_skipped_and_retries_are_counted():
@@ -135,7 +146,7 @@ def test_pairs_in_different_parts_are_skipped_and_retries_are_counted():
     n = graph.shape[0]
     rng = np.random.default_rng(0)
     pairs = rng.integers(0, n, size=(300, 2))
-    hits, work, retries = _draw(setup, pairs)
+    hits, work, retries, _ = _draw(setup, pairs)
     lengths = hops[pairs[:, 0], pairs[:, 1]]
     connected = np.isfinite(lengths) & (pairs[:, 0] != pairs[:, 1])
     assert hits.sum() == np.sum(lengths[connected] - 1)
@@ -167,7 +178,7 @@ def test_long_line_keeps_landmark_hops_exact_beyond_uint16():
     n = 70_000
     graph, _ = pixel_graph(np.ones((1, n), dtype=bool))
     grid = _Grid(graph)
-    labels, marks = _approx._grid_guides(grid, 2)
+    labels, marks, _ = _approx._grid_guides(grid, 2)
     assert marks.dtype == np.int32 and marks.max() == n - 1
     approx, info = cen.betweenness(graph, normalized=True, epsilon=0.1, seed=2, return_info=True)
     i = np.arange(n)

@@ -340,6 +340,10 @@ def betweenness(
         search that misses the target (a detour around holes or bends) runs again with a
         larger allowance. On an open region that is the parallelogram of shortest paths
         instead of two balls: on a megapixel silhouette 3.5x fewer visits, 2.7x less time.
+        On 8-neighbour 2D grids a pair whose distance is the unobstructed one (85% of the
+        pairs on that silhouette) needs no search at all: its paths advance one column (or
+        row) per step, so their counts follow column by column over the band they can
+        occupy, the same paths drawn with the same random numbers, another 2x.
     delta : float in (0, 1), default=0.1
         Failure probability of the approximation.
     seed : int, numpy.random.Generator or None
@@ -351,8 +355,9 @@ def betweenness(
     return_info : bool, default=False
         Also return a dict: ``"samples"`` (paths drawn; 0 when exact), ``"searches"``,
         ``"bound"`` (the guaranteed error of the normalised values, 0 when exact); when
-        sampled also ``"visited"`` (nodes the searches visited) and ``"retries"`` (pixel
-        searches run again with a larger allowance).
+        sampled also ``"visited"`` (nodes the searches visited, and cells counted),
+        ``"retries"`` (pixel searches run again with a larger allowance) and ``"counted"``
+        (pairs counted without a search).
 
     Returns
     -------

@@ -26,6 +26,7 @@ __all__ = ["sample_betweenness", "sample_sources"]
 RK_CONSTANT = 0.5  # the universal constant c of the VC-dimension sample bound
 _GROWTH = 1.5  # checkpoint sizes grow geometrically by this factor
 _LANDMARKS = 8  # pixel grids: landmarks whose hop counts bound the distance to a target
+_NO_RASTERS = (np.zeros(0, dtype=np.bool_), np.zeros(0, dtype=np.bool_))
 
 
 def _largest_eccentricity_bound(prep) -> int:
@@ -57,14 +58,19 @@ def _drain(pool):
 
 
 def _grid_guides(grid, reach):
-    """Connected-component labels of the padded raster (int32) and the hop counts from
+    """Connected-component labels of the padded raster (int32), the hop counts from
     :data:`_LANDMARKS` landmarks chosen farthest-first in the largest component (uint16
-    where they fit): what lets the pruned searches skip impossible pairs and bound the
-    distance to a target around holes and bends."""
+    where they fit), and in 2D the raster row by row and column by column: what lets the
+    searches skip impossible pairs and bound the distance to a target around holes and
+    bends, and the paths of most pairs be counted without a search."""
     from scipy import ndimage
 
     structure = ndimage.generate_binary_structure(grid.padded.ndim, reach)
     labels, count = ndimage.label(grid.padded, structure=structure)
+    if grid.padded.ndim == 2:  # the raster row by row, and column by column
+        rasters = (grid.foreground, np.ascontiguousarray(grid.padded.T).ravel())
+    else:
+        rasters = _NO_RASTERS
     labels = labels.ravel().astype(np.int32)
     largest = np.argmax(np.bincount(labels)[1:]) + 1
     start = int(np.flatnonzero(labels == largest)[0])
@@ -73,7 +79,7 @@ def _grid_guides(grid, reach):
         marks = marks.astype(np.uint16)  # less memory traffic in the searches
     else:
         marks = np.array(marks)  # allocated by NumPy (huge pages), like the searches' arrays
-    return labels, marks
+    return labels, marks, rasters
 
 
 def rk_sample_size(vertex_diameter: int, epsilon: float, delta: float) -> int:
@@ -100,7 +106,7 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
     n = prep.n
     rng = as_generator(seed)  # validated even when there is nothing to sample
     if n < 3:
-        return np.zeros(n), {"samples": 0, "searches": 0, "bound": 0.0, "visited": 0, "retries": 0}
+        return np.zeros(n), {"samples": 0, "searches": 0, "bound": 0.0, "visited": 0, "retries": 0, "counted": 0}
     # E[hits / k] = b / (n (n - 1)) over ordered pairs; normalised b is that times n / (n - 2).
     target = epsilon * (n - 2) / n
     if prep.directed:
@@ -124,6 +130,7 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
     steps, shape, reach = np.empty((0, 0), dtype=np.int64), np.empty(0, dtype=np.int64), 0
     marks = np.empty((0, 0), dtype=np.int32)
     labels = np.empty(0, dtype=np.int32)
+    rasters = _NO_RASTERS
     indptr, indices = prep.indptr, prep.indices
     if grid is not None:
         offs, foreground = grid.offs, grid.foreground
@@ -133,7 +140,7 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
         steps = np.array(grid.steps, dtype=np.int64)
         shape = np.array(grid.padded.shape, dtype=np.int64)
         reach = int(np.abs(steps).sum(axis=1).max())
-        labels, marks = _grid_guides(grid, reach)
+        labels, marks, rasters = _grid_guides(grid, reach)
     scratch = queue.SimpleQueue()
     size = foreground.size if grid is not None else n
     for _ in range(max(1, min(get_num_threads(), cap))):
@@ -142,6 +149,7 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
     bound = math.inf
     visited = 0
     retries = 0
+    direct = 0
     for k in checkpoints:
 
         def task(lo, hi, first=done):
@@ -162,14 +170,18 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
                     reach,
                     marks,
                     labels,
+                    rasters,
                     arrays,
                 )
             finally:
                 scratch.put(arrays)
 
-        for _, _, (work, n_retries) in run_chunks(task, k - done, progress=progress, desc="betweenness samples"):
+        for _, _, (work, n_retries, n_direct) in run_chunks(
+            task, k - done, progress=progress, desc="betweenness samples"
+        ):
             visited += work
             retries += n_retries
+            direct += n_direct
         done = k
         hits = sum(arrays[-1] for arrays in _drain(scratch))
         bound = _bernstein(hits, k, log_term) if k > 1 else math.inf
@@ -185,6 +197,7 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
         "bound": bound * n / (n - 2),
         "visited": visited,
         "retries": retries,
+        "counted": direct,
     }
 
 

@@ -262,8 +262,113 @@ def new_scratch(n, foreground, grid):
 
 
 @njit(cache=True, nogil=True)
+def _open_pair(s, t, width, height, foreground, transposed, seed, sample, cells, starts, hits):
+    """Draw a shortest ``s``-``t`` path of the 8-neighbour 2D grid by counting, when one
+    as short as on the unobstructed grid exists; returns the number of cells counted,
+    negated when there is none (nothing drawn: the caller searches).
+
+    With ``|dc| >= |dr|`` (else rows and columns trade places) every path of the
+    unobstructed length ``X = |dc|`` advances one column per step, and after ``i`` steps
+    lies ``max(-i, dr - (X - i)) .. min(i, dr + (X - i))`` rows from the source: a band of
+    column segments. The paths of that length in the mask are those that stay on its
+    pixels in the band, so their counts follow column by column, each the sum of the (at
+    most) three counts beside it in the column before, or 0 on background: no hop counts,
+    queue or neighbour tests, and the column reads ``transposed`` (the raster stored
+    column by column) contiguously. If t's count is 0, no path has that length.
+    """
+    sr = s // width
+    sc = s - sr * width
+    tr = t // width
+    dr = tr - sr
+    dc = t - tr * width - sc
+    by_column = abs(dc) >= abs(dr)
+    if by_column:
+        steps, minor, sign, start, major, extent, stride, line = abs(dc), dr, 1, sr, sc, height, height, transposed
+        if dc < 0:
+            sign = -1
+    else:
+        steps, minor, sign, start, major, extent, stride, line = abs(dr), dc, 1, sc, sr, width, width, foreground
+        if dr < 0:
+            sign = -1
+    # starts[2 i]: where column i's counts begin in ``cells``; starts[2 i + 1]: its first row
+    cells[0] = 1.0
+    starts[0] = 0
+    starts[1] = 0
+    prev_lo = 0
+    prev_hi = 0
+    used = 1
+    for i in range(1, steps + 1):
+        lo = max(-i, minor - (steps - i), -start)
+        hi = min(i, minor + (steps - i), extent - 1 - start)
+        if lo > hi:
+            return -used
+        starts[2 * i] = used
+        starts[2 * i + 1] = lo
+        base = starts[2 * i - 2] - prev_lo
+        pixel = (major + sign * i) * stride + start
+        top = 0.0
+        for y in range(lo, hi + 1):
+            total = 0.0
+            if line[pixel + y]:
+                for z in range(max(y - 1, prev_lo), min(y + 1, prev_hi) + 1):
+                    total += cells[base + z]
+            cells[used + y - lo] = total
+            top = max(top, total)
+        if top == 0.0:
+            return -(used + hi - lo + 1)
+        if top > _RESCALE:
+            for y in range(hi - lo + 1):
+                cells[used + y] /= top
+        used += hi - lo + 1
+        prev_lo = lo
+        prev_hi = hi
+    # Back from t, each step to one of the (at most) three counts before it, in proportion.
+    y = minor
+    step = 0
+    for i in range(steps - 1, 0, -1):
+        lo = starts[2 * i + 1]
+        hi = lo + starts[2 * i + 2] - starts[2 * i] - 1
+        base = starts[2 * i] - lo
+        a = max(y - 1, lo)
+        b = min(y + 1, hi)
+        total = 0.0
+        for z in range(a, b + 1):
+            total += cells[base + z]
+        r = uniform(seed, sample, step) * total
+        step += 1
+        pick = -1
+        for z in range(a, b + 1):
+            if cells[base + z] > 0.0:
+                pick = z
+                r -= cells[base + z]
+                if r < 0.0:
+                    break
+        y = pick
+        if by_column:
+            hits[(sr + y) * width + sc + sign * i] += 1
+        else:
+            hits[(sr + sign * i) * width + sc + y] += 1
+    return used
+
+
+@njit(cache=True, nogil=True)
 def sample_paths(
-    indptr, indices, t_indptr, t_indices, pairs, seed, first, stop, offs, steps, shape, reach, marks, labels, scratch
+    indptr,
+    indices,
+    t_indptr,
+    t_indices,
+    pairs,
+    seed,
+    first,
+    stop,
+    offs,
+    steps,
+    shape,
+    reach,
+    marks,
+    labels,
+    rasters,
+    scratch,
 ):
     """Riondato-Kornaropoulos samples ``first .. stop - 1``: for each pair ``(s, t)`` a
     shortest path drawn uniformly at random; adds to ``hits`` (in ``scratch``, see
@@ -277,7 +382,9 @@ def sample_paths(
     that can lie on a shortest path, bounded by the open grid (``steps``, ``reach``) and by
     the landmark hop counts ``marks`` (no landmarks: zero columns); ``reach = 0`` turns
     the pruning off. Pairs whose ``labels`` (connected components; may be empty) differ are
-    not searched.
+    not searched. ``rasters``: the padded raster's foreground row by row and column by
+    column; with them (8-neighbour 2D grids) a pair whose distance is the unobstructed one
+    has its paths counted directly (:func:`_open_pair`), without a search.
     """
     grid = offs.shape[0] > 0
     dist_s, dist_t, sig_s, sig_t, front_s, front_t, nxt, visited, hits = scratch
@@ -287,11 +394,20 @@ def sample_paths(
     here = np.empty(dims.shape[0], dtype=np.int64)
     there = np.empty(dims.shape[0], dtype=np.int64)
     no_step = np.zeros(dims.shape[0], dtype=np.int64)
+    foreground, transposed = rasters
+    counting = grid and reach == 2 and dims.shape[0] == 2 and transposed.shape[0] > 0
+    direct = 0
     for i in range(first, stop):
         s = pairs[i, 0]
         t = pairs[i, 1]
         if labels.shape[0] > 0 and labels[s] != labels[t]:
             continue  # no path: no inner node
+        if counting and s != t:
+            cells = _open_pair(s, t, dims[1], dims[0], foreground, transposed, seed, i, sig_t, front_t, hits)
+            work += abs(cells)
+            if cells > 0:
+                direct += 1
+                continue
         if grid and reach > 0 and s != t:
             # The region of shortest paths alone: first with t as near as the open grid
             # allows, then with the slack at least doubled (and at least the smallest
@@ -384,4 +500,4 @@ def sample_paths(
             v = visited[q]
             dist_s[v] = -1
             dist_t[v] = -1
-    return work, retries
+    return work, retries, direct
