@@ -298,8 +298,9 @@ def _open_pair(s, t, width, height, foreground, transposed, seed, sample, cells,
     prev_hi = 0
     used = 1
     for i in range(1, steps + 1):
-        lo = max(-i, minor - (steps - i), -start)
-        hi = min(i, minor + (steps - i), extent - 1 - start)
+        # the band's segment, within the raster and one row of the last column's paths
+        lo = max(-i, minor - (steps - i), -start, prev_lo - 1)
+        hi = min(i, minor + (steps - i), extent - 1 - start, prev_hi + 1)
         if lo > hi:
             return -used
         starts[2 * i] = used
@@ -307,21 +308,31 @@ def _open_pair(s, t, width, height, foreground, transposed, seed, sample, cells,
         base = starts[2 * i - 2] - prev_lo
         pixel = (major + sign * i) * stride + start
         top = 0.0
+        live_lo = hi + 1
+        live_hi = lo - 1
         for y in range(lo, hi + 1):
             total = 0.0
             if line[pixel + y]:
                 for z in range(max(y - 1, prev_lo), min(y + 1, prev_hi) + 1):
                     total += cells[base + z]
             cells[used + y - lo] = total
-            top = max(top, total)
+            if total > 0.0:
+                live_lo = min(live_lo, y)
+                live_hi = y
+                top = max(top, total)
         if top == 0.0:
             return -(used + hi - lo + 1)
         if top > _RESCALE:
             for y in range(hi - lo + 1):
                 cells[used + y] /= top
-        used += hi - lo + 1
-        prev_lo = lo
-        prev_hi = hi
+        # keep only the rows with paths (their counts are where the next column reads)
+        starts[2 * i + 1] = live_lo
+        if live_lo > lo:  # (shifting down: each cell read before it is overwritten)
+            for y in range(live_hi - live_lo + 1):
+                cells[used + y] = cells[used + live_lo - lo + y]
+        used += live_hi - live_lo + 1
+        prev_lo = live_lo
+        prev_hi = live_hi
     # Back from t, each step to one of the (at most) three counts before it, in proportion.
     y = minor
     step = 0
