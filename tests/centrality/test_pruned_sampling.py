@@ -128,9 +128,9 @@ def test_paths_are_drawn_uniformly(shape, connectivity, wall, reach, counting):
         assert np.all(np.abs(hits / k - share) <= tolerance), (s, t)
         if not wall and reach is None:
             assert retries == 0  # on an open box the grid bound is the distance itself
-        if not wall and counting and connectivity == 8:
+        if not wall and counting and len(shape) == 2:
             assert counted == k  # a clear view: paths counted column by column, no search
-        elif not counting:
+        elif not counting or len(shape) == 3:
             assert counted == 0
 
 
@@ -199,3 +199,58 @@ def test_sampled_betweenness_on_a_mask_in_parts_keeps_its_bound():
     approx, info = cen.betweenness(graph, normalized=True, epsilon=0.03, seed=1, return_info=True)
     assert np.abs(approx - exact).max() <= info["bound"] <= 0.03
     assert info["retries"] > 0  # the pillar and the corridor make detours
+
+
+def _exact_shares(mask, s, t, steps):
+    """Share of the shortest s-t paths through each pixel, by exact integer path counts."""
+    g, _ = pixel_graph(mask, connectivity=len(steps))
+    d = shortest_path(g, unweighted=True, indices=[s, t])
+    coords = np.argwhere(mask)
+    index = {tuple(c): k for k, c in enumerate(coords)}
+    counts = [[0] * len(coords), [0] * len(coords)]
+    for side, src in ((0, s), (1, t)):
+        counts[side][src] = 1
+        for v in sorted(range(len(coords)), key=lambda v: d[side][v]):
+            for step in steps:
+                u = index.get((coords[v][0] - step[0], coords[v][1] - step[1]))
+                if u is not None and d[side][u] == d[side][v] - 1:
+                    counts[side][v] += counts[side][u]
+    total = counts[0][t]
+    return np.array(
+        [counts[0][v] * counts[1][v] / total if d[0][v] + d[1][v] == d[0][t] else 0.0 for v in range(len(coords))]
+    )
+
+
+@pytest.mark.parametrize("connectivity", [4, 8])
+def test_counted_paths_stay_uniform_past_float64_range(connectivity):
+    # Path counts past float64's range (rescaled per column or row) against shares from exact
+    # integer counts.
+    if connectivity == 4:
+        mask = np.ones((530, 530), dtype=bool)  # C(1058, 529) ~ 1e317 monotone paths
+        s, t = 0, mask.size - 1
+        steps = None
+    else:
+        mask = np.ones((121, 720), dtype=bool)  # 719 columns of about 3-way choices ~ 1e340
+        s, t = 60 * 720, 60 * 720 + 719
+        steps = [(a, b) for a in (-1, 0, 1) for b in (-1, 0, 1) if a or b]
+    setup = _setup(mask, connectivity)
+    k = 2000
+    hits, _, _, counted = _draw(setup, np.tile([s, t], (k, 1)), seed=3)
+    assert counted == k
+    if connectivity == 4:  # monotone staircases in the full box: binomial counts
+        from scipy.special import gammaln
+
+        i, j = np.divmod(np.arange(mask.size), mask.shape[1])
+        rows, cols = mask.shape[0] - 1, mask.shape[1] - 1
+
+        def log_paths(a, b):  # C(a + b, a)
+            return gammaln(a + b + 1) - gammaln(a + 1) - gammaln(b + 1)
+
+        share = np.exp(log_paths(i, j) + log_paths(rows - i, cols - j) - log_paths(rows, cols))
+    else:
+        share = _exact_shares(mask, s, t, steps)
+    share = np.clip(share, 0.0, 1.0)
+    share[[s, t]] = 0.0  # the ends are no inner nodes
+    probe = np.flatnonzero(share > 0.05)
+    tolerance = 5 * np.sqrt(share[probe] * (1 - share[probe]) / k)
+    assert probe.size > 20 and np.all(np.abs(hits[probe] / k - share[probe]) <= tolerance)

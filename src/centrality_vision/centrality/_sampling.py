@@ -363,6 +363,63 @@ def _open_pair(s, t, width, height, foreground, transposed, seed, sample, cells,
 
 
 @njit(cache=True, nogil=True)
+def _open_pair_4(s, t, width, foreground, seed, sample, cells, scales, hits):
+    """:func:`_open_pair` for the 4-neighbour 2D grid: the paths of the unobstructed
+    length ``|dr| + |dc|`` are the monotone staircases inside the box of ``s`` and ``t``, so
+    their counts follow row by row (each the count above plus the count before it, or 0 on
+    background). A row's counts share one scale, kept as a logarithm in ``scales``, so two
+    counts of different rows compare exactly in ratio. Returns the cells counted, negated
+    when t's count is 0 (nothing drawn)."""
+    sr = s // width
+    sc = s - sr * width
+    tr = t // width
+    dr = tr - sr
+    dc = t - tr * width - sc
+    rows = abs(dr) + 1
+    cols = abs(dc) + 1
+    vr = 1 if dr > 0 else -1
+    vc = 1 if dc > 0 else -1
+    for i in range(rows):
+        pixel = (sr + vr * i) * width + sc
+        scales[i] = scales[i - 1] if i > 0 else 0.0
+        top = 0.0
+        for j in range(cols):
+            total = 0.0
+            if foreground[pixel + vc * j]:
+                if i == 0 and j == 0:
+                    total = 1.0
+                else:
+                    if i > 0:
+                        total = cells[(i - 1) * cols + j]
+                    if j > 0:
+                        total += cells[i * cols + j - 1]
+            cells[i * cols + j] = total
+            top = max(top, total)
+        if top == 0.0:
+            return -(i + 1) * cols
+        if top > _RESCALE:
+            for j in range(cols):
+                cells[i * cols + j] /= top
+            scales[i] += np.log(top)
+    if cells[rows * cols - 1] == 0.0:
+        return -rows * cols
+    # Back from t: up or left, in proportion to the counts (the row above rescaled to this one's).
+    i = rows - 1
+    j = cols - 1
+    step = 0
+    while i + j > 1:
+        up = cells[(i - 1) * cols + j] * np.exp(scales[i - 1] - scales[i]) if i > 0 else 0.0
+        left = cells[i * cols + j - 1] if j > 0 else 0.0
+        if uniform(seed, sample, step) * (up + left) < up:
+            i -= 1
+        else:
+            j -= 1
+        step += 1
+        hits[(sr + vr * i) * width + sc + vc * j] += 1
+    return rows * cols
+
+
+@njit(cache=True, nogil=True)
 def sample_paths(
     indptr,
     indices,
@@ -406,7 +463,8 @@ def sample_paths(
     there = np.empty(dims.shape[0], dtype=np.int64)
     no_step = np.zeros(dims.shape[0], dtype=np.int64)
     foreground, transposed = rasters
-    counting = grid and reach == 2 and dims.shape[0] == 2 and transposed.shape[0] > 0
+    counting = grid and dims.shape[0] == 2 and transposed.shape[0] > 0
+    four = offs.shape[0] == 4
     direct = 0
     for i in range(first, stop):
         s = pairs[i, 0]
@@ -414,7 +472,10 @@ def sample_paths(
         if labels.shape[0] > 0 and labels[s] != labels[t]:
             continue  # no path: no inner node
         if counting and s != t:
-            cells = _open_pair(s, t, dims[1], dims[0], foreground, transposed, seed, i, sig_t, front_t, hits)
+            if four:
+                cells = _open_pair_4(s, t, dims[1], foreground, seed, i, sig_t, sig_s, hits)
+            else:
+                cells = _open_pair(s, t, dims[1], dims[0], foreground, transposed, seed, i, sig_t, front_t, hits)
             work += abs(cells)
             if cells > 0:
                 direct += 1
