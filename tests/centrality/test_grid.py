@@ -194,3 +194,43 @@ def test_sampled_betweenness_on_the_grid_keeps_its_bound():
     # Same estimator as on the adjacency lists: the same guarantee, other draws.
     plain = cen.betweenness(_plain(graph), normalized=True, epsilon=0.03, seed=5)
     assert np.abs(plain - exact).max() <= 0.03
+
+
+def _rebuilt_equal(graph):
+    """The slow definition of PixelGraph.matches_mask: rebuild and compare."""
+    fresh, _ = pixel_graph(graph.mask, connectivity=graph.connectivity, spacing=graph.spacing)
+    return bool(
+        graph.shape == fresh.shape
+        and np.array_equal(graph.indptr, fresh.indptr)
+        and np.array_equal(graph.indices, fresh.indices)
+        and np.array_equal(graph.data, fresh.data)
+    )
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(
+    mask=arrays(bool, st.one_of(st.tuples(st.integers(1, 7), st.integers(1, 7)), st.tuples(*[st.integers(1, 4)] * 3))),
+    full=st.booleans(),
+    spacing=st.booleans(),
+    edit=st.sampled_from([None, "length", "neighbour", "drop", "spacing"]),
+    data=st.data(),
+)
+def test_matches_mask_agrees_with_rebuilding_the_graph(mask, full, spacing, edit, data):
+    if not mask.any():
+        mask.flat[0] = True
+    connectivity = {2: (8, 4), 3: (26, 6)}[mask.ndim][0 if full else 1]
+    spacings = (1.0, 2.5, 0.7)[: mask.ndim] if spacing else None
+    graph, _ = pixel_graph(mask, connectivity=connectivity, spacing=spacings)
+    assert graph.matches_mask()
+    if edit is not None and graph.nnz:
+        k = data.draw(st.integers(0, graph.nnz - 1))
+        if edit == "length":
+            graph.data[k] = graph.data[k] * (1 + 1e-15) + 1e-300
+        elif edit == "neighbour":
+            graph.indices[k] = (graph.indices[k] + 1) % graph.shape[0]
+        elif edit == "drop":
+            graph.data[k] = 0.0
+            graph.eliminate_zeros()  # in place on this PixelGraph: one edge fewer
+        else:
+            graph.spacing = None if spacing else np.full(mask.ndim, 1.5)
+    assert graph.matches_mask() == _rebuilt_equal(graph)

@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
+from numba import njit
 from scipy import sparse
 
 from .._seeding import as_generator
@@ -54,16 +57,61 @@ class PixelGraph(sparse.csr_array):
         graph of :attr:`mask`; False when it was edited in place or derived from one."""
         if self.mask is None:
             return False
+        mask = np.asarray(self.mask, dtype=bool)
         try:
-            fresh, _ = pixel_graph(self.mask, connectivity=self.connectivity, spacing=self.spacing)
-        except (ValueError, TypeError):  # pragma: no cover - a mask pixel_graph itself made
+            offsets, lengths = _steps_of(mask.ndim, self.connectivity, _spacing_key(self.spacing))
+        except (ValueError, TypeError):  # pragma: no cover - settings pixel_graph itself took
             return False
+        padded = np.pad(mask, 1)
+        node_of = np.full(padded.shape, -1, dtype=np.int64)
+        n = int(np.count_nonzero(padded))
+        node_of[padded] = np.arange(n)
+        strides = np.cumprod((1,) + padded.shape[:0:-1])[::-1]
+        raster = np.flatnonzero(padded.ravel())
+        offs = np.array([int(np.dot(d, strides)) for d in offsets], dtype=np.int64)
         return bool(
-            self.shape == fresh.shape
-            and np.array_equal(self.indptr, fresh.indptr)
-            and np.array_equal(self.indices, fresh.indices)
-            and np.array_equal(self.data, fresh.data)
+            self.shape == (n, n)
+            and _csr_is_grid(self.indptr, self.indices, self.data, raster, node_of.ravel(), offs, lengths)
         )
+
+
+def _spacing_key(spacing):
+    return None if spacing is None else tuple(float(x) for x in np.asarray(spacing).ravel())
+
+
+@functools.lru_cache(maxsize=64)
+def _steps_of(ndim: int, connectivity: int, spacing):
+    """The neighbour steps of :func:`pixel_graph` in the order of its sorted rows, and the
+    edge length it stores for each: read off the middle pixel of a full 3 x 3 (x 3) patch,
+    so they are the engine's own values to the last bit."""
+    patch, _ = pixel_graph(np.ones((3,) * ndim, dtype=bool), connectivity=connectivity, spacing=spacing)
+    middle = (3**ndim) // 2
+    row = slice(patch.indptr[middle], patch.indptr[middle + 1])
+    centre = np.array(np.unravel_index(middle, (3,) * ndim))
+    offsets = [tuple(int(x) for x in np.array(np.unravel_index(k, (3,) * ndim)) - centre) for k in patch.indices[row]]
+    return offsets, np.array(patch.data[row], dtype=np.float64)
+
+
+@njit(cache=True)
+def _csr_is_grid(indptr, indices, data, raster, node_of, offs, lengths):
+    """Whether the CSR arrays are exactly the pixel graph whose node ``i`` sits at
+    ``raster[i]`` of a padded raster (``node_of``: its inverse, -1 on background): row by
+    row, the foreground neighbours at ``raster[i] + offs`` (sorted), each with its length."""
+    n = raster.shape[0]
+    if indptr.shape[0] != n + 1 or indptr[0] != 0:
+        return False
+    k = 0
+    for i in range(n):
+        if indptr[i] != k:
+            return False
+        r = raster[i]
+        for j in range(offs.shape[0]):
+            w = node_of[r + offs[j]]
+            if w >= 0:
+                if k >= indices.shape[0] or k >= data.shape[0] or indices[k] != w or data[k] != lengths[j]:
+                    return False
+                k += 1
+    return indptr[n] == k and indices.shape[0] == k and data.shape[0] == k
 
 
 def _volume_mask(image, threshold) -> np.ndarray:
