@@ -72,6 +72,20 @@ def _draw(setup, pairs, seed=11, reach=None, counting=True):
     data=st.data(),
 )
 def test_each_drawn_path_is_a_shortest_path(mask, connectivity, landmarks, data):
+    _check_drawn_path(mask, connectivity, landmarks, data)
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(
+    mask=arrays(bool, st.tuples(st.integers(2, 6), st.integers(2, 6), st.integers(2, 6)), elements=st.booleans()),
+    connectivity=st.sampled_from([6, 18, 26]),
+    data=st.data(),
+)
+def test_each_drawn_path_is_a_shortest_path_in_3d(mask, connectivity, data):
+    _check_drawn_path(mask, connectivity, True, data)
+
+
+def _check_drawn_path(mask, connectivity, landmarks, data):
     if mask.sum() < 2:
         mask[:2, 0] = True
     setup = _setup(mask, connectivity, landmarks)
@@ -128,9 +142,9 @@ def test_paths_are_drawn_uniformly(shape, connectivity, wall, reach, counting):
         assert np.all(np.abs(hits / k - share) <= tolerance), (s, t)
         if not wall and reach is None:
             assert retries == 0  # on an open box the grid bound is the distance itself
-        if not wall and counting and len(shape) == 2:
-            assert counted == k  # a clear view: paths counted column by column, no search
-        elif not counting or len(shape) == 3:
+        if not wall and counting and (len(shape) == 2 or connectivity == 26):
+            assert counted == k  # a clear view: paths counted slice by slice, no search
+        elif not counting or connectivity in (6, 18):
             assert counted == 0
 
 
@@ -212,7 +226,7 @@ def _exact_shares(mask, s, t, steps):
         counts[side][src] = 1
         for v in sorted(range(len(coords)), key=lambda v: d[side][v]):
             for step in steps:
-                u = index.get((coords[v][0] - step[0], coords[v][1] - step[1]))
+                u = index.get(tuple(int(a) - b for a, b in zip(coords[v], step)))
                 if u is not None and d[side][u] == d[side][v] - 1:
                     counts[side][v] += counts[side][u]
     total = counts[0][t]
@@ -221,7 +235,7 @@ def _exact_shares(mask, s, t, steps):
     )
 
 
-@pytest.mark.parametrize("connectivity", [4, 8])
+@pytest.mark.parametrize("connectivity", [4, 8, 26])
 def test_counted_paths_stay_uniform_past_float64_range(connectivity):
     # Path counts past float64's range (rescaled per column or row) against shares from exact
     # integer counts.
@@ -229,10 +243,15 @@ def test_counted_paths_stay_uniform_past_float64_range(connectivity):
         mask = np.ones((530, 530), dtype=bool)  # C(1058, 529) ~ 1e317 monotone paths
         s, t = 0, mask.size - 1
         steps = None
-    else:
+    elif connectivity == 8:
         mask = np.ones((121, 720), dtype=bool)  # 719 columns of about 3-way choices ~ 1e340
         s, t = 60 * 720, 60 * 720 + 719
         steps = [(a, b) for a in (-1, 0, 1) for b in (-1, 0, 1) if a or b]
+    else:
+        mask = np.ones((7, 7, 420), dtype=bool)  # 419 slices of about 7-way choices ~ 1e350
+        s, t = 3 * 7 * 420 + 3 * 420, 3 * 7 * 420 + 3 * 420 + 419
+        steps = [d for d in np.ndindex(3, 3, 3) if d != (1, 1, 1)]
+        steps = [tuple(x - 1 for x in d) for d in steps]
     setup = _setup(mask, connectivity)
     k = 2000
     hits, _, _, counted = _draw(setup, np.tile([s, t], (k, 1)), seed=3)

@@ -344,7 +344,9 @@ def betweenness(
         silhouette) needs no search at all: with 8 neighbours its paths advance one column
         (or row) per step, so their counts follow column by column over the band they can
         occupy (the same paths drawn with the same random numbers), another 2x; with 4
-        neighbours they are the monotone staircases of the pair's box, counted row by row.
+        neighbours they are the monotone staircases of the pair's box, counted row by row;
+        on 26-neighbour 3D grids they advance one slice per step (1.6x on a 90,000-voxel
+        ball with a slot).
     delta : float in (0, 1), default=0.1
         Failure probability of the approximation.
     seed : int, numpy.random.Generator or None

@@ -69,6 +69,8 @@ def _grid_guides(grid, reach):
     labels, count = ndimage.label(grid.padded, structure=structure)
     if grid.padded.ndim == 2:  # the raster row by row, and column by column
         rasters = (grid.foreground, np.ascontiguousarray(grid.padded.T).ravel())
+    elif len(grid.steps) == 26:  # 3D: the raster itself (the second entry only says "count")
+        rasters = (grid.foreground, grid.foreground)
     else:
         rasters = _NO_RASTERS
     labels = labels.ravel().astype(np.int32)

@@ -420,6 +420,117 @@ def _open_pair_4(s, t, width, foreground, seed, sample, cells, scales, hits):
 
 
 @njit(cache=True, nogil=True)
+def _open_pair_26(s, t, dims, foreground, seed, sample, cells, starts, hits):
+    """:func:`_open_pair` for the 26-neighbour 3D grid: paths of the unobstructed length
+    advance one slice per step along the axis of the largest offset, inside a box of
+    rectangles (each other axis as in 2D), and a count is the sum of the (at most) nine
+    counts beside it in the slice before, or 0 on background. ``starts`` holds five numbers
+    per slice: where its counts begin and its rectangle's first rows and extents."""
+    n_dims = 3
+    here = np.empty(n_dims, dtype=np.int64)
+    gap = np.empty(n_dims, dtype=np.int64)
+    strides = np.empty(n_dims, dtype=np.int64)
+    strides[2] = 1
+    strides[1] = dims[2]
+    strides[0] = dims[1] * dims[2]
+    rest = s
+    rest_t = t
+    for k in range(n_dims):
+        here[k] = rest // strides[k]
+        rest -= here[k] * strides[k]
+        gap[k] = rest_t // strides[k] - here[k]
+        rest_t -= (rest_t // strides[k]) * strides[k]
+    major = 0
+    for k in range(1, n_dims):
+        if abs(gap[k]) > abs(gap[major]):
+            major = k
+    b = 1 if major == 0 else 0
+    c = 2 if major != 2 else 1
+    steps = abs(gap[major])
+    sign = 1 if gap[major] > 0 else -1
+    if 5 * (steps + 1) > starts.shape[0]:
+        return -1
+    cells[0] = 1.0
+    starts[0] = 0
+    starts[1] = 0
+    starts[2] = 0
+    starts[3] = 1
+    starts[4] = 1
+    live = (0, 0, 0, 0)  # the previous slice's rows with paths, along b and along c
+    used = 1
+    for i in range(1, steps + 1):
+        lo_b = max(-i, gap[b] - (steps - i), -here[b], live[0] - 1)
+        hi_b = min(i, gap[b] + (steps - i), dims[b] - 1 - here[b], live[1] + 1)
+        lo_c = max(-i, gap[c] - (steps - i), -here[c], live[2] - 1)
+        hi_c = min(i, gap[c] + (steps - i), dims[c] - 1 - here[c], live[3] + 1)
+        if lo_b > hi_b or lo_c > hi_c:
+            return -used
+        n_b = hi_b - lo_b + 1
+        n_c = hi_c - lo_c + 1
+        prev = 5 * (i - 1)
+        p_at, p_lo_b, p_lo_c, p_n_b, p_n_c = (
+            starts[prev],
+            starts[prev + 1],
+            starts[prev + 2],
+            starts[prev + 3],
+            starts[prev + 4],
+        )
+        at = 5 * i
+        starts[at] = used
+        starts[at + 1] = lo_b
+        starts[at + 2] = lo_c
+        starts[at + 3] = n_b
+        starts[at + 4] = n_c
+        base = (here[major] + sign * i) * strides[major] + here[b] * strides[b] + here[c] * strides[c]
+        top = 0.0
+        new_live = (hi_b + 1, lo_b - 1, hi_c + 1, lo_c - 1)
+        for y in range(lo_b, hi_b + 1):
+            for z in range(lo_c, hi_c + 1):
+                total = 0.0
+                if foreground[base + y * strides[b] + z * strides[c]]:
+                    for yy in range(max(y - 1, p_lo_b), min(y + 1, p_lo_b + p_n_b - 1) + 1):
+                        for zz in range(max(z - 1, p_lo_c), min(z + 1, p_lo_c + p_n_c - 1) + 1):
+                            total += cells[p_at + (yy - p_lo_b) * p_n_c + zz - p_lo_c]
+                cells[used + (y - lo_b) * n_c + z - lo_c] = total
+                if total > 0.0:
+                    top = max(top, total)
+                    new_live = (min(new_live[0], y), max(new_live[1], y), min(new_live[2], z), max(new_live[3], z))
+        if top == 0.0:
+            return -(used + n_b * n_c)
+        if top > _RESCALE:
+            for q in range(n_b * n_c):
+                cells[used + q] /= top
+        used += n_b * n_c
+        live = new_live
+    # Back from t, each step to one of the (at most) nine counts before it, in proportion.
+    y = gap[b]
+    z = gap[c]
+    step = 0
+    for i in range(steps - 1, 0, -1):
+        at = 5 * i
+        p_at, lo_b, lo_c, n_b, n_c = starts[at], starts[at + 1], starts[at + 2], starts[at + 3], starts[at + 4]
+        total = 0.0
+        for yy in range(max(y - 1, lo_b), min(y + 1, lo_b + n_b - 1) + 1):
+            for zz in range(max(z - 1, lo_c), min(z + 1, lo_c + n_c - 1) + 1):
+                total += cells[p_at + (yy - lo_b) * n_c + zz - lo_c]
+        r = uniform(seed, sample, step) * total
+        step += 1
+        pick_y = -1
+        pick_z = -1
+        for yy in range(max(y - 1, lo_b), min(y + 1, lo_b + n_b - 1) + 1):
+            for zz in range(max(z - 1, lo_c), min(z + 1, lo_c + n_c - 1) + 1):
+                value = cells[p_at + (yy - lo_b) * n_c + zz - lo_c]
+                if value > 0.0 and r >= 0.0:
+                    pick_y = yy
+                    pick_z = zz
+                    r -= value
+        y = pick_y
+        z = pick_z
+        hits[(here[major] + sign * i) * strides[major] + (here[b] + y) * strides[b] + (here[c] + z) * strides[c]] += 1
+    return used
+
+
+@njit(cache=True, nogil=True)
 def sample_paths(
     indptr,
     indices,
@@ -463,8 +574,9 @@ def sample_paths(
     there = np.empty(dims.shape[0], dtype=np.int64)
     no_step = np.zeros(dims.shape[0], dtype=np.int64)
     foreground, transposed = rasters
-    counting = grid and dims.shape[0] == 2 and transposed.shape[0] > 0
+    counting = grid and transposed.shape[0] > 0 and (dims.shape[0] == 2 or offs.shape[0] == 26)
     four = offs.shape[0] == 4
+    cube = offs.shape[0] == 26
     direct = 0
     for i in range(first, stop):
         s = pairs[i, 0]
@@ -472,7 +584,9 @@ def sample_paths(
         if labels.shape[0] > 0 and labels[s] != labels[t]:
             continue  # no path: no inner node
         if counting and s != t:
-            if four:
+            if cube:
+                cells = _open_pair_26(s, t, dims, foreground, seed, i, sig_t, front_t, hits)
+            elif four:
                 cells = _open_pair_4(s, t, dims[1], foreground, seed, i, sig_t, sig_s, hits)
             else:
                 cells = _open_pair(s, t, dims[1], dims[0], foreground, transposed, seed, i, sig_t, front_t, hits)
