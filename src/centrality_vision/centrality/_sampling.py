@@ -262,7 +262,7 @@ def new_scratch(n, foreground, grid):
 
 
 @njit(cache=True, nogil=True)
-def _open_pair(s, t, width, height, foreground, transposed, seed, sample, cells, starts, hits):
+def _open_pair(s, t, width, height, foreground, transposed, seed, sample, cells, starts, temp, hits):
     """Draw a shortest ``s``-``t`` path of the 8-neighbour 2D grid by counting, when one
     as short as on the unobstructed grid exists; returns the number of cells counted,
     negated when there is none (nothing drawn: the caller searches).
@@ -291,67 +291,70 @@ def _open_pair(s, t, width, height, foreground, transposed, seed, sample, cells,
         if dr < 0:
             sign = -1
     # starts[2 i]: where column i's counts begin in ``cells``; starts[2 i + 1]: its first row
-    cells[0] = 1.0
+    # Column i's counts are stored as ``0, 0, counts of its rows live_lo .. live_hi, 0, 0``
+    # from ``starts[2 i]`` (``starts[2 i + 1] = live_lo``): the zeros let every sum of three
+    # read without bounds, so the loop over a column has no branch.
+    if cells.shape[0] < 5:
+        return -1
+    cells[0:5] = 0.0
+    cells[2] = 1.0
     starts[0] = 0
     starts[1] = 0
     prev_lo = 0
     prev_hi = 0
-    used = 1
+    used = 5
     for i in range(1, steps + 1):
         # the band's segment, within the raster and one row of the last column's paths
         lo = max(-i, minor - (steps - i), -start, prev_lo - 1)
         hi = min(i, minor + (steps - i), extent - 1 - start, prev_hi + 1)
-        if lo > hi:
+        if lo > hi or used + hi - lo + 5 > cells.shape[0]:
             return -used
-        starts[2 * i] = used
-        starts[2 * i + 1] = lo
-        base = starts[2 * i - 2] - prev_lo
-        pixel = (major + sign * i) * stride + start
+        # the column's sums into ``temp`` (no branch per row), then its rows with paths kept
+        first = starts[2 * i - 2] + 2 - prev_lo + lo  # cells[first + k]: last column's row lo + k
+        pixel = (major + sign * i) * stride + start + lo
+        n_rows = hi - lo + 1
+        for k in range(n_rows):
+            temp[k] = (cells[first + k - 1] + cells[first + k] + cells[first + k + 1]) * line[pixel + k]
+        head = 0
+        while head < n_rows and temp[head] == 0.0:
+            head += 1
+        if head == n_rows:
+            return -(used + n_rows)
+        tail = n_rows - 1
+        while temp[tail] == 0.0:
+            tail -= 1
         top = 0.0
-        live_lo = hi + 1
-        live_hi = lo - 1
-        for y in range(lo, hi + 1):
-            total = 0.0
-            if line[pixel + y]:
-                for z in range(max(y - 1, prev_lo), min(y + 1, prev_hi) + 1):
-                    total += cells[base + z]
-            cells[used + y - lo] = total
-            if total > 0.0:
-                live_lo = min(live_lo, y)
-                live_hi = y
-                top = max(top, total)
-        if top == 0.0:
-            return -(used + hi - lo + 1)
-        if top > _RESCALE:
-            for y in range(hi - lo + 1):
-                cells[used + y] /= top
-        # keep only the rows with paths (their counts are where the next column reads)
+        for k in range(head, tail + 1):
+            top = max(top, temp[k])
+        scale = 1.0 / top if top > _RESCALE else 1.0
+        out = used + 2 - head
+        for k in range(head, tail + 1):  # rows live_lo .. live_hi
+            cells[out + k] = temp[k] * scale
+        live_lo = lo + head
+        live_hi = lo + tail
+        end = used + 2 + live_hi - live_lo + 1
+        cells[used] = 0.0
+        cells[used + 1] = 0.0
+        cells[end] = 0.0
+        cells[end + 1] = 0.0
+        starts[2 * i] = used
         starts[2 * i + 1] = live_lo
-        if live_lo > lo:  # (shifting down: each cell read before it is overwritten)
-            for y in range(live_hi - live_lo + 1):
-                cells[used + y] = cells[used + live_lo - lo + y]
-        used += live_hi - live_lo + 1
+        used = end + 2
         prev_lo = live_lo
         prev_hi = live_hi
     # Back from t, each step to one of the (at most) three counts before it, in proportion.
     y = minor
     step = 0
     for i in range(steps - 1, 0, -1):
-        lo = starts[2 * i + 1]
-        hi = lo + starts[2 * i + 2] - starts[2 * i] - 1
-        base = starts[2 * i] - lo
-        a = max(y - 1, lo)
-        b = min(y + 1, hi)
-        total = 0.0
-        for z in range(a, b + 1):
-            total += cells[base + z]
+        column = starts[2 * i] + 2 - starts[2 * i + 1]  # cells[column + row]; zeros around
+        total = cells[column + y - 1] + cells[column + y] + cells[column + y + 1]
         r = uniform(seed, sample, step) * total
         step += 1
-        pick = -1
-        for z in range(a, b + 1):
-            if cells[base + z] > 0.0:
+        pick = y + 1
+        for z in range(y - 1, y + 2):
+            if cells[column + z] > 0.0:
                 pick = z
-                r -= cells[base + z]
+                r -= cells[column + z]
                 if r < 0.0:
                     break
         y = pick
@@ -589,7 +592,7 @@ def sample_paths(
             elif four:
                 cells = _open_pair_4(s, t, dims[1], foreground, seed, i, sig_t, sig_s, hits)
             else:
-                cells = _open_pair(s, t, dims[1], dims[0], foreground, transposed, seed, i, sig_t, front_t, hits)
+                cells = _open_pair(s, t, dims[1], dims[0], foreground, transposed, seed, i, sig_t, front_t, sig_s, hits)
             work += abs(cells)
             if cells > 0:
                 direct += 1
