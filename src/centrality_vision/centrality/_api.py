@@ -325,7 +325,7 @@ def betweenness(
         Approximate instead: with probability at least ``1 - delta`` every node's
         *normalised* value is within ``epsilon`` of the exact one (for ``normalized=False``
         the same bound times :math:`(n-1)(n-2)/2`). Shortest paths between random pairs
-        are drawn uniformly (balanced bidirectional search), as in Riondato and
+        are drawn uniformly (on general graphs by a balanced bidirectional search), as in Riondato and
         Kornaropoulos [2]_; sampling stops at the first checkpoint where an empirical
         Bernstein bound (Maurer and Pontil), union-bounded over nodes and checkpoints,
         holds for every node, and at the latest after the Riondato-Kornaropoulos size
