@@ -587,6 +587,9 @@ def sample_paths(
         if labels.shape[0] > 0 and labels[s] != labels[t]:
             continue  # no path: no inner node
         if counting and s != t:
+            # counts in sig_t, positions in front_t, a column in sig_s: work arrays of the
+            # bidirectional search, which grid pairs do not use (raster-sized: the counted
+            # cells are distinct pixels; the 8- and 26-neighbour counters check the rest)
             if cube:
                 cells = _open_pair_26(s, t, dims, foreground, seed, i, sig_t, front_t, hits)
             elif four:
