@@ -66,10 +66,10 @@ def _grid_guides(grid, reach):
     from scipy import ndimage
 
     structure = ndimage.generate_binary_structure(grid.padded.ndim, reach)
-    labels, count = ndimage.label(grid.padded, structure=structure)
+    labels, _ = ndimage.label(grid.padded, structure=structure)
     if grid.padded.ndim == 2:  # the raster row by row, and column by column
         rasters = (grid.foreground, np.ascontiguousarray(grid.padded.T).ravel())
-    elif len(grid.steps) == 26:  # 3D: the raster itself (the second entry only says "count")
+    elif len(grid.steps) == 26:  # 3D: the slices are read from the raster itself
         rasters = (grid.foreground, grid.foreground)
     else:
         rasters = _NO_RASTERS

@@ -429,22 +429,14 @@ def _open_pair_26(s, t, dims, foreground, seed, sample, cells, starts, hits):
     rectangles (each other axis as in 2D), and a count is the sum of the (at most) nine
     counts beside it in the slice before, or 0 on background. ``starts`` holds five numbers
     per slice: where its counts begin and its rectangle's first rows and extents."""
-    n_dims = 3
-    here = np.empty(n_dims, dtype=np.int64)
-    gap = np.empty(n_dims, dtype=np.int64)
-    strides = np.empty(n_dims, dtype=np.int64)
-    strides[2] = 1
-    strides[1] = dims[2]
-    strides[0] = dims[1] * dims[2]
-    rest = s
-    rest_t = t
-    for k in range(n_dims):
-        here[k] = rest // strides[k]
-        rest -= here[k] * strides[k]
-        gap[k] = rest_t // strides[k] - here[k]
-        rest_t -= (rest_t // strides[k]) * strides[k]
+    here = np.empty(3, dtype=np.int64)
+    gap = np.empty(3, dtype=np.int64)
+    _unravel(s, dims, here)
+    _unravel(t, dims, gap)
+    gap -= here
+    strides = np.array([dims[1] * dims[2], dims[2], 1], dtype=np.int64)
     major = 0
-    for k in range(1, n_dims):
+    for k in range(1, 3):
         if abs(gap[k]) > abs(gap[major]):
             major = k
     b = 1 if major == 0 else 0
@@ -564,9 +556,10 @@ def sample_paths(
     that can lie on a shortest path, bounded by the open grid (``steps``, ``reach``) and by
     the landmark hop counts ``marks`` (no landmarks: zero columns); ``reach = 0`` turns
     the pruning off. Pairs whose ``labels`` (connected components; may be empty) differ are
-    not searched. ``rasters``: the padded raster's foreground row by row and column by
-    column; with them (8-neighbour 2D grids) a pair whose distance is the unobstructed one
-    has its paths counted directly (:func:`_open_pair`), without a search.
+    not searched. ``rasters``: the padded raster's foreground row by row and (2D) column by
+    column, or two empty arrays; with them (2D grids and 26-neighbour 3D grids) a pair whose
+    distance is the unobstructed one has its paths counted directly (:func:`_open_pair`,
+    :func:`_open_pair_4`, :func:`_open_pair_26`), without a search.
     """
     grid = offs.shape[0] > 0
     dist_s, dist_t, sig_s, sig_t, front_s, front_t, nxt, visited, hits = scratch
