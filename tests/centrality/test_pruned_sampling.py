@@ -164,7 +164,12 @@ def test_pairs_in_different_parts_are_skipped_and_retries_are_counted():
     lengths = hops[pairs[:, 0], pairs[:, 1]]
     connected = np.isfinite(lengths) & (pairs[:, 0] != pairs[:, 1])
     assert hits.sum() == np.sum(lengths[connected] - 1)
-    assert work > 0 and retries >= 0
+    assert work > 0 and retries > 0  # the bridge's detours miss the first allowance
+    # Pairs in different parts cost nothing: no search, no count, no hit.
+    across = pairs[~np.isfinite(lengths)]
+    assert len(across) > 20
+    hits, work, retries, counted = _draw(setup, across)
+    assert hits.sum() == 0 and work == 0 and retries == 0 and counted == 0
 
 
 def test_landmarks_are_hop_counts_from_far_apart_pixels():
