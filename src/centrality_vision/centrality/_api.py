@@ -193,17 +193,21 @@ def _length_stats(indptr, indices, data, progress: bool, desc: str):
     return [np.concatenate(p) for p in zip(*parts)]
 
 
-def _distance_stats(prep: _Prepared, weights: bool, progress: bool, desc: str, inward: bool, grid_graph=None):
+def _distance_stats(
+    prep: _Prepared, weights: bool, progress: bool, desc: str, inward: bool, grid_graph=None, need_inverse=True
+):
     """Per node: sum of distances, sum of inverse distances, eccentricity, nodes reached.
 
     ``inward``: distances to the node (closeness, harmonic); else from it (eccentricity).
     The two coincide on undirected graphs. With lengths, ``grid_graph`` (the same graph,
-    given only where :func:`_on_pixel_grid` holds) is searched on the pixel grid.
+    given only where :func:`_on_pixel_grid` holds) is searched on the pixel grid, and the
+    inverse sums are left at zero unless ``need_inverse`` (they cost a visit per pixel
+    there, where the other sums come in closed form).
     """
     if weights and grid_graph is not None:
         from ._grid import grid_length_stats
 
-        return grid_length_stats(grid_graph, progress, desc)  # node order of the graph itself
+        return grid_length_stats(grid_graph, progress, desc, need_inverse)  # node order of the graph itself
     if weights:
         # Per-source searches give distances from the source: reverse the arcs for inward.
         indptr, indices, data = prep.transposed() if inward else (prep.indptr, prep.indices, prep.data)
@@ -551,7 +555,10 @@ def closeness(
         Adjacency; stored values are edge lengths.
     weights : bool, default=False
         Distances in hops (False) or by stored edge length (exact FIFO-queue search on
-        graphs with few distinct lengths, such as pixel graphs).
+        graphs with few distinct lengths, such as pixel graphs; on the 8-neighbour
+        :class:`~centrality_vision.graphs.PixelGraph` of square pixels, the distances of the
+        pixels a node sees along straight-then-diagonal paths come in closed form and
+        only the rest are searched, which takes about the time of hop counts).
     normalized : bool, default=True
         If True, the formula above. In a disconnected graph a node reached from ``r - 1``
         others gets :math:`\frac{r-1}{n-1} \cdot \frac{r-1}{\sum d}` (Wasserman and
@@ -594,7 +601,7 @@ def closeness(
     array([0.66666667, 1.        , 0.66666667])
     """
     normalized = _check_flag(normalized, "normalized")
-    n, total, _, _, reached, info = _inward_sums(graph, weights, epsilon, delta, seed, progress, "closeness")
+    n, total, _, _, reached, info = _inward_sums(graph, weights, epsilon, delta, seed, progress, "closeness", False)
     values = np.zeros(n)
     ok = total > 0
     if normalized:
@@ -606,8 +613,9 @@ def closeness(
     return (out, info) if _check_flag(return_info, "return_info") else out
 
 
-def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc):
-    """(n, sum of distances, sum of inverse distances, largest, reached, info) to each node."""
+def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc, need_inverse=True):
+    """(n, sum of distances, sum of inverse distances, largest, reached, info) to each node
+    (the inverse sums may be zeros unless ``need_inverse``)."""
     weights = _check_flag(weights, "weights")
     on_grid = weights and epsilon is None and _on_pixel_grid(graph)
     prep = _prepare(graph, reorder=not on_grid)  # the grid search walks the mask, not these lists
@@ -621,7 +629,8 @@ def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc):
         total, inverse, largest, reached, info = sample_sources(prep, epsilon, delta, seed, progress, desc)
         stats = [prep.unpermute(v) for v in (total, inverse, largest, reached)]
     else:
-        stats = _distance_stats(prep, weights, progress, desc, inward=True, grid_graph=graph if on_grid else None)
+        grid_graph = graph if on_grid else None
+        stats = _distance_stats(prep, weights, progress, desc, True, grid_graph, need_inverse)
         info = {"searches": prep.n, "samples": 0}
     info["labels"] = prep.labels
     return (prep.n, *stats, info)
@@ -778,7 +787,7 @@ def eccentricity(
             largest = prep.unpermute(largest)
     if largest is None:
         grid_graph = graph if weights and _on_pixel_grid(graph) else None
-        largest = _distance_stats(prep, weights, progress, "eccentricity", inward=False, grid_graph=grid_graph)[2]
+        largest = _distance_stats(prep, weights, progress, "eccentricity", False, grid_graph, need_inverse=False)[2]
         searches += prep.n if weights else int(math.ceil(prep.n / 64))
     if normalized:
         top = largest.max()

@@ -291,15 +291,26 @@ def two_length_stats(foreground, offs, kind, lengths, sources):
     return total, inverse, largest, reached
 
 
-def grid_length_stats(graph, progress: bool, desc: str) -> list[np.ndarray]:
+def grid_length_stats(graph, progress: bool, desc: str, need_inverse: bool = True) -> list[np.ndarray]:
     """Per node (node order of ``graph``), by edge length: sum of distances, of inverse
-    distances, largest distance, nodes reached: one grid-mode FIFO-queue search per node
-    (:func:`two_length_stats` when the steps have at most two lengths, as in 2D)."""
+    distances (zeros unless ``need_inverse``), largest distance, nodes reached.
+
+    8-neighbour 2D masks with axis and diagonal lengths ``L0 <= L1 <= 2 L0`` (square or
+    isotropically spaced pixels) take :func:`._octile.octile_stats`: the pixels a source
+    sees along octile paths in closed form, a search only for the rest. Other grids take
+    one FIFO-queue search per node (:func:`two_length_stats` when the steps have at most
+    two lengths, as with 4 neighbours).
+    """
+    from ._octile import OctileGrid
+
     grid = _Grid(graph)
+    octile = OctileGrid.of(grid)
     empty_lists = np.empty(0, dtype=np.int64)
     empty_heads = np.empty(0, dtype=np.int32)
 
     def task(lo, hi):
+        if octile is not None:
+            return octile.stats(grid, grid.raster[lo:hi], need_inverse)
         if grid.lengths.shape[0] <= 2:
             return two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, grid.raster[lo:hi])
         return _kernels.class_stats(

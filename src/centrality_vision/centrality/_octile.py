@@ -1,0 +1,525 @@
+"""Exact distances by edge length on 8-neighbour pixel graphs, most of them in closed form.
+
+On the open grid, with axis steps of length ``L0`` and diagonal steps of length ``L1``,
+``L0 <= L1 <= 2 L0`` (1 and sqrt 2 for square pixels), the distance from ``s`` to a
+pixel ``q`` that lies ``dx >= dy >= 0`` away (up to the grid's symmetries) is the octile
+distance ``(dx - dy) L0 + dy L1``, and a path of that length is one made of exactly
+``dx - dy`` axis steps and ``dy`` diagonal steps of the octant ``q`` lies in, in any
+order. Call ``q`` *visible* from ``s`` when such a path stays in the mask: its distance
+in the pixel graph is then the octile distance, and no search is needed to find it.
+
+**Visible pixels, 64 rows at a time.** The mask is stored as one bit per pixel, each
+column a run of machine words. In the octant of the axis step east and the diagonal
+step north-east, the pixels of column ``x + 1`` reached by those steps are those of
+column ``x`` and the same shifted one row north, kept where the mask is set: three word
+operations per 64 rows. In the octant of the steps north and north-east, a column's
+reached pixels are the previous column's shifted north, then filled northward along
+runs of the mask: with ``M`` the column's mask, ``S`` the seeds and ``R`` the first
+pixel of each run of ``M``, the sum ``(M & ~S) + R`` carries from each run's start up
+to its first seed and leaves the rest of the run standing, so ``((M & ~S) + R | S) & M``
+is the fill (the carry crossing word boundaries like a long addition). The four
+southern octants are the northern ones of the mask flipped upside down. Each of the
+eight rays between octants is counted by exactly one of them, so every visible pixel
+is counted once. Per column, the sum of the distances of the visible pixels follows
+from the count and the sum of the row numbers (bit populations of six masks), the
+largest from the highest set bit; the sum of inverse distances, when wanted, visits
+each visible pixel.
+
+**The rest by Dijkstra, seeded from the visible region.** A shortest path to a pixel
+that is not visible leaves the visible region for the last time at a visible pixel,
+whose distance is its octile distance, and then stays among the invisible pixels. So
+Dijkstra's search runs on the invisible pixels only, its queue seeded with each
+invisible pixel next to the visible region at its best distance through a visible
+neighbour. Distances are kept as counts ``(a, b)`` of the two steps and read as
+``a L0 + b L1``, rounded once, so equal lengths tie exactly. The seeds are sorted once;
+every later candidate comes from a settled pixel, whose distance never decreases, so
+one first-in-first-out queue per step kind stays sorted, and the next pixel is the
+least of three queue heads. A convex mask has no invisible pixel at all: its searches
+cost a few word operations per 64 pixels.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from llvmlite import ir
+from numba import njit, types
+from numba.extending import intrinsic
+
+__all__ = ["OctileGrid", "octile_stats"]
+
+_U0 = np.uint64(0)
+_U1 = np.uint64(1)
+_U63 = np.uint64(63)
+_ALL = np.uint64(0xFFFFFFFFFFFFFFFF)
+# _POS[k]: the bits whose position has bit k set; sum over k of 2^k popcount(x & _POS[k])
+# is the sum of the positions of the set bits of x
+_POS = np.array(
+    [
+        0xAAAAAAAAAAAAAAAA,
+        0xCCCCCCCCCCCCCCCC,
+        0xF0F0F0F0F0F0F0F0,
+        0xFF00FF00FF00FF00,
+        0xFFFF0000FFFF0000,
+        0xFFFFFFFF00000000,
+    ],
+    dtype=np.uint64,
+)
+_SETTLED = -2.0  # a settled pixel's distance d is stored as _SETTLED - d
+_BLOCKED = -3.0  # a visible pixel next to the invisible region: never relaxed
+
+
+@intrinsic
+def _popcount(typingctx, x):
+    """Set bits of a uint64 (one instruction)."""
+    sig = types.int64(types.uint64)
+
+    def codegen(context, builder, signature, args):
+        return builder.ctpop(args[0])
+
+    return sig, codegen
+
+
+@intrinsic
+def _lowest_bit(typingctx, x):
+    """Position of the lowest set bit of a nonzero uint64."""
+    sig = types.int64(types.uint64)
+
+    def codegen(context, builder, signature, args):
+        return builder.cttz(args[0], ir.Constant(ir.IntType(1), 1))
+
+    return sig, codegen
+
+
+@intrinsic
+def _highest_bit(typingctx, x):
+    """Position of the highest set bit of a nonzero uint64."""
+    sig = types.int64(types.uint64)
+
+    def codegen(context, builder, signature, args):
+        lead = builder.ctlz(args[0], ir.Constant(ir.IntType(1), 1))
+        return builder.sub(ir.Constant(ir.IntType(64), 63), lead)
+
+    return sig, codegen
+
+
+@intrinsic
+def _reverse(typingctx, x):
+    """The 64 bits of a uint64 in reverse order."""
+    sig = types.uint64(types.uint64)
+
+    def codegen(context, builder, signature, args):
+        return builder.bitreverse(args[0])
+
+    return sig, codegen
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _position_sum(x):
+    total = 0
+    for k in range(6):
+        total += _popcount(x & _POS[k]) << k
+    return total
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _fill_north(column, R, lo, hi):
+    """Fill the seeds ``R[lo:hi]`` northward along the runs of ``column`` (in place);
+    returns the new ``hi`` (words from it are zero)."""
+    n_words = column.shape[0]
+    carry = _U0
+    below = _U0  # top bit of the mask's previous word: a run may continue across words
+    new_hi = lo
+    for w in range(lo, n_words):
+        seeds = R[w]
+        m = column[w]
+        starts = m & ~((m << _U1) | below)
+        below = m >> _U63
+        rest = m & ~seeds
+        t = rest + starts
+        c1 = t < rest
+        t2 = t + carry
+        c2 = t2 < t
+        carry = _U1 if (c1 or c2) else _U0
+        filled = (t2 | seeds) & m
+        R[w] = filled
+        if filled != _U0:
+            new_hi = w + 1
+        elif w >= hi:  # past every seed, and no run carried on: the rest stays empty
+            break
+    return new_hi
+
+
+@njit(cache=True, nogil=True)
+def _octant(M, V, R, y0, x0, step, vertical, own_axis, own_diag, len0, len1, need_inverse):
+    """Pixels visible from ``(y0, x0)`` in one northern octant of the bit mask ``M``
+    (columns of words): east (``step = 1``) or west, of the axis and diagonal steps
+    (``vertical = False``) or of the north and diagonal steps. They are or-ed into ``V``.
+
+    Returns ``(sum of axis counts a, sum of diagonal counts b, pixels, largest distance,
+    sum of inverse distances)`` over the octant without the source, the axis ray counted
+    when ``own_axis``, the diagonal ray when ``own_diag``.
+    """
+    n_words = M.shape[1]
+    for w in range(n_words):
+        R[w] = _U0
+    lo = y0 >> 6
+    hi = lo + 1
+    R[lo] = _U1 << np.uint64(y0 & 63)
+    sum_a = 0
+    sum_b = 0
+    count = 0
+    largest = 0.0
+    inverse = 0.0
+    x = x0
+    k = 0
+    if vertical:
+        hi = _fill_north(M[x0], R, lo, hi)
+    while True:
+        if k > 0:
+            # the diagonal step (and, east or west, the axis step) into column x
+            x += step
+            hi = min(hi + 1, n_words)
+            carry = _U0
+            for w in range(lo, hi):
+                r = R[w]
+                if vertical:
+                    R[w] = ((r << _U1) | carry) & M[x, w]
+                else:
+                    R[w] = (r | (r << _U1) | carry) & M[x, w]
+                carry = r >> _U63
+            if vertical:
+                hi = _fill_north(M[x], R, lo, hi)
+            while lo < hi and R[lo] == _U0:
+                lo += 1
+            if lo == hi:
+                break
+            while R[hi - 1] == _U0:
+                hi -= 1
+        for w in range(lo, hi):
+            V[x, w] |= R[w]
+        # the bits not counted here: the source, and a ray another octant owns
+        skip1 = -1
+        skip2 = -1
+        if k == 0:
+            skip1 = y0
+            if not (vertical and own_axis):
+                k += 1
+                continue
+        elif vertical:
+            if not own_diag:
+                skip1 = y0 + k
+        else:
+            if not own_axis:
+                skip1 = y0
+            if not own_diag:
+                skip2 = y0 + k
+        n = 0
+        rows = 0
+        for w in range(lo, hi):
+            r = R[w]
+            if skip1 >> 6 == w:
+                r &= ~(_U1 << np.uint64(skip1 & 63))
+            if skip2 >> 6 == w:
+                r &= ~(_U1 << np.uint64(skip2 & 63))
+            c = _popcount(r)
+            n += c
+            rows += c * (w << 6) + _position_sum(r)
+            if need_inverse:
+                while r != _U0:
+                    dy = (w << 6) + _lowest_bit(r) - y0
+                    if vertical:
+                        inverse += 1.0 / ((dy - k) * len0 + k * len1)
+                    else:
+                        inverse += 1.0 / ((k - dy) * len0 + dy * len1)
+                    r &= r - _U1
+        if n > 0:
+            dys = rows - n * y0
+            if vertical:
+                sum_a += dys - n * k
+                sum_b += n * k
+            else:
+                sum_a += n * k - dys
+                sum_b += dys
+            top = ((hi - 1) << 6) + _highest_bit(R[hi - 1]) - y0
+            far = (top - k) * len0 + k * len1 if vertical else (k - top) * len0 + top * len1
+            if far > largest:
+                largest = far
+            count += n
+        k += 1
+    return sum_a, sum_b, count, largest, inverse
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _or_3x3(A, x, w, n_words):
+    """Word ``w`` of column ``x`` of the 3 x 3 dilation of the bit mask ``A``."""
+    d = A[x - 1, w] | A[x, w] | A[x + 1, w]
+    out = d | (d << _U1) | (d >> _U1)
+    if w > 0:
+        out |= (A[x - 1, w - 1] | A[x, w - 1] | A[x + 1, w - 1]) >> _U63
+    if w + 1 < n_words:
+        out |= (A[x - 1, w + 1] | A[x, w + 1] | A[x + 1, w + 1]) << _U63
+    return out
+
+
+@njit(cache=True, nogil=True)
+def octile_stats(north, south, labels, sizes, foreground, offs, steps, lengths, sources, need_inverse):
+    """Sum of distances, of inverse distances (when ``need_inverse``, else 0), largest
+    distance and pixels reached from each of ``sources`` (raster indices of the padded
+    mask, ``width`` = ``north.shape[0]`` columns), by edge length.
+
+    ``north``: the padded mask as bits, ``north[x, y >> 6]`` bit ``y & 63``; ``south`` the
+    same upside down (row ``y`` at ``64 * words - 1 - y``). ``labels``/``sizes``: connected
+    component of each raster pixel and pixels per component. ``offs``/``steps``: raster
+    offsets and ``(dy, dx)`` of the 8 neighbours; ``lengths``: axis and diagonal step.
+    """
+    width, n_words = north.shape
+    size = foreground.shape[0]
+    len0 = lengths[0]
+    len1 = lengths[1]
+    visible_n = np.zeros((width, n_words), dtype=np.uint64)
+    visible_s = np.zeros((width, n_words), dtype=np.uint64)
+    visible = np.zeros((width, n_words), dtype=np.uint64)
+    hidden = np.zeros((width, n_words), dtype=np.uint64)
+    has_hidden = np.zeros(width, dtype=np.bool_)
+    R = np.zeros(n_words, dtype=np.uint64)
+    n_pixels = 0
+    dist = np.empty(size)
+    for i in range(size):
+        if foreground[i]:
+            dist[i] = np.inf
+            n_pixels += 1
+        else:
+            dist[i] = -1.0
+    counts = np.zeros(size, dtype=np.int64)  # (a << 32) | b
+    queue0 = np.empty(n_pixels, dtype=np.int64)
+    queue1 = np.empty(n_pixels, dtype=np.int64)
+    seeds = np.empty(n_pixels, dtype=np.int64)
+    seed_value = np.empty(n_pixels)
+    order = np.empty(n_pixels, dtype=np.int64)
+    blocked = np.empty(n_pixels, dtype=np.int64)
+    n_offs = offs.shape[0]
+    axis_offs = np.empty(4, dtype=np.int64)
+    diagonal_offs = np.empty(4, dtype=np.int64)
+    n_axis = 0
+    for j in range(n_offs):
+        if steps[j, 0] == 0 or steps[j, 1] == 0:
+            axis_offs[n_axis] = offs[j]
+            n_axis += 1
+        else:
+            diagonal_offs[j - n_axis] = offs[j]
+    one_a = np.int64(1) << 32
+    low = (np.int64(1) << 32) - 1
+    flip = 64 * n_words - 1
+    k = sources.shape[0]
+    total = np.zeros(k)
+    inverse = np.zeros(k)
+    largest = np.zeros(k)
+    reached = np.zeros(k, dtype=np.int64)
+    for i in range(k):
+        s = sources[i]
+        y0 = s // width
+        x0 = s - y0 * width
+        visible_n[:] = _U0
+        visible_s[:] = _U0
+        sum_a = 0
+        sum_b = 0
+        seen = 1
+        far = 0.0
+        h = 0.0
+        for o in range(8):
+            east = o % 4 == 0 or o % 4 == 1
+            vertical = o % 4 == 1 or o % 4 == 2
+            if o < 4:  # north: E-NE owns E, NE-N owns NE, N-NW owns N, NW-W owns NW
+                part = _octant(
+                    north, visible_n, R, y0, x0, 1 if east else -1, vertical,
+                    o % 2 == 0, o % 2 == 1, len0, len1, need_inverse,
+                )  # fmt: skip
+            else:  # south, upside down: W-SW owns W, SW-S owns SW, S-SE owns S, SE-E owns SE
+                part = _octant(
+                    south, visible_s, R, flip - y0, x0, -1 if east else 1, vertical,
+                    o % 2 == 0, o % 2 == 1, len0, len1, need_inverse,
+                )  # fmt: skip
+            sum_a += part[0]
+            sum_b += part[1]
+            seen += part[2]
+            if part[3] > far:
+                far = part[3]
+            h += part[4]
+        t = sum_a * len0 + sum_b * len1
+        count = 0
+        n_blocked = 0
+        if seen < sizes[labels[s]]:
+            # the invisible pixels, the seeds among them and the visible pixels beside them
+            for x in range(width):
+                any_hidden = _U0
+                for w in range(n_words):
+                    v = visible_n[x, w] | _reverse(visible_s[x, n_words - 1 - w])
+                    visible[x, w] = v
+                    hidden[x, w] = north[x, w] & ~v
+                    any_hidden |= hidden[x, w]
+                has_hidden[x] = any_hidden != _U0
+            n_seeds = 0
+            for x in range(1, width - 1):
+                if not (has_hidden[x - 1] or has_hidden[x] or has_hidden[x + 1]):
+                    continue
+                for w in range(n_words):
+                    edge = visible[x, w] & _or_3x3(hidden, x, w, n_words)
+                    while edge != _U0:
+                        y = (w << 6) + _lowest_bit(edge)
+                        q = y * width + x
+                        dist[q] = _BLOCKED
+                        blocked[n_blocked] = q
+                        n_blocked += 1
+                        edge &= edge - _U1
+                    front = hidden[x, w] & _or_3x3(visible, x, w, n_words)
+                    while front != _U0:
+                        y = (w << 6) + _lowest_bit(front)
+                        front &= front - _U1
+                        best = np.inf
+                        best_counts = 0
+                        for j in range(n_offs):
+                            yn = y + steps[j, 0]
+                            xn = x + steps[j, 1]
+                            if (visible[xn, yn >> 6] >> np.uint64(yn & 63)) & _U1:
+                                ady = abs(yn - y0)
+                                adx = abs(xn - x0)
+                                b = min(ady, adx)
+                                a = max(ady, adx) - b
+                                if steps[j, 0] != 0 and steps[j, 1] != 0:
+                                    b += 1
+                                else:
+                                    a += 1
+                                value = a * len0 + b * len1
+                                if value < best:
+                                    best = value
+                                    best_counts = (np.int64(a) << 32) | b
+                        q = y * width + x
+                        dist[q] = best
+                        counts[q] = best_counts
+                        seeds[n_seeds] = q
+                        seed_value[n_seeds] = best
+                        n_seeds += 1
+            by_value = np.argsort(seed_value[:n_seeds])
+            for j in range(n_seeds):
+                queue0[j] = seeds[by_value[j]]
+            for j in range(n_seeds):
+                seeds[j] = queue0[j]
+            # heads cached: a head's value is at least its pixel's distance, and equal to
+            # it unless the pixel was improved since, which pushed it again elsewhere
+            head_s = head0 = tail0 = head1 = tail1 = 0
+            ds = dist[seeds[0]] if n_seeds > 0 else np.inf
+            d0 = d1 = np.inf
+            while True:
+                if ds <= d0 and ds <= d1:
+                    if ds == np.inf:
+                        break
+                    v = seeds[head_s]
+                    head_s += 1
+                    ds = dist[seeds[head_s]] if head_s < n_seeds else np.inf
+                elif d0 <= d1:
+                    v = queue0[head0]
+                    head0 += 1
+                    d0 = dist[queue0[head0]] if head0 < tail0 else np.inf
+                else:
+                    v = queue1[head1]
+                    head1 += 1
+                    d1 = dist[queue1[head1]] if head1 < tail1 else np.inf
+                dv = dist[v]
+                if dv < 0.0:  # settled from another queue
+                    continue
+                dist[v] = _SETTLED - dv
+                order[count] = v
+                count += 1
+                t += dv
+                if need_inverse:
+                    h += 1.0 / dv
+                if dv > far:
+                    far = dv
+                cv = counts[v]
+                a = cv >> 32
+                b = cv & low
+                via = (a + 1) * len0 + b * len1
+                for j in range(4):
+                    w = v + axis_offs[j]
+                    if via < dist[w]:
+                        dist[w] = via
+                        counts[w] = cv + one_a
+                        if head0 == tail0:
+                            d0 = via
+                        queue0[tail0] = w
+                        tail0 += 1
+                via = a * len0 + (b + 1) * len1
+                for j in range(4):
+                    w = v + diagonal_offs[j]
+                    if via < dist[w]:
+                        dist[w] = via
+                        counts[w] = cv + 1
+                        if head1 == tail1:
+                            d1 = via
+                        queue1[tail1] = w
+                        tail1 += 1
+            for q in range(count):
+                dist[order[q]] = np.inf
+            for q in range(n_blocked):
+                dist[blocked[q]] = np.inf
+        total[i] = t
+        inverse[i] = h
+        largest[i] = far
+        reached[i] = seen + count
+    return total, inverse, largest, reached
+
+
+class OctileGrid:
+    """The bit masks and components :func:`octile_stats` takes, from a grid whose steps
+    are the 8 neighbours of a 2D mask with axis and diagonal lengths ``L0 <= L1 <= 2 L0``
+    (else :meth:`of` gives None)."""
+
+    def __init__(self, padded: np.ndarray, steps, lengths):
+        from scipy import ndimage
+
+        height, width = padded.shape
+        n_words = (height + 63) // 64
+        bits = np.zeros((width, n_words * 64), dtype=bool)
+        bits[:, :height] = padded.T
+        # little-endian bit order: row y is bit y & 63 of word y >> 6
+        self.north = np.packbits(bits, axis=1, bitorder="little").view(np.uint64).reshape(width, n_words)
+        self.north = np.ascontiguousarray(self.north)
+        self.south = np.ascontiguousarray(
+            np.packbits(bits[:, ::-1], axis=1, bitorder="little").view(np.uint64).reshape(width, n_words)
+        )
+        labels, n_labels = ndimage.label(padded, structure=np.ones((3, 3), dtype=bool))
+        self.labels = labels.ravel().astype(np.int64)
+        self.sizes = np.bincount(self.labels, minlength=n_labels + 1).astype(np.int64)
+        self.steps = np.asarray(steps, dtype=np.int64)
+        self.lengths = np.asarray(lengths, dtype=np.float64)
+
+    @staticmethod
+    def of(grid):
+        """An :class:`OctileGrid` for ``grid`` (a ``_grid._Grid``), or None when its steps
+        are not the 8 neighbours of a 2D mask with ``L0 <= L1 <= 2 L0``."""
+        steps = np.asarray(grid.steps)
+        if grid.padded.ndim != 2 or steps.shape[0] != 8:
+            return None
+        step_lengths = grid.lengths[grid.kind]
+        diagonal = np.all(steps != 0, axis=1)
+        axis_lengths, diagonal_lengths = step_lengths[~diagonal], step_lengths[diagonal]
+        if np.ptp(axis_lengths) != 0 or np.ptp(diagonal_lengths) != 0:
+            return None  # anisotropic spacing: three lengths
+        len0, len1 = float(axis_lengths[0]), float(diagonal_lengths[0])
+        if not len0 <= len1 <= 2 * len0:
+            return None
+        return OctileGrid(grid.padded, steps, (len0, len1))
+
+    def stats(self, grid, sources, need_inverse: bool):
+        return octile_stats(
+            self.north,
+            self.south,
+            self.labels,
+            self.sizes,
+            grid.foreground,
+            grid.offs,
+            self.steps,
+            self.lengths,
+            sources,
+            need_inverse,
+        )

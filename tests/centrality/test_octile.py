@@ -1,0 +1,141 @@
+"""Distances by length on 8-neighbour pixel graphs: octile-visible pixels in closed form,
+the rest by a search seeded from them, against the plain FIFO-queue search."""
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from hypothesis.extra.numpy import arrays
+from scipy import ndimage
+
+from centrality_vision import centrality as cen
+from centrality_vision.centrality._grid import _Grid, grid_length_stats, two_length_stats
+from centrality_vision.centrality._octile import OctileGrid
+from centrality_vision.graphs import pixel_graph
+
+SQRT2 = np.sqrt(2.0)
+NAMES = ("total", "inverse", "largest", "reached")
+
+
+def _both(mask, spacing=None, sources=None):
+    """(octile kernel, plain search) statistics from ``sources`` (all pixels by default)."""
+    graph, _ = pixel_graph(mask, connectivity=8, spacing=spacing)
+    grid = _Grid(graph)
+    octile = OctileGrid.of(grid)
+    assert octile is not None
+    raster = grid.raster if sources is None else grid.raster[sources]
+    fast = octile.stats(grid, raster, True)
+    plain = two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, raster)
+    return fast, plain
+
+
+def _agree(fast, plain):
+    for name, got, want in zip(NAMES, fast, plain):
+        np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12, err_msg=name)
+
+
+def test_hand_computed_u_turn():
+    # (row, col) from the top-left corner; the middle row only has its right pixel.
+    #   X X X
+    #   . . X
+    #   X X X
+    # Seen along octile paths from (0, 0): (0, 1) at 1, (0, 2) at 2, (1, 2) at 1 + sqrt 2.
+    # Hidden: (2, 2) at 2 + sqrt 2 (not 2 sqrt 2), (2, 1) at 1 + 2 sqrt 2 (not 1 + sqrt 2),
+    # (2, 0) at 2 + 2 sqrt 2 (not 2).
+    mask = np.array([[1, 1, 1], [0, 0, 1], [1, 1, 1]], dtype=bool)
+    graph, _ = pixel_graph(mask, connectivity=8)
+    total, inverse, largest, reached = grid_length_stats(graph, False, "", True)
+    distances = [1, 2, 1 + SQRT2, 2 + SQRT2, 1 + 2 * SQRT2, 2 + 2 * SQRT2]
+    assert total[0] == pytest.approx(sum(distances), rel=1e-15)
+    assert inverse[0] == pytest.approx(sum(1 / d for d in distances), rel=1e-15)
+    assert largest[0] == pytest.approx(2 + 2 * SQRT2, rel=1e-15)
+    assert reached[0] == 7  # itself included
+    # without the inverse sums: zeros there, the rest unchanged
+    total2, inverse2, largest2, reached2 = grid_length_stats(graph, False, "", False)
+    assert not inverse2.any()
+    np.testing.assert_array_equal(total2, total)
+    np.testing.assert_array_equal(largest2, largest)
+    np.testing.assert_array_equal(reached2, reached)
+
+
+def test_convex_mask_needs_no_search_and_matches_octile_distances():
+    # On a filled rectangle every pixel is seen: the sums are those of octile distances.
+    mask = np.ones((7, 11), dtype=bool)
+    fast, plain = _both(mask)
+    _agree(fast, plain)
+    rows, cols = np.nonzero(mask)
+    dy = np.abs(rows[:, None] - rows[None, :])
+    dx = np.abs(cols[:, None] - cols[None, :])
+    octile = np.abs(dx - dy) + np.minimum(dx, dy) * SQRT2
+    np.testing.assert_allclose(fast[0], octile.sum(axis=1), rtol=1e-13)
+    np.testing.assert_allclose(fast[2], octile.max(axis=1), rtol=1e-15)
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(
+    mask=arrays(bool, st.tuples(st.integers(1, 12), st.integers(1, 12))),
+    spacing=st.sampled_from([None, (2.5, 2.5), (0.3, 0.3)]),
+)
+def test_equals_the_plain_search_on_any_small_mask(mask, spacing):
+    if not mask.any():
+        return
+    _agree(*_both(mask, spacing))
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_equals_the_plain_search_on_tall_masks(seed):
+    # Several words per column (64 rows each): runs, fills and shifts cross word edges.
+    rng = np.random.default_rng(seed)
+    height, width = rng.integers(65, 260), rng.integers(20, 90)
+    noise = ndimage.gaussian_filter(rng.random((height, width)), rng.uniform(1.0, 3.0))
+    mask = noise > np.quantile(noise, rng.uniform(0.3, 0.6))
+    sources = rng.choice(np.count_nonzero(mask), 40, replace=False)
+    _agree(*_both(mask, sources=sources))
+
+
+def test_corridor_across_word_edges():
+    # A one-pixel corridor up 150 rows with pockets off it: the fill north carries
+    # through two word edges, and the pockets are hidden behind the corridor's corners.
+    mask = np.zeros((150, 9), dtype=bool)
+    mask[:, 4] = True
+    for row in (10, 63, 64, 65, 127, 128, 140):
+        mask[row, 1:8] = True
+    _agree(*_both(mask))
+
+
+def test_parts_count_only_their_own_pixels():
+    mask = np.zeros((9, 9), dtype=bool)
+    mask[:3, :3] = True  # a square of 9
+    mask[5:, 5] = True  # a bar of 4
+    mask[5, 8] = True  # an isolated pixel
+    fast, plain = _both(mask)
+    _agree(fast, plain)
+    np.testing.assert_array_equal(np.sort(fast[3]), [1] + [4] * 4 + [9] * 9)
+
+
+def test_only_8_neighbour_2d_grids_with_octile_lengths_take_the_kernel():
+    disk = np.ones((5, 5), dtype=bool)
+    cases = [
+        (dict(connectivity=8), True),
+        (dict(connectivity=8, spacing=(0.7, 0.7)), True),
+        (dict(connectivity=8, spacing=(1.0, 1.5)), False),  # three lengths
+        (dict(connectivity=4), False),
+    ]
+    for options, expected in cases:
+        graph, _ = pixel_graph(disk, **options)
+        assert (OctileGrid.of(_Grid(graph)) is not None) == expected, options
+    graph, _ = pixel_graph(np.ones((3, 3, 3), dtype=bool), connectivity=26)
+    assert OctileGrid.of(_Grid(graph)) is None
+
+
+def test_closeness_harmonic_eccentricity_by_length_unchanged_through_the_api():
+    rng = np.random.default_rng(7)
+    mask = ndimage.gaussian_filter(rng.random((40, 50)), 2.0) > 0.5
+    graph, _ = pixel_graph(mask, connectivity=8)
+    from scipy import sparse
+
+    plain = sparse.csr_array(graph)  # adjacency lists: the Dijkstra kernels
+    for name in ("closeness", "harmonic", "eccentricity"):
+        np.testing.assert_allclose(
+            cen.compute(graph, name, weights=True), cen.compute(plain, name, weights=True), rtol=1e-12, err_msg=name
+        )
