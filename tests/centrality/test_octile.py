@@ -139,3 +139,21 @@ def test_closeness_harmonic_eccentricity_by_length_unchanged_through_the_api():
         np.testing.assert_allclose(
             cen.compute(graph, name, weights=True), cen.compute(plain, name, weights=True), rtol=1e-12, err_msg=name
         )
+
+
+def test_inverse_sums_from_tables_and_by_division_agree(monkeypatch):
+    # Masks too wide for the tables of inverse distances divide pixel by pixel instead.
+    rng = np.random.default_rng(3)
+    mask = ndimage.gaussian_filter(rng.random((70, 40)), 2.0) > 0.45
+    graph, _ = pixel_graph(mask, connectivity=8)
+    grid = _Grid(graph)
+    tables = OctileGrid.of(grid)
+    assert tables.inverse_tables()[0].size > 0
+    with_tables = tables.stats(grid, grid.raster, True)
+    monkeypatch.setattr(OctileGrid, "_MAX_TABLE", 0)
+    divided = OctileGrid.of(grid)
+    assert divided.inverse_tables()[0].size == 0
+    by_division = divided.stats(grid, grid.raster, True)
+    _agree(with_tables, by_division)
+    plain = two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, grid.raster)
+    _agree(by_division, plain)

@@ -121,6 +121,15 @@ def _position_sum(x):
     return total
 
 
+@njit(cache=True, nogil=True, fastmath={"reassoc", "nsz"})
+def _row_sum(row, a, b):
+    """``sum(row[a:b])`` in a loop the compiler vectorises."""
+    total = 0.0
+    for i in range(a, b):
+        total += row[i]
+    return total
+
+
 @njit(cache=True, nogil=True, inline="always")
 def _fill_north(column, R, lo, hi):
     """Fill the seeds ``R[lo:hi]`` northward along the runs of ``column`` (in place);
@@ -150,7 +159,7 @@ def _fill_north(column, R, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def _octant(M, V, R, y0, x0, step, vertical, own_axis, own_diag, len0, len1, need_inverse):
+def _octant(M, V, R, y0, x0, step, vertical, own_axis, own_diag, len0, len1, need_inverse, inverse_of):
     """Pixels visible from ``(y0, x0)`` in one northern octant of the bit mask ``M``
     (columns of words): east (``step = 1``) or west, of the axis and diagonal steps
     (``vertical = False``) or of the north and diagonal steps. They are or-ed into ``V``.
@@ -224,7 +233,18 @@ def _octant(M, V, R, y0, x0, step, vertical, own_axis, own_diag, len0, len1, nee
             c = _popcount(r)
             n += c
             rows += c * (w << 6) + _position_sum(r)
-            if need_inverse:
+            if need_inverse and inverse_of.shape[0] > 0:
+                row = inverse_of[k]
+                while r != _U0:  # run by run of set bits, read from the table
+                    start = _lowest_bit(r)
+                    rest = ~(r >> np.uint64(start))
+                    length = 64 - start if rest == _U0 else _lowest_bit(rest)
+                    dy = (w << 6) + start - y0
+                    inverse += _row_sum(row, dy, dy + length)
+                    if start + length == 64:
+                        break
+                    r &= ~(((_U1 << np.uint64(length)) - _U1) << np.uint64(start))
+            elif need_inverse:
                 while r != _U0:
                     dy = (w << 6) + _lowest_bit(r) - y0
                     if vertical:
@@ -262,7 +282,9 @@ def _or_3x3(A, x, w, n_words):
 
 
 @njit(cache=True, nogil=True)
-def octile_stats(north, south, labels, sizes, foreground, offs, steps, lengths, sources, need_inverse):
+def octile_stats(
+    north, south, labels, sizes, foreground, offs, steps, lengths, sources, need_inverse, inverse_across, inverse_up
+):
     """Sum of distances, of inverse distances (when ``need_inverse``, else 0), largest
     distance and pixels reached from each of ``sources`` (raster indices of the padded
     mask, ``width`` = ``north.shape[0]`` columns), by edge length.
@@ -271,6 +293,9 @@ def octile_stats(north, south, labels, sizes, foreground, offs, steps, lengths, 
     same upside down (row ``y`` at ``64 * words - 1 - y``). ``labels``/``sizes``: connected
     component of each raster pixel and pixels per component. ``offs``/``steps``: raster
     offsets and ``(dy, dx)`` of the 8 neighbours; ``lengths``: axis and diagonal step.
+    ``inverse_across[k, d]`` / ``inverse_up[k, d]``: the inverse distance of the pixel ``d``
+    rows up in column ``k`` of an octant of axis and diagonal steps / of vertical and
+    diagonal steps (:meth:`OctileGrid.inverse_tables`); empty to divide pixel by pixel.
     """
     width, n_words = north.shape
     size = foreground.shape[0]
@@ -333,11 +358,13 @@ def octile_stats(north, south, labels, sizes, foreground, offs, steps, lengths, 
                 part = _octant(
                     north, visible_n, R, y0, x0, 1 if east else -1, vertical,
                     o % 2 == 0, o % 2 == 1, len0, len1, need_inverse,
+                    inverse_up if vertical else inverse_across,
                 )  # fmt: skip
             else:  # south, upside down: W-SW owns W, SW-S owns SW, S-SE owns S, SE-E owns SE
                 part = _octant(
                     south, visible_s, R, flip - y0, x0, -1 if east else 1, vertical,
                     o % 2 == 0, o % 2 == 1, len0, len1, need_inverse,
+                    inverse_up if vertical else inverse_across,
                 )  # fmt: skip
             sum_a += part[0]
             sum_b += part[1]
@@ -510,7 +537,34 @@ class OctileGrid:
             return None
         return OctileGrid(grid.padded, steps, (len0, len1))
 
+    # the inverse distances are read from two tables of (width + 1) x (rows + 1) entries
+    # up to this many entries each (32 MiB), else divided pixel by pixel
+    _MAX_TABLE = 1 << 22
+
+    def inverse_tables(self):
+        """``(inverse_across, inverse_up)`` for :func:`octile_stats`: the sums of inverse
+        distances then add up runs of seen pixels from a table row, which the compiler
+        vectorises, instead of dividing per pixel (same values: the same two products and
+        one sum, rounded alike). Empty when they would be too large."""
+        width, n_words = self.north.shape
+        rows = 64 * n_words
+        if (width + 1) * (max(width, rows) + 1) > self._MAX_TABLE:
+            empty = np.empty((0, 0))
+            return empty, empty
+        len0, len1 = self.lengths
+        k = np.arange(width + 1)[:, None]
+        d = np.arange(min(width, rows) + 1)[None, :]
+        with np.errstate(divide="ignore"):
+            across = np.where(d <= k, 1.0 / ((k - d) * len0 + d * len1), 0.0)
+            d = np.arange(rows + 1)[None, :]
+            up = np.where(d >= k, 1.0 / ((d - k) * len0 + k * len1), 0.0)
+        across[0, 0] = up[0, 0] = 0.0  # the source itself, never read
+        return np.ascontiguousarray(across), np.ascontiguousarray(up)
+
     def stats(self, grid, sources, need_inverse: bool):
+        if need_inverse and not hasattr(self, "_tables"):
+            self._tables = self.inverse_tables()
+        across, up = self._tables if need_inverse else (np.empty((0, 0)), np.empty((0, 0)))
         return octile_stats(
             self.north,
             self.south,
@@ -522,4 +576,6 @@ class OctileGrid:
             self.lengths,
             sources,
             need_inverse,
+            across,
+            up,
         )
