@@ -933,9 +933,16 @@ def _scale_exact(args, built, cen, eps):
 
 
 def _plain_fifo(grid, lo, hi):
+    """The FIFO-queue search per source that the octile kernel replaced (two lengths, or
+    the general one for three)."""
+    from centrality_vision.centrality import _kernels
     from centrality_vision.centrality._grid import two_length_stats
 
-    return two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, grid.raster[lo:hi])
+    sources = grid.raster[lo:hi]
+    if grid.lengths.shape[0] <= 2:
+        return two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, sources)
+    no_lists = np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int32)
+    return _kernels.class_stats(*no_lists, grid.kind, grid.lengths, sources, grid.offs, grid.foreground)
 
 
 def _scale_closeness(built, cen, _kernels):
@@ -956,6 +963,8 @@ def _scale_closeness(built, cen, _kernels):
         for shape in ("dog1", "hand", "f16", "fish14"):
             mask = rescale(kimia.image(shape).astype(float), 2, order=0) > 0.5
             graphs["kimia-%s-x2" % shape] = pixel_graph(mask, connectivity=8)[0]
+            if shape == "dog1":  # rectangular pixels: three lengths (1, 1.5, sqrt 3.25)
+                graphs["dog1-x2-1:1.5"] = pixel_graph(mask, connectivity=8, spacing=(1.0, 1.5))[0]
     except Exception as exc:  # the data is optional here
         print("  ! Kimia-99 silhouettes unavailable (%s: %s)" % (type(exc).__name__, exc))
     for name, g in graphs.items():

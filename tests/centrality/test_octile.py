@@ -9,6 +9,7 @@ from hypothesis.extra.numpy import arrays
 from scipy import ndimage
 
 from centrality_vision import centrality as cen
+from centrality_vision.centrality import _kernels
 from centrality_vision.centrality._grid import _Grid, grid_length_stats, two_length_stats
 from centrality_vision.centrality._octile import OctileGrid
 from centrality_vision.graphs import pixel_graph
@@ -25,7 +26,11 @@ def _both(mask, spacing=None, sources=None):
     assert octile is not None
     raster = grid.raster if sources is None else grid.raster[sources]
     fast = octile.stats(grid, raster, True)
-    plain = two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, raster)
+    if grid.lengths.shape[0] <= 2:
+        plain = two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, raster)
+    else:  # three lengths (anisotropic spacing): the general FIFO-queue search
+        no_lists = np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int32)
+        plain = _kernels.class_stats(*no_lists, grid.kind, grid.lengths, raster, grid.offs, grid.foreground)
     return fast, plain
 
 
@@ -74,7 +79,7 @@ def test_convex_mask_needs_no_search_and_matches_octile_distances():
 @settings(max_examples=60, deadline=None, derandomize=True)
 @given(
     mask=arrays(bool, st.tuples(st.integers(1, 12), st.integers(1, 12))),
-    spacing=st.sampled_from([None, (2.5, 2.5), (0.3, 0.3)]),
+    spacing=st.sampled_from([None, (2.5, 2.5), (0.3, 0.3), (1.0, 1.5), (0.7, 0.2), (2.0, 1.0)]),
 )
 def test_equals_the_plain_search_on_any_small_mask(mask, spacing):
     if not mask.any():
@@ -82,7 +87,7 @@ def test_equals_the_plain_search_on_any_small_mask(mask, spacing):
     _agree(*_both(mask, spacing))
 
 
-@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("seed", range(6))
 def test_equals_the_plain_search_on_tall_masks(seed):
     # Several words per column (64 rows each): runs, fills and shifts cross word edges.
     rng = np.random.default_rng(seed)
@@ -90,7 +95,8 @@ def test_equals_the_plain_search_on_tall_masks(seed):
     noise = ndimage.gaussian_filter(rng.random((height, width)), rng.uniform(1.0, 3.0))
     mask = noise > np.quantile(noise, rng.uniform(0.3, 0.6))
     sources = rng.choice(np.count_nonzero(mask), 40, replace=False)
-    _agree(*_both(mask, sources=sources))
+    spacing = None if seed < 3 else (1.0, rng.uniform(0.3, 3.0))
+    _agree(*_both(mask, spacing, sources=sources))
 
 
 def test_corridor_across_word_edges():
@@ -113,12 +119,26 @@ def test_parts_count_only_their_own_pixels():
     np.testing.assert_array_equal(np.sort(fast[3]), [1] + [4] * 4 + [9] * 9)
 
 
-def test_only_8_neighbour_2d_grids_with_octile_lengths_take_the_kernel():
+def test_hand_computed_anisotropic_spacing():
+    # Rows 1 apart, columns 2 apart: a step along a row is 2 long, along a column 1, a
+    # diagonal sqrt 5. From the top-left pixel of a 2 x 3 block with its middle-bottom
+    # pixel missing, (1, 2) is seen at 2 + sqrt 5 (one row step, one diagonal), and only
+    # through (0, 1) or (0, 2); (1, 0) at 1 (a column step).
+    mask = np.array([[1, 1, 1], [1, 0, 1]], dtype=bool)
+    graph, _ = pixel_graph(mask, connectivity=8, spacing=(1.0, 2.0))
+    total, _, largest, reached = grid_length_stats(graph, False, "", False)
+    distances = [2, 4, 1, 2 + np.sqrt(5)]  # (0, 1), (0, 2), (1, 0), (1, 2)
+    assert total[0] == pytest.approx(sum(distances), rel=1e-15)
+    assert largest[0] == pytest.approx(2 + np.sqrt(5), rel=1e-15)
+    assert reached[0] == 5
+
+
+def test_only_8_neighbour_2d_grids_take_the_kernel():
     disk = np.ones((5, 5), dtype=bool)
     cases = [
         (dict(connectivity=8), True),
         (dict(connectivity=8, spacing=(0.7, 0.7)), True),
-        (dict(connectivity=8, spacing=(1.0, 1.5)), False),  # three lengths
+        (dict(connectivity=8, spacing=(1.0, 1.5)), True),  # three lengths
         (dict(connectivity=4), False),
     ]
     for options, expected in cases:

@@ -295,11 +295,11 @@ def grid_length_stats(graph, progress: bool, desc: str, need_inverse: bool = Tru
     """Per node (node order of ``graph``), by edge length: sum of distances, of inverse
     distances (zeros unless ``need_inverse``), largest distance, nodes reached.
 
-    8-neighbour 2D masks with axis and diagonal lengths ``L0 <= L1 <= 2 L0`` (square or
-    isotropically spaced pixels) take :func:`._octile.octile_stats`: the pixels a source
-    sees along octile paths in closed form, a search only for the rest. Other grids take
-    one FIFO-queue search per node (:func:`two_length_stats` when the steps have at most
-    two lengths, as with 4 neighbours).
+    8-neighbour 2D masks (any pixel spacing, under 2^21 pixels) take
+    :func:`._octile.octile_stats`: the pixels a source sees along octile paths in closed
+    form, a search only for the rest. Other grids take one FIFO-queue search per node
+    (:func:`two_length_stats` when the steps have at most two lengths, as with 4
+    neighbours).
     """
     from ._octile import OctileGrid
 

@@ -1,12 +1,15 @@
 """Exact distances by edge length on 8-neighbour pixel graphs, most of them in closed form.
 
-On the open grid, with axis steps of length ``L0`` and diagonal steps of length ``L1``,
-``L0 <= L1 <= 2 L0`` (1 and sqrt 2 for square pixels), the distance from ``s`` to a
-pixel ``q`` that lies ``dx >= dy >= 0`` away (up to the grid's symmetries) is the octile
-distance ``(dx - dy) L0 + dy L1``, and a path of that length is one made of exactly
-``dx - dy`` axis steps and ``dy`` diagonal steps of the octant ``q`` lies in, in any
-order. Call ``q`` *visible* from ``s`` when such a path stays in the mask: its distance
-in the pixel graph is then the octile distance, and no search is needed to find it.
+On the open grid, with steps of length ``L_x`` along a row, ``L_y`` along a column and
+``L_d`` diagonally, ``max(L_x, L_y) <= L_d <= L_x + L_y`` (the Euclidean lengths of any
+pixel spacing; 1, 1 and sqrt 2 for square pixels), the distance from ``s`` to a pixel
+``q`` that lies ``dx >= dy >= 0`` columns and rows away is ``(dx - dy) L_x + dy L_d``
+(the other octants alike): a diagonal step is no longer than the two axis steps it
+replaces, so a shortest path takes all ``dy`` it can, and a path of that length is one
+made of exactly ``dx - dy`` row steps and ``dy`` diagonal steps of the octant ``q`` lies
+in, in any order. Call ``q`` *visible* from ``s`` when such a path stays in the mask: its
+distance in the pixel graph is then this octile distance, and no search is needed to
+find it.
 
 **Visible pixels, 64 rows at a time.** The mask is stored as one bit per pixel, each
 column a run of machine words. In the octant of the axis step east and the diagonal
@@ -30,11 +33,11 @@ that is not visible leaves the visible region for the last time at a visible pix
 whose distance is its octile distance, and then stays among the invisible pixels. So
 Dijkstra's search runs on the invisible pixels only, its queue seeded with each
 invisible pixel next to the visible region at its best distance through a visible
-neighbour. Distances are kept as counts ``(a, b)`` of the two steps and read as
-``a L0 + b L1``, rounded once, so equal lengths tie exactly. The seeds are sorted once;
-every later candidate comes from a settled pixel, whose distance never decreases, so
-one first-in-first-out queue per step kind stays sorted, and the next pixel is the
-least of three queue heads. A convex mask has no invisible pixel at all: its searches
+neighbour. Distances are kept as counts of the three steps and read as
+``(a_x L_x + a_y L_y) + b L_d`` (one axis count for square pixels), so equal lengths tie
+exactly. The seeds are sorted once; every later candidate comes from a settled pixel,
+whose distance never decreases, so one first-in-first-out queue per step kind stays
+sorted, and the next pixel is the least of the queue heads. A convex mask has no invisible pixel at all: its searches
 cost a few word operations per 64 pixels.
 """
 
@@ -159,7 +162,7 @@ def _fill_north(column, R, lo, hi):
 
 
 @njit(cache=True, nogil=True)
-def _octant(M, V, R, y0, x0, step, vertical, own_axis, own_diag, len0, len1, need_inverse, inverse_of):
+def _octant(M, V, R, y0, x0, step, vertical, own_axis, own_diag, len_axis, len_d, need_inverse, inverse_of):
     """Pixels visible from ``(y0, x0)`` in one northern octant of the bit mask ``M``
     (columns of words): east (``step = 1``) or west, of the axis and diagonal steps
     (``vertical = False``) or of the north and diagonal steps. They are or-ed into ``V``.
@@ -248,9 +251,9 @@ def _octant(M, V, R, y0, x0, step, vertical, own_axis, own_diag, len0, len1, nee
                 while r != _U0:
                     dy = (w << 6) + _lowest_bit(r) - y0
                     if vertical:
-                        inverse += 1.0 / ((dy - k) * len0 + k * len1)
+                        inverse += 1.0 / ((dy - k) * len_axis + k * len_d)
                     else:
-                        inverse += 1.0 / ((k - dy) * len0 + dy * len1)
+                        inverse += 1.0 / ((k - dy) * len_axis + dy * len_d)
                     r &= r - _U1
         if n > 0:
             dys = rows - n * y0
@@ -261,7 +264,7 @@ def _octant(M, V, R, y0, x0, step, vertical, own_axis, own_diag, len0, len1, nee
                 sum_a += n * k - dys
                 sum_b += dys
             top = ((hi - 1) << 6) + _highest_bit(R[hi - 1]) - y0
-            far = (top - k) * len0 + k * len1 if vertical else (k - top) * len0 + top * len1
+            far = (top - k) * len_axis + k * len_d if vertical else (k - top) * len_axis + top * len_d
             if far > largest:
                 largest = far
             count += n
@@ -292,15 +295,24 @@ def octile_stats(
     ``north``: the padded mask as bits, ``north[x, y >> 6]`` bit ``y & 63``; ``south`` the
     same upside down (row ``y`` at ``64 * words - 1 - y``). ``labels``/``sizes``: connected
     component of each raster pixel and pixels per component. ``offs``/``steps``: raster
-    offsets and ``(dy, dx)`` of the 8 neighbours; ``lengths``: axis and diagonal step.
-    ``inverse_across[k, d]`` / ``inverse_up[k, d]``: the inverse distance of the pixel ``d``
-    rows up in column ``k`` of an octant of axis and diagonal steps / of vertical and
-    diagonal steps (:meth:`OctileGrid.inverse_tables`); empty to divide pixel by pixel.
+    offsets and ``(dy, dx)`` of the 8 neighbours; ``lengths``: the steps along a row
+    (``dx``), along a column (``dy``) and diagonal, ``L_diag >= max(L_x, L_y)`` and
+    ``L_diag <= L_x + L_y``. ``inverse_across[k, d]`` / ``inverse_up[k, d]``: the inverse
+    distance of the pixel ``d`` rows up in column ``k`` of an octant of row and diagonal
+    steps / of column and diagonal steps (:meth:`OctileGrid.inverse_tables`); empty to
+    divide pixel by pixel.
+
+    A distance is kept as its step counts ``(a_x, a_y, b)``, 21 bits each in one int64
+    (:class:`OctileGrid` sends larger masks elsewhere), and read as
+    ``(a_x L_x + a_y L_y) + b L_diag``; with ``L_x == L_y`` the two axis counts are one
+    (``a_y = 0``), so equal lengths tie exactly.
     """
     width, n_words = north.shape
     size = foreground.shape[0]
-    len0 = lengths[0]
-    len1 = lengths[1]
+    len_x = lengths[0]
+    len_y = lengths[1]
+    len_d = lengths[2]
+    square = len_x == len_y  # one axis count and one axis queue
     visible_n = np.zeros((width, n_words), dtype=np.uint64)
     visible_s = np.zeros((width, n_words), dtype=np.uint64)
     visible = np.zeros((width, n_words), dtype=np.uint64)
@@ -315,25 +327,32 @@ def octile_stats(
             n_pixels += 1
         else:
             dist[i] = -1.0
-    counts = np.zeros(size, dtype=np.int64)  # (a << 32) | b
-    queue0 = np.empty(n_pixels, dtype=np.int64)
-    queue1 = np.empty(n_pixels, dtype=np.int64)
+    counts = np.zeros(size, dtype=np.int64)  # (a_x << 42) | (a_y << 21) | b
+    queue0 = np.empty(n_pixels, dtype=np.int64)  # reached by a step along a row (and a column if square)
+    queue2 = np.empty(n_pixels, dtype=np.int64)  # by a step along a column (not square)
+    queue1 = np.empty(n_pixels, dtype=np.int64)  # by a diagonal step
     seeds = np.empty(n_pixels, dtype=np.int64)
     seed_value = np.empty(n_pixels)
     order = np.empty(n_pixels, dtype=np.int64)
     blocked = np.empty(n_pixels, dtype=np.int64)
     n_offs = offs.shape[0]
-    axis_offs = np.empty(4, dtype=np.int64)
+    row_offs = np.empty(2, dtype=np.int64)
+    column_offs = np.empty(2, dtype=np.int64)
     diagonal_offs = np.empty(4, dtype=np.int64)
-    n_axis = 0
+    n_row = n_column = n_diagonal = 0
     for j in range(n_offs):
-        if steps[j, 0] == 0 or steps[j, 1] == 0:
-            axis_offs[n_axis] = offs[j]
-            n_axis += 1
+        if steps[j, 0] == 0:
+            row_offs[n_row] = offs[j]
+            n_row += 1
+        elif steps[j, 1] == 0:
+            column_offs[n_column] = offs[j]
+            n_column += 1
         else:
-            diagonal_offs[j - n_axis] = offs[j]
-    one_a = np.int64(1) << 32
-    low = (np.int64(1) << 32) - 1
+            diagonal_offs[n_diagonal] = offs[j]
+            n_diagonal += 1
+    one_x = np.int64(1) << 42
+    one_y = one_x if square else np.int64(1) << 21
+    field = (np.int64(1) << 21) - 1
     flip = 64 * n_words - 1
     k = sources.shape[0]
     total = np.zeros(k)
@@ -346,7 +365,8 @@ def octile_stats(
         x0 = s - y0 * width
         visible_n[:] = _U0
         visible_s[:] = _U0
-        sum_a = 0
+        sum_x = 0
+        sum_y = 0
         sum_b = 0
         seen = 1
         far = 0.0
@@ -357,22 +377,25 @@ def octile_stats(
             if o < 4:  # north: E-NE owns E, NE-N owns NE, N-NW owns N, NW-W owns NW
                 part = _octant(
                     north, visible_n, R, y0, x0, 1 if east else -1, vertical,
-                    o % 2 == 0, o % 2 == 1, len0, len1, need_inverse,
+                    o % 2 == 0, o % 2 == 1, len_y if vertical else len_x, len_d, need_inverse,
                     inverse_up if vertical else inverse_across,
                 )  # fmt: skip
             else:  # south, upside down: W-SW owns W, SW-S owns SW, S-SE owns S, SE-E owns SE
                 part = _octant(
                     south, visible_s, R, flip - y0, x0, -1 if east else 1, vertical,
-                    o % 2 == 0, o % 2 == 1, len0, len1, need_inverse,
+                    o % 2 == 0, o % 2 == 1, len_y if vertical else len_x, len_d, need_inverse,
                     inverse_up if vertical else inverse_across,
                 )  # fmt: skip
-            sum_a += part[0]
+            if vertical and not square:
+                sum_y += part[0]
+            else:
+                sum_x += part[0]
             sum_b += part[1]
             seen += part[2]
             if part[3] > far:
                 far = part[3]
             h += part[4]
-        t = sum_a * len0 + sum_b * len1
+        t = (sum_x * len_x + sum_y * len_y) + sum_b * len_d
         count = 0
         n_blocked = 0
         if seen < sizes[labels[s]]:
@@ -408,18 +431,25 @@ def octile_stats(
                             yn = y + steps[j, 0]
                             xn = x + steps[j, 1]
                             if (visible[xn, yn >> 6] >> np.uint64(yn & 63)) & _U1:
+                                # the octile counts of the visible neighbour, plus the step
                                 ady = abs(yn - y0)
                                 adx = abs(xn - x0)
                                 b = min(ady, adx)
-                                a = max(ady, adx) - b
+                                ax = adx - b
+                                ay = ady - b
+                                if square:
+                                    ax += ay
+                                    ay = 0
                                 if steps[j, 0] != 0 and steps[j, 1] != 0:
                                     b += 1
+                                elif steps[j, 0] == 0 or square:
+                                    ax += 1
                                 else:
-                                    a += 1
-                                value = a * len0 + b * len1
+                                    ay += 1
+                                value = (ax * len_x + ay * len_y) + b * len_d
                                 if value < best:
                                     best = value
-                                    best_counts = (np.int64(a) << 32) | b
+                                    best_counts = (np.int64(ax) << 42) | (np.int64(ay) << 21) | b
                         q = y * width + x
                         dist[q] = best
                         counts[q] = best_counts
@@ -433,24 +463,28 @@ def octile_stats(
                 seeds[j] = queue0[j]
             # heads cached: a head's value is at least its pixel's distance, and equal to
             # it unless the pixel was improved since, which pushed it again elsewhere
-            head_s = head0 = tail0 = head1 = tail1 = 0
+            head_s = head0 = tail0 = head1 = tail1 = head2 = tail2 = 0
             ds = dist[seeds[0]] if n_seeds > 0 else np.inf
-            d0 = d1 = np.inf
+            d0 = d1 = d2 = np.inf
             while True:
-                if ds <= d0 and ds <= d1:
+                if ds <= d0 and ds <= d1 and ds <= d2:
                     if ds == np.inf:
                         break
                     v = seeds[head_s]
                     head_s += 1
                     ds = dist[seeds[head_s]] if head_s < n_seeds else np.inf
-                elif d0 <= d1:
+                elif d0 <= d1 and d0 <= d2:
                     v = queue0[head0]
                     head0 += 1
                     d0 = dist[queue0[head0]] if head0 < tail0 else np.inf
-                else:
+                elif d1 <= d2:
                     v = queue1[head1]
                     head1 += 1
                     d1 = dist[queue1[head1]] if head1 < tail1 else np.inf
+                else:
+                    v = queue2[head2]
+                    head2 += 1
+                    d2 = dist[queue2[head2]] if head2 < tail2 else np.inf
                 dv = dist[v]
                 if dv < 0.0:  # settled from another queue
                     continue
@@ -463,19 +497,41 @@ def octile_stats(
                 if dv > far:
                     far = dv
                 cv = counts[v]
-                a = cv >> 32
-                b = cv & low
-                via = (a + 1) * len0 + b * len1
-                for j in range(4):
-                    w = v + axis_offs[j]
+                ax = cv >> 42
+                ay = (cv >> 21) & field
+                b = cv & field
+                via = ((ax + 1) * len_x + ay * len_y) + b * len_d
+                for j in range(2):
+                    w = v + row_offs[j]
                     if via < dist[w]:
                         dist[w] = via
-                        counts[w] = cv + one_a
+                        counts[w] = cv + one_x
                         if head0 == tail0:
                             d0 = via
                         queue0[tail0] = w
                         tail0 += 1
-                via = a * len0 + (b + 1) * len1
+                if square:
+                    for j in range(2):
+                        w = v + column_offs[j]
+                        if via < dist[w]:
+                            dist[w] = via
+                            counts[w] = cv + one_x
+                            if head0 == tail0:
+                                d0 = via
+                            queue0[tail0] = w
+                            tail0 += 1
+                else:
+                    via = (ax * len_x + (ay + 1) * len_y) + b * len_d
+                    for j in range(2):
+                        w = v + column_offs[j]
+                        if via < dist[w]:
+                            dist[w] = via
+                            counts[w] = cv + one_y
+                            if head2 == tail2:
+                                d2 = via
+                            queue2[tail2] = w
+                            tail2 += 1
+                via = (ax * len_x + ay * len_y) + (b + 1) * len_d
                 for j in range(4):
                     w = v + diagonal_offs[j]
                     if via < dist[w]:
@@ -498,8 +554,7 @@ def octile_stats(
 
 class OctileGrid:
     """The bit masks and components :func:`octile_stats` takes, from a grid whose steps
-    are the 8 neighbours of a 2D mask with axis and diagonal lengths ``L0 <= L1 <= 2 L0``
-    (else :meth:`of` gives None)."""
+    are the 8 neighbours of a 2D mask (see :meth:`of`)."""
 
     def __init__(self, padded: np.ndarray, steps, lengths):
         from scipy import ndimage
@@ -523,19 +578,24 @@ class OctileGrid:
     @staticmethod
     def of(grid):
         """An :class:`OctileGrid` for ``grid`` (a ``_grid._Grid``), or None when its steps
-        are not the 8 neighbours of a 2D mask with ``L0 <= L1 <= 2 L0``."""
+        are not the 8 neighbours of a 2D mask, its lengths (along a row, along a column,
+        diagonal) do not satisfy ``max(L_x, L_y) <= L_diag <= L_x + L_y`` (Euclidean
+        lengths of any pixel spacing do), or it has ``2^21`` pixels or more (the step
+        counts' field width)."""
         steps = np.asarray(grid.steps)
-        if grid.padded.ndim != 2 or steps.shape[0] != 8:
+        if grid.padded.ndim != 2 or steps.shape[0] != 8 or grid.raster.size >= 1 << 21:
             return None
         step_lengths = grid.lengths[grid.kind]
-        diagonal = np.all(steps != 0, axis=1)
-        axis_lengths, diagonal_lengths = step_lengths[~diagonal], step_lengths[diagonal]
-        if np.ptp(axis_lengths) != 0 or np.ptp(diagonal_lengths) != 0:
-            return None  # anisotropic spacing: three lengths
-        len0, len1 = float(axis_lengths[0]), float(diagonal_lengths[0])
-        if not len0 <= len1 <= 2 * len0:
+        along_row = steps[:, 0] == 0
+        along_column = steps[:, 1] == 0
+        diagonal = ~(along_row | along_column)
+        groups = [step_lengths[along_row], step_lengths[along_column], step_lengths[diagonal]]
+        if any(np.ptp(g) != 0 for g in groups):
             return None
-        return OctileGrid(grid.padded, steps, (len0, len1))
+        len_x, len_y, len_d = (float(g[0]) for g in groups)
+        if not max(len_x, len_y) <= len_d <= len_x + len_y:
+            return None
+        return OctileGrid(grid.padded, steps, (len_x, len_y, len_d))
 
     # the inverse distances are read from two tables of (width + 1) x (rows + 1) entries
     # up to this many entries each (32 MiB), else divided pixel by pixel
@@ -551,13 +611,13 @@ class OctileGrid:
         if (width + 1) * (max(width, rows) + 1) > self._MAX_TABLE:
             empty = np.empty((0, 0))
             return empty, empty
-        len0, len1 = self.lengths
+        len_x, len_y, len_d = self.lengths
         k = np.arange(width + 1)[:, None]
         d = np.arange(min(width, rows) + 1)[None, :]
         with np.errstate(divide="ignore"):
-            across = np.where(d <= k, 1.0 / ((k - d) * len0 + d * len1), 0.0)
+            across = np.where(d <= k, 1.0 / ((k - d) * len_x + d * len_d), 0.0)
             d = np.arange(rows + 1)[None, :]
-            up = np.where(d >= k, 1.0 / ((d - k) * len0 + k * len1), 0.0)
+            up = np.where(d >= k, 1.0 / ((d - k) * len_y + k * len_d), 0.0)
         across[0, 0] = up[0, 0] = 0.0  # the source itself, never read
         return np.ascontiguousarray(across), np.ascontiguousarray(up)
 
