@@ -288,6 +288,24 @@ def _or_3x3(A, x, w, n_words):
 def octile_stats(
     north, south, labels, sizes, foreground, offs, steps, lengths, sources, need_inverse, inverse_across, inverse_up
 ):
+    """See :func:`_octile_stats`; compiled apart for square pixels (one axis count), where
+    the branches for three lengths fold away."""
+    if lengths[0] == lengths[1]:
+        return _octile_stats(
+            north, south, labels, sizes, foreground, offs, steps, lengths, sources, need_inverse,
+            inverse_across, inverse_up, True,
+        )  # fmt: skip
+    return _octile_stats(
+        north, south, labels, sizes, foreground, offs, steps, lengths, sources, need_inverse,
+        inverse_across, inverse_up, False,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _octile_stats(
+    north, south, labels, sizes, foreground, offs, steps, lengths, sources, need_inverse,
+    inverse_across, inverse_up, square,
+):  # fmt: skip
     """Sum of distances, of inverse distances (when ``need_inverse``, else 0), largest
     distance and pixels reached from each of ``sources`` (raster indices of the padded
     mask, ``width`` = ``north.shape[0]`` columns), by edge length.
@@ -304,15 +322,14 @@ def octile_stats(
 
     A distance is kept as its step counts ``(a_x, a_y, b)``, 21 bits each in one int64
     (:class:`OctileGrid` sends larger masks elsewhere), and read as
-    ``(a_x L_x + a_y L_y) + b L_diag``; with ``L_x == L_y`` the two axis counts are one
-    (``a_y = 0``), so equal lengths tie exactly.
+    ``(a_x L_x + a_y L_y) + b L_diag``; with ``square`` (``L_x == L_y``) the two axis counts
+    are one (``a_y = 0``), so equal lengths tie exactly.
     """
     width, n_words = north.shape
     size = foreground.shape[0]
     len_x = lengths[0]
     len_y = lengths[1]
     len_d = lengths[2]
-    square = len_x == len_y  # one axis count and one axis queue
     visible_n = np.zeros((width, n_words), dtype=np.uint64)
     visible_s = np.zeros((width, n_words), dtype=np.uint64)
     visible = np.zeros((width, n_words), dtype=np.uint64)
