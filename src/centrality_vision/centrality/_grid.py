@@ -199,6 +199,22 @@ def _live_head(queue, head, tail, dist):
 
 
 @njit(cache=True, nogil=True)
+def open_distances(foreground):
+    """The distances a search over the padded raster starts from (inf on the pixels, -1 on
+    the background, below every candidate) and the number of pixels."""
+    size = foreground.shape[0]
+    n_pixels = 0
+    dist = np.empty(size)
+    for i in range(size):
+        if foreground[i]:
+            dist[i] = np.inf
+            n_pixels += 1
+        else:
+            dist[i] = -1.0
+    return dist, n_pixels
+
+
+@njit(cache=True, nogil=True)
 def two_length_stats(foreground, offs, kind, lengths, sources):
     """Sum of distances, of inverse distances, largest distance and nodes reached from each
     of ``sources`` (padded-raster indices) when every step is one of two lengths (one class
@@ -213,14 +229,7 @@ def two_length_stats(foreground, offs, kind, lengths, sources):
     an arc is one comparison, and a queue entry is stale when its distance is negative.
     """
     size = foreground.shape[0]
-    n_pixels = 0
-    dist = np.empty(size)
-    for i in range(size):
-        if foreground[i]:
-            dist[i] = np.inf
-            n_pixels += 1
-        else:
-            dist[i] = -1.0
+    dist, n_pixels = open_distances(foreground)
     counts = np.zeros(size, dtype=np.int64)  # (a << 32) | b
     queue0 = np.empty(n_pixels, dtype=np.int64)
     queue1 = np.empty(n_pixels, dtype=np.int64)

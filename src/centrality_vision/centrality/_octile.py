@@ -48,6 +48,8 @@ from llvmlite import ir
 from numba import njit, types
 from numba.extending import intrinsic
 
+from ._grid import open_distances
+
 __all__ = ["OctileGrid", "octile_stats"]
 
 _U0 = np.uint64(0)
@@ -336,14 +338,7 @@ def _octile_stats(
     hidden = np.zeros((width, n_words), dtype=np.uint64)
     has_hidden = np.zeros(width, dtype=np.bool_)
     R = np.zeros(n_words, dtype=np.uint64)
-    n_pixels = 0
-    dist = np.empty(size)
-    for i in range(size):
-        if foreground[i]:
-            dist[i] = np.inf
-            n_pixels += 1
-        else:
-            dist[i] = -1.0
+    dist, n_pixels = open_distances(foreground)
     counts = np.zeros(size, dtype=np.int64)  # (a_x << 42) | (a_y << 21) | b
     queue0 = np.empty(n_pixels, dtype=np.int64)  # reached by a step along a row (and a column if square)
     queue2 = np.empty(n_pixels, dtype=np.int64)  # by a step along a column (not square)
