@@ -22,7 +22,7 @@ def _both(mask, spacing=None, sources=None):
     """(octile kernel, plain search) statistics from ``sources`` (all pixels by default)."""
     graph, _ = pixel_graph(mask, connectivity=8, spacing=spacing)
     grid = _Grid(graph)
-    octile = OctileGrid.of(grid)
+    octile = OctileGrid.of(grid, need_inverse=True)
     assert octile is not None
     raster = grid.raster if sources is None else grid.raster[sources]
     fast = octile.stats(grid, raster, True)
@@ -167,12 +167,12 @@ def test_inverse_sums_from_tables_and_by_division_agree(monkeypatch):
     mask = ndimage.gaussian_filter(rng.random((70, 40)), 2.0) > 0.45
     graph, _ = pixel_graph(mask, connectivity=8)
     grid = _Grid(graph)
-    tables = OctileGrid.of(grid)
-    assert tables.inverse_tables()[0].size > 0
+    tables = OctileGrid.of(grid, need_inverse=True)
+    assert tables.tables[0].size > 0
     with_tables = tables.stats(grid, grid.raster, True)
     monkeypatch.setattr(OctileGrid, "_MAX_TABLE", 0)
-    divided = OctileGrid.of(grid)
-    assert divided.inverse_tables()[0].size == 0
+    divided = OctileGrid.of(grid, need_inverse=True)
+    assert divided.tables[0].size == 0
     by_division = divided.stats(grid, grid.raster, True)
     _agree(with_tables, by_division)
     plain = two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, grid.raster)

@@ -555,8 +555,8 @@ def closeness(
         Adjacency; stored values are edge lengths.
     weights : bool, default=False
         Distances in hops (False) or by stored edge length (exact FIFO-queue search on
-        graphs with few distinct lengths, such as pixel graphs; on the 8-neighbour
-        :class:`~centrality_vision.graphs.PixelGraph` of square pixels, the distances of the
+        graphs with few distinct lengths, such as pixel graphs; on an 8-neighbour 2D
+        :class:`~centrality_vision.graphs.PixelGraph`, with any pixel spacing, the distances of the
         pixels a node sees along straight-then-diagonal paths come in closed form and
         only the rest are searched, which takes about the time of hop counts).
     normalized : bool, default=True

@@ -313,7 +313,7 @@ def grid_length_stats(graph, progress: bool, desc: str, need_inverse: bool = Tru
     from ._octile import OctileGrid
 
     grid = _Grid(graph)
-    octile = OctileGrid.of(grid)
+    octile = OctileGrid.of(grid, need_inverse)  # made once, before the threads share it
     empty_lists = np.empty(0, dtype=np.int64)
     empty_heads = np.empty(0, dtype=np.int32)
 

@@ -586,10 +586,12 @@ class OctileGrid:
         self.sizes = np.bincount(self.labels, minlength=n_labels + 1).astype(np.int64)
         self.steps = np.asarray(steps, dtype=np.int64)
         self.lengths = np.asarray(lengths, dtype=np.float64)
+        self.tables = None  # (inverse_across, inverse_up), made by of(need_inverse=True)
 
     @staticmethod
-    def of(grid):
-        """An :class:`OctileGrid` for ``grid`` (a ``_grid._Grid``), or None when its steps
+    def of(grid, need_inverse: bool = False):
+        """An :class:`OctileGrid` for ``grid`` (a ``_grid._Grid``), with the tables of
+        inverse distances when ``need_inverse`` (:meth:`inverse_tables`), or None when its steps
         are not the 8 neighbours of a 2D mask, its lengths (along a row, along a column,
         diagonal) do not satisfy ``max(L_x, L_y) <= L_diag <= L_x + L_y`` (Euclidean
         lengths of any pixel spacing do), or it has ``2^21`` pixels or more (the step
@@ -607,7 +609,10 @@ class OctileGrid:
         len_x, len_y, len_d = (float(g[0]) for g in groups)
         if not max(len_x, len_y) <= len_d <= len_x + len_y:
             return None
-        return OctileGrid(grid.padded, steps, (len_x, len_y, len_d))
+        octile = OctileGrid(grid.padded, steps, (len_x, len_y, len_d))
+        if need_inverse:
+            octile.tables = octile.inverse_tables()
+        return octile
 
     # the inverse distances are read from two tables of (width + 1) x (rows + 1) entries
     # up to this many entries each (32 MiB), else divided pixel by pixel
@@ -634,9 +639,10 @@ class OctileGrid:
         return np.ascontiguousarray(across), np.ascontiguousarray(up)
 
     def stats(self, grid, sources, need_inverse: bool):
-        if need_inverse and not hasattr(self, "_tables"):
-            self._tables = self.inverse_tables()
-        across, up = self._tables if need_inverse else (np.empty((0, 0)), np.empty((0, 0)))
+        """:func:`octile_stats` from ``sources`` (inverse sums divided pixel by pixel unless
+        the tables were made: :meth:`of` with ``need_inverse``)."""
+        empty = np.empty((0, 0))
+        across, up = self.tables if need_inverse and self.tables is not None else (empty, empty)
         return octile_stats(
             self.north,
             self.south,
