@@ -25,8 +25,9 @@ southern octants are the northern ones of the mask flipped upside down. Each of 
 eight rays between octants is counted by exactly one of them, so every visible pixel
 is counted once. Per column, the sum of the distances of the visible pixels follows
 from the count and the sum of the row numbers (bit populations of six masks), the
-largest from the highest set bit; the sum of inverse distances, when wanted, visits
-each visible pixel.
+largest from the highest set bit; the sum of inverse distances, when wanted, is one
+difference of two prefix sums per run of set bits (a table per octant kind, summed once
+per mask in extended precision).
 
 **The rest by Dijkstra, seeded from the visible region.** A shortest path to a pixel
 that is not visible leaves the visible region for the last time at a visible pixel,
@@ -123,15 +124,6 @@ def _position_sum(x):
     total = 0
     for k in range(6):
         total += _popcount(x & _POS[k]) << k
-    return total
-
-
-@njit(cache=True, nogil=True, fastmath={"reassoc", "nsz"})
-def _row_sum(row, a, b):
-    """``sum(row[a:b])`` in a loop the compiler vectorises."""
-    total = 0.0
-    for i in range(a, b):
-        total += row[i]
     return total
 
 
@@ -240,12 +232,12 @@ def _octant(M, V, R, y0, x0, step, vertical, own_axis, own_diag, len_axis, len_d
             rows += c * (w << 6) + _position_sum(r)
             if need_inverse and inverse_of.shape[0] > 0:
                 row = inverse_of[k]
-                while r != _U0:  # run by run of set bits, read from the table
+                while r != _U0:  # run by run of set bits, from the table's prefix sums
                     start = _lowest_bit(r)
                     rest = ~(r >> np.uint64(start))
                     length = 64 - start if rest == _U0 else _lowest_bit(rest)
                     dy = (w << 6) + start - y0
-                    inverse += _row_sum(row, dy, dy + length)
+                    inverse += row[dy + length] - row[dy]
                     if start + length == 64:
                         break
                     r &= ~(((_U1 << np.uint64(length)) - _U1) << np.uint64(start))
@@ -317,10 +309,10 @@ def _octile_stats(
     component of each raster pixel and pixels per component. ``offs``/``steps``: raster
     offsets and ``(dy, dx)`` of the 8 neighbours; ``lengths``: the steps along a row
     (``dx``), along a column (``dy``) and diagonal, ``L_diag >= max(L_x, L_y)`` and
-    ``L_diag <= L_x + L_y``. ``inverse_across[k, d]`` / ``inverse_up[k, d]``: the inverse
-    distance of the pixel ``d`` rows up in column ``k`` of an octant of row and diagonal
-    steps / of column and diagonal steps (:meth:`OctileGrid.inverse_tables`); empty to
-    divide pixel by pixel.
+    ``L_diag <= L_x + L_y``. ``inverse_across[k, d]`` / ``inverse_up[k, d]``: the sum of the
+    inverse distances of the pixels less than ``d`` rows up in column ``k`` of an octant of
+    row and diagonal steps / of column and diagonal steps
+    (:meth:`OctileGrid.inverse_tables`); empty to divide pixel by pixel.
 
     A distance is kept as its step counts ``(a_x, a_y, b)``, 21 bits each in one int64
     (:class:`OctileGrid` sends larger masks elsewhere), and read as
@@ -619,10 +611,10 @@ class OctileGrid:
     _MAX_TABLE = 1 << 22
 
     def inverse_tables(self):
-        """``(inverse_across, inverse_up)`` for :func:`octile_stats`: the sums of inverse
-        distances then add up runs of seen pixels from a table row, which the compiler
-        vectorises, instead of dividing per pixel (same values: the same two products and
-        one sum, rounded alike). Empty when they would be too large."""
+        """``(inverse_across, inverse_up)`` for :func:`octile_stats`: per octant column
+        ``k``, the prefix sums over ``d`` of the inverse distances of the pixels ``d`` rows
+        up (summed in extended precision, then rounded), so a run of seen pixels costs one
+        difference instead of a division per pixel. Empty when they would be too large."""
         width, n_words = self.north.shape
         rows = 64 * n_words
         if (width + 1) * (max(width, rows) + 1) > self._MAX_TABLE:
@@ -635,8 +627,14 @@ class OctileGrid:
             across = np.where(d <= k, 1.0 / ((k - d) * len_x + d * len_d), 0.0)
             d = np.arange(rows + 1)[None, :]
             up = np.where(d >= k, 1.0 / ((d - k) * len_y + k * len_d), 0.0)
-        across[0, 0] = up[0, 0] = 0.0  # the source itself, never read
-        return np.ascontiguousarray(across), np.ascontiguousarray(up)
+        across[0, 0] = up[0, 0] = 0.0  # the source itself, never counted
+
+        def prefix(table):
+            out = np.zeros((table.shape[0], table.shape[1] + 1))
+            out[:, 1:] = np.cumsum(table.astype(np.longdouble), axis=1)
+            return out
+
+        return prefix(across), prefix(up)
 
     def stats(self, grid, sources, need_inverse: bool):
         """:func:`octile_stats` from ``sources`` (inverse sums divided pixel by pixel unless
