@@ -1023,8 +1023,8 @@ def _scale_closeness(built, cen, _kernels):
     )
     print(
         "  hops: bit-parallel search, 64 sources at a time. length: cen.closeness(weights=True), octile-visible\n"
-        "  pixels in closed form and a search only for the hidden ones; harmonic: the same plus a visit per\n"
-        "  seen pixel for the inverse sums; plain FIFO: one exact FIFO-queue search per source (the kernel the\n"
+        "  pixels in closed form and a search only for the hidden ones; harmonic: the same plus one difference\n"
+        "  of prefix sums per run of seen pixels; plain FIFO: one exact FIFO-queue search per source (the kernel the\n"
         "  octile one replaced), same threads; heap: the Dijkstra kernel of general graphs, one thread, all\n"
         "  sources, for the |diff| check. Medians of 3 interleaved runs."
     )
