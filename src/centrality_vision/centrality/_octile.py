@@ -38,8 +38,8 @@ neighbour. Distances are kept as counts of the three steps and read as
 ``(a_x L_x + a_y L_y) + b L_d`` (one axis count for square pixels), so equal lengths tie
 exactly. The seeds are sorted once; every later candidate comes from a settled pixel,
 whose distance never decreases, so one first-in-first-out queue per step kind stays
-sorted, and the next pixel is the least of the queue heads. A convex mask has no invisible pixel at all: its searches
-cost a few word operations per 64 pixels.
+sorted, and the next pixel is the least of the queue heads. A convex mask has no
+invisible pixel at all: its searches cost a few word operations per 64 pixels.
 """
 
 from __future__ import annotations
@@ -56,7 +56,6 @@ __all__ = ["OctileGrid", "octile_stats"]
 _U0 = np.uint64(0)
 _U1 = np.uint64(1)
 _U63 = np.uint64(63)
-_ALL = np.uint64(0xFFFFFFFFFFFFFFFF)
 # _POS[k]: the bits whose position has bit k set; sum over k of 2^k popcount(x & _POS[k])
 # is the sum of the positions of the set bits of x
 _POS = np.array(
@@ -121,6 +120,7 @@ def _reverse(typingctx, x):
 
 @njit(cache=True, nogil=True, inline="always")
 def _position_sum(x):
+    """Sum of the positions of the set bits of a uint64 (see ``_POS``)."""
     total = 0
     for k in range(6):
         total += _popcount(x & _POS[k]) << k
