@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
-from scipy import ndimage
+from scipy import ndimage, sparse
 
 from centrality_vision import centrality as cen
 from centrality_vision.centrality import _kernels
@@ -152,8 +152,6 @@ def test_closeness_harmonic_eccentricity_by_length_unchanged_through_the_api():
     rng = np.random.default_rng(7)
     mask = ndimage.gaussian_filter(rng.random((40, 50)), 2.0) > 0.5
     graph, _ = pixel_graph(mask, connectivity=8)
-    from scipy import sparse
-
     plain = sparse.csr_array(graph)  # adjacency lists: the Dijkstra kernels
     for name in ("closeness", "harmonic", "eccentricity"):
         np.testing.assert_allclose(
@@ -162,7 +160,8 @@ def test_closeness_harmonic_eccentricity_by_length_unchanged_through_the_api():
 
 
 def test_inverse_sums_from_tables_and_by_division_agree(monkeypatch):
-    # Masks too wide for the tables of inverse distances divide pixel by pixel instead.
+    # Masks too wide for the tables of inverse distances divide pixel by pixel instead; the
+    # prefix sums of the tables and the division agree to rounding.
     rng = np.random.default_rng(3)
     mask = ndimage.gaussian_filter(rng.random((70, 40)), 2.0) > 0.45
     graph, _ = pixel_graph(mask, connectivity=8)
