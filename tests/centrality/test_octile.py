@@ -176,3 +176,22 @@ def test_inverse_sums_from_tables_and_by_division_agree(monkeypatch):
     _agree(with_tables, by_division)
     plain = two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, grid.raster)
     _agree(by_division, plain)
+
+
+@pytest.mark.parametrize("spacing", [None, (1.0, 1.5)])
+def test_results_do_not_depend_on_thread_count(spacing):
+    # Every source is one independent computation: the chunks change, the values do not.
+    import centrality_vision as cv
+
+    rng = np.random.default_rng(5)
+    mask = ndimage.gaussian_filter(rng.random((60, 45)), 2.0) > 0.5
+    graph, _ = pixel_graph(mask, connectivity=8, spacing=spacing)
+    try:
+        cv.set_num_threads(1)
+        single = [cen.compute(graph, name, weights=True) for name in ("closeness", "harmonic")]
+        cv.set_num_threads(3)
+        multi = [cen.compute(graph, name, weights=True) for name in ("closeness", "harmonic")]
+    finally:
+        cv.set_num_threads(None)
+    for a, b in zip(single, multi):
+        np.testing.assert_array_equal(a, b)
