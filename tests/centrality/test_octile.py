@@ -195,3 +195,26 @@ def test_results_do_not_depend_on_thread_count(spacing):
         cv.set_num_threads(None)
     for a, b in zip(single, multi):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+def test_eccentricity_auto_by_length_gives_up_bounds_for_the_octile_search(seed):
+    # 'auto' runs Takes-Kosters bounds for up to n / 16 searches, then the octile search
+    # from every pixel: the largest part of a smoothed noise mask needs 120 bound searches
+    # (seed 1, 1,505 pixels: falls back) or 57 (seed 2, 1,624 pixels: the bounds finish).
+    rng = np.random.default_rng(seed)
+    mask = ndimage.gaussian_filter(rng.random((60, 60)), 2.5) > 0.5
+    labels, _ = ndimage.label(mask, np.ones((3, 3)))
+    mask = labels == np.argmax(np.bincount(labels.ravel())[1:]) + 1
+    graph, _ = pixel_graph(mask)
+    n = graph.shape[0]
+    bounds, bound_info = cen.eccentricity(graph, weights=True, method="bounds", return_info=True)
+    auto, info = cen.eccentricity(graph, weights=True, return_info=True)
+    every = cen.eccentricity(graph, weights=True, method="all")
+    np.testing.assert_allclose(auto, bounds, rtol=1e-12)
+    np.testing.assert_allclose(every, bounds, rtol=1e-12)
+    if bound_info["searches"] > n // 16:
+        assert info["searches"] == n // 16 + n
+    else:
+        assert info["searches"] == bound_info["searches"]
+    assert (seed == 1) == (bound_info["searches"] > n // 16)  # both branches are covered
