@@ -933,16 +933,10 @@ def _scale_exact(args, built, cen, eps):
 
 
 def _plain_fifo(grid, lo, hi):
-    """The FIFO-queue search per source that the octile kernel replaced (two lengths, or
-    the general one for three)."""
-    from centrality_vision.centrality import _kernels
-    from centrality_vision.centrality._grid import two_length_stats
+    """The FIFO-queue search per source that the octile kernel replaced."""
+    from centrality_vision.centrality._grid import fifo_stats
 
-    sources = grid.raster[lo:hi]
-    if grid.lengths.shape[0] <= 2:
-        return two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, sources)
-    no_lists = np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int32)
-    return _kernels.class_stats(*no_lists, grid.kind, grid.lengths, sources, grid.offs, grid.foreground)
+    return fifo_stats(grid, grid.raster[lo:hi])
 
 
 def _scale_closeness(built, cen, _kernels):

@@ -9,8 +9,7 @@ from hypothesis.extra.numpy import arrays
 from scipy import ndimage, sparse
 
 from centrality_vision import centrality as cen
-from centrality_vision.centrality import _kernels
-from centrality_vision.centrality._grid import _Grid, grid_length_stats, two_length_stats
+from centrality_vision.centrality._grid import _Grid, fifo_stats, grid_length_stats, two_length_stats
 from centrality_vision.centrality._octile import OctileGrid
 from centrality_vision.graphs import pixel_graph
 
@@ -25,13 +24,8 @@ def _both(mask, spacing=None, sources=None):
     octile = OctileGrid.of(grid, need_inverse=True)
     assert octile is not None
     raster = grid.raster if sources is None else grid.raster[sources]
-    fast = octile.stats(grid, raster, True)
-    if grid.lengths.shape[0] <= 2:
-        plain = two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, raster)
-    else:  # three lengths (anisotropic spacing): the general FIFO-queue search
-        no_lists = np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int32)
-        plain = _kernels.class_stats(*no_lists, grid.kind, grid.lengths, raster, grid.offs, grid.foreground)
-    return fast, plain
+    # the plain search: two lengths, or three (anisotropic spacing) by the general one
+    return octile.stats(grid, raster, True), fifo_stats(grid, raster)
 
 
 def _agree(fast, plain):

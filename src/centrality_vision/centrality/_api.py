@@ -121,7 +121,9 @@ def _on_pixel_grid(graph) -> bool:
 def _octile_grid(graph) -> bool:
     """Whether distances by length on ``graph`` take the octile kernel of ``_octile`` (an
     8-neighbour 2D pixel graph still matching its mask, under 2^21 pixels)."""
-    return _on_pixel_grid(graph) and graph.mask.ndim == 2 and int(graph.connectivity) == 8 and graph.shape[0] < 1 << 21
+    from ._octile import takes
+
+    return _on_pixel_grid(graph) and takes(graph.mask.ndim, int(graph.connectivity), graph.shape[0])
 
 
 def _prepare(graph, *, reorder: bool = True, allow_directed: bool = True) -> _Prepared:

@@ -300,6 +300,16 @@ def two_length_stats(foreground, offs, kind, lengths, sources):
     return total, inverse, largest, reached
 
 
+def fifo_stats(grid: _Grid, sources: np.ndarray):
+    """:func:`grid_length_stats`' four sums from ``sources`` (padded-raster indices) by one
+    FIFO-queue search each: :func:`two_length_stats` for at most two step lengths, else the
+    general search of :mod:`._kernels` in its grid mode."""
+    if grid.lengths.shape[0] <= 2:
+        return two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, sources)
+    no_lists = np.empty(0, dtype=np.int64), np.empty(0, dtype=np.int32)
+    return _kernels.class_stats(*no_lists, grid.kind, grid.lengths, sources, grid.offs, grid.foreground)
+
+
 def grid_length_stats(graph, progress: bool, desc: str, need_inverse: bool = True) -> list[np.ndarray]:
     """Per node (node order of ``graph``), by edge length: sum of distances, of inverse
     distances (zeros unless ``need_inverse``), largest distance, nodes reached.
@@ -314,17 +324,11 @@ def grid_length_stats(graph, progress: bool, desc: str, need_inverse: bool = Tru
 
     grid = _Grid(graph)
     octile = OctileGrid.of(grid, need_inverse)  # made once, before the threads share it
-    empty_lists = np.empty(0, dtype=np.int64)
-    empty_heads = np.empty(0, dtype=np.int32)
 
     def task(lo, hi):
         if octile is not None:
             return octile.stats(grid, grid.raster[lo:hi], need_inverse)
-        if grid.lengths.shape[0] <= 2:
-            return two_length_stats(grid.foreground, grid.offs, grid.kind, grid.lengths, grid.raster[lo:hi])
-        return _kernels.class_stats(
-            empty_lists, empty_heads, grid.kind, grid.lengths, grid.raster[lo:hi], grid.offs, grid.foreground
-        )
+        return fifo_stats(grid, grid.raster[lo:hi])
 
     parts = [r for _, _, r in run_chunks(task, grid.raster.size, progress=progress, desc=desc)]
     return [np.concatenate(p) for p in zip(*parts)]

@@ -51,7 +51,7 @@ from numba.extending import intrinsic
 
 from ._grid import open_distances
 
-__all__ = ["OctileGrid", "octile_stats"]
+__all__ = ["OctileGrid", "octile_stats", "takes"]
 
 _U0 = np.uint64(0)
 _U1 = np.uint64(1)
@@ -556,6 +556,13 @@ def _octile_stats(
     return total, inverse, largest, reached
 
 
+def takes(n_dims: int, n_neighbours: int, n_pixels: int) -> bool:
+    """Whether a pixel grid of this kind takes the octile kernel: 8 neighbours in 2D, under
+    2^21 pixels (the width of each step count's field). Any pixel spacing's Euclidean
+    lengths meet the kernel's condition on them (see :meth:`OctileGrid.of`)."""
+    return n_dims == 2 and n_neighbours == 8 and n_pixels < 1 << 21
+
+
 class OctileGrid:
     """The bit masks and components :func:`octile_stats` takes, from a grid whose steps
     are the 8 neighbours of a 2D mask (see :meth:`of`)."""
@@ -589,7 +596,7 @@ class OctileGrid:
         lengths of any pixel spacing do), or it has ``2^21`` pixels or more (the step
         counts' field width)."""
         steps = np.asarray(grid.steps)
-        if grid.padded.ndim != 2 or steps.shape[0] != 8 or grid.raster.size >= 1 << 21:
+        if not takes(grid.padded.ndim, steps.shape[0], grid.raster.size):
             return None
         step_lengths = grid.lengths[grid.kind]
         along_row = steps[:, 0] == 0
