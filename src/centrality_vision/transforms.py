@@ -82,6 +82,24 @@ class SimilarityTransform:
         object.__setattr__(self, "translation", translation)
         object.__setattr__(self, "scale", float(self.scale))
 
+    @classmethod
+    def _trusted(cls, rotation: np.ndarray, translation: np.ndarray, scale: float = 1.0):
+        """The transform without the checks of the constructor, for a rotation that is proper
+        by construction (an M-step's SVD): the checks cost more than a small M-step itself."""
+        out = object.__new__(cls)
+        rotation = np.array(rotation, dtype=float)
+        translation = np.array(translation, dtype=float)
+        rotation.setflags(write=False)
+        translation.setflags(write=False)
+        object.__setattr__(out, "rotation", rotation)
+        object.__setattr__(out, "translation", translation)
+        object.__setattr__(out, "scale", float(scale))
+        return out
+
+    def _apply(self, points: np.ndarray) -> np.ndarray:
+        """``__call__`` on points already checked (a float64 array of shape (n, D))."""
+        return self.scale * points @ self.rotation.T + self.translation
+
     @property
     def matrix(self) -> np.ndarray:
         """Homogeneous matrix of shape (D+1, D+1)."""
@@ -92,8 +110,7 @@ class SimilarityTransform:
         return out
 
     def __call__(self, points) -> np.ndarray:
-        points = as_points(points, name="points", n_dims=(self.rotation.shape[0],))
-        return self.scale * points @ self.rotation.T + self.translation
+        return self._apply(as_points(points, name="points", n_dims=(self.rotation.shape[0],)))
 
     def inverse(self) -> SimilarityTransform:
         rotation = self.rotation.T

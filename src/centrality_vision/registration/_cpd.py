@@ -965,7 +965,7 @@ class RigidCPD(_CPD):
 
     def _m_step(self, post, moving, fixed, state, sigma2):
         transform, sigma2 = rigid_m_step(post, moving, fixed, scale=bool(self.scale))
-        return transform, transform(moving), sigma2
+        return transform, transform._apply(moving), sigma2
 
     def _vector(self, state):
         scale = [state.scale] if self.scale else []
@@ -976,10 +976,10 @@ class RigidCPD(_CPD):
         rotation = proper_rotation(vector[: dim * dim].reshape(dim, dim))[0]
         translation = vector[dim * dim : dim * dim + dim]
         if self.scale:
-            new = SimilarityTransform(rotation, translation, max(float(vector[-1]), 1e-300))
+            new = SimilarityTransform._trusted(rotation, translation, max(float(vector[-1]), 1e-300))
         else:
-            new = RigidTransform(rotation, translation)
-        return new, new(self._work)
+            new = RigidTransform._trusted(rotation, translation)
+        return new, new._apply(self._work)
 
     def _make_transform(self, state, moving, frame):
         return frame.linear_out(state)

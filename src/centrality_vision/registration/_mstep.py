@@ -13,6 +13,7 @@ References
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from scipy import linalg
 
 from ..transforms import AffineTransform, RigidTransform, SimilarityTransform, proper_rotation
@@ -21,15 +22,59 @@ from ._estep import Posteriors
 __all__ = ["rigid_m_step", "affine_m_step", "nonrigid_m_step", "kernel_times", "gaussian_kernel", "LowRankKernel"]
 
 
+@njit(nogil=True, cache=True, fastmath={"contract", "reassoc"})
+def _dot(a, b, shift_b):
+    """``sum_i a[i] (b[i] - shift_b)`` over 1-D arrays (one vectorised loop)."""
+    total = 0.0
+    for i in range(a.shape[0]):
+        total += a[i] * (b[i] - shift_b)
+    return total
+
+
+@njit(nogil=True, cache=True, fastmath={"contract", "reassoc"})
+def _weighted_dot(weights, a, shift_a, b, shift_b):
+    """``sum_i weights[i] (a[i] - shift_a) (b[i] - shift_b)`` over 1-D arrays (one vectorised loop)."""
+    total = 0.0
+    for i in range(a.shape[0]):
+        total += weights[i] * (a[i] - shift_a) * (b[i] - shift_b)
+    return total
+
+
+@njit(nogil=True, cache=True)
+def _centred_moments(p1, pt1, px, moving, fixed, n_p):
+    """``mu_x``, ``mu_y``, ``A = (P X)^T (Y - mu_y)``, ``tr(Xh^T d(P^T 1) Xh)`` and
+    ``Yh^T d(P1) Yh`` (D x D): the coordinates transposed once, then each entry one
+    vectorised pass.
+
+    ``A`` is taken about ``mu_y`` alone: it equals ``(X - mu_x)^T P^T (Y - mu_y)`` because
+    ``(P X)^T 1 = Np mu_x``, and every product is of centred values, so points far from the
+    origin lose no digits to cancellation.
+    """
+    n_dims = moving.shape[1]
+    xt = np.ascontiguousarray(fixed.T)
+    yt = np.ascontiguousarray(moving.T)
+    pxt = np.ascontiguousarray(px.T)
+    mu_x = np.empty(n_dims)
+    mu_y = np.empty(n_dims)
+    for k in range(n_dims):
+        mu_x[k] = _dot(pt1, xt[k], 0.0) / n_p
+        mu_y[k] = _dot(p1, yt[k], 0.0) / n_p
+    x_px = 0.0
+    for k in range(n_dims):
+        x_px += _weighted_dot(pt1, xt[k], mu_x[k], xt[k], mu_x[k])
+    a = np.empty((n_dims, n_dims))
+    y_py = np.empty((n_dims, n_dims))
+    for i in range(n_dims):
+        for j in range(n_dims):
+            a[i, j] = _dot(pxt[i], yt[j], mu_y[j])
+            y_py[i, j] = _weighted_dot(p1, yt[i], mu_y[i], yt[j], mu_y[j]) if j >= i else y_py[j, i]
+    return mu_x, mu_y, a, x_px, y_py
+
+
 def _moments(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
-    n_p = post.n_p
-    mu_x = fixed.T @ post.pt1 / n_p
-    mu_y = moving.T @ post.p1 / n_p
-    a = post.px.T @ moving - n_p * np.outer(mu_x, mu_y)
-    x_hat = fixed - mu_x
-    y_hat = moving - mu_y
-    x_px = float(post.pt1 @ np.einsum("ij,ij->i", x_hat, x_hat))
-    return n_p, mu_x, mu_y, a, x_hat, y_hat, x_px
+    """``(Np, mu_x, mu_y, A, tr(Xh^T d(P^T 1) Xh), Yh^T d(P1) Yh)``; see :func:`_centred_moments`."""
+    mu_x, mu_y, a, x_px, y_py = _centred_moments(post.p1, post.pt1, post.px, moving, fixed, post.n_p)
+    return post.n_p, mu_x, mu_y, a, x_px, y_py
 
 
 def rigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, scale: bool = True):
@@ -38,15 +83,15 @@ def rigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, sca
     The rotation is the proper one closest to ``A`` (SVD with the last singular vector's sign
     fixed so that det R = +1); ``s = tr(A^T R) / tr(Yh^T d(P1) Yh)``.
     """
-    n_p, mu_x, mu_y, a, _, y_hat, x_px = _moments(post, moving, fixed)
+    n_p, mu_x, mu_y, a, x_px, y_py = _moments(post, moving, fixed)
     n_dims = moving.shape[1]
     rotation, tr_ar = proper_rotation(a)
-    y_py = float(post.p1 @ np.einsum("ij,ij->i", y_hat, y_hat))
+    y_py = float(np.trace(y_py))
     s = tr_ar / y_py if scale and y_py > 0 and tr_ar > 0 else 1.0
     sigma2 = (x_px - 2 * s * tr_ar + s * s * y_py) / (n_p * n_dims)
     translation = mu_x - s * rotation @ mu_y
-    transform = SimilarityTransform(rotation, translation, s) if scale else RigidTransform(rotation, translation)
-    return transform, float(sigma2)
+    kind = SimilarityTransform if scale else RigidTransform
+    return kind._trusted(rotation, translation, s if scale else 1.0), float(sigma2)
 
 
 def affine_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
@@ -54,9 +99,8 @@ def affine_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
 
     A singular ``Yh^T d(P1) Yh`` (collinear moving points) takes the minimum-norm solution.
     """
-    n_p, mu_x, mu_y, a, _, y_hat, x_px = _moments(post, moving, fixed)
+    n_p, mu_x, mu_y, a, x_px, y_py = _moments(post, moving, fixed)
     n_dims = moving.shape[1]
-    y_py = (y_hat * post.p1[:, None]).T @ y_hat
     linear = np.linalg.lstsq(y_py.T, a.T, rcond=None)[0].T
     sigma2 = (x_px - float(np.sum(a * linear))) / (n_p * n_dims)
     return AffineTransform(linear, mu_x - linear @ mu_y), float(sigma2)
