@@ -2,6 +2,8 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from centrality_vision.registration._estep import (
     CentralityPrior,
@@ -397,3 +399,57 @@ def test_planner_takes_up_an_earlier_probe_when_sigma2_swings_back(monkeypatch):
     planner(big, big, 1.2e-3, 0.0)  # back near the first probe: its choice, without probing
     assert planner.probes == 2 and planner.reused == 1
     assert planner.winner == "dense" and fake.calls[-1] == "dense"
+
+
+def test_planner_times_the_dense_path_once_and_runs_it_again_only_to_win(monkeypatch):
+    # first probe: dense 10 s, truncated 16 s (not a close call); dense wins
+    durations = {"dense": [10.0, 10.0, 10.0], "truncated": [16.0, 4.0, 30.0]}
+    planner, _, fake = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 0.0})
+    assert planner.winner == "dense" and fake.calls == ["dense", "truncated"]
+    big = np.zeros((1100, 2))
+    # 1000x smaller sigma2: a new probe runs the truncated path alone (4 s against dense's
+    # known 10 s; no re-timing of the dense runner-up) and returns its statistics
+    assert planner(big, big, 1e-6, 0.0) == "truncated"
+    assert planner.probes == 2 and planner.winner == "truncated"
+    assert fake.calls == ["dense", "truncated", "truncated"]
+    # back up: the truncated path takes 30 s, dense's known 10 s wins and runs once
+    assert planner(big, big, 1e-1, 0.0) == "dense"
+    assert planner.probes == 3 and fake.calls[2:] == ["truncated", "truncated", "dense"]
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    dims=st.integers(1, 4),
+    n_moving=st.integers(1, 120),
+    n_fixed=st.integers(1, 60),
+    layout=st.sampled_from(["uniform", "lattice", "curve", "far", "clump"]),
+)
+def test_nearest_points_equal_brute_force(seed, dims, n_moving, n_fixed, layout):
+    # the grid search (1-3 D) and the k-d tree (4 D, clumped sets) alike: exact squared
+    # distances and the smaller index on ties, whatever the layout
+    from centrality_vision.registration._estep import _nearest
+
+    rng = np.random.default_rng(seed)
+    if layout == "lattice":  # many exact ties and duplicates
+        moving = rng.integers(0, 4, (n_moving, dims)).astype(float)
+        fixed = rng.integers(-1, 5, (n_fixed, dims)).astype(float)
+    elif layout == "curve":  # a thin set: most cells empty
+        t = rng.random(n_moving)
+        moving = np.column_stack([np.cos(6 * t), *[np.sin(6 * t * (k + 1)) for k in range(dims - 1)]])[:, :dims]
+        fixed = moving[rng.integers(0, n_moving, n_fixed)] + rng.normal(0, 0.05, (n_fixed, dims))
+    else:
+        moving = rng.random((n_moving, dims))
+        fixed = rng.random((n_fixed, dims))
+        if layout == "far":  # queries far outside the grid
+            fixed = fixed * 1e4 - 5e3
+        elif layout == "clump":  # all but one point in a tiny clump: a crowded cell
+            moving[1:] *= 1e-9
+    d2, index = _nearest(moving, fixed)
+    brute = ((fixed[:, None, :] - moving[None, :, :]) ** 2).sum(-1)
+    np.testing.assert_allclose(d2, brute.min(axis=1), rtol=1e-12, atol=0)
+    best = brute[np.arange(n_fixed), index]
+    assert np.all(best <= brute.min(axis=1) * (1 + 1e-12))
+    # on the grid (1-3 D) ties go to the smaller index (integer coordinates: exact ties)
+    if layout == "lattice" and dims <= 3:
+        assert np.array_equal(index, np.argmin(brute, axis=1))

@@ -33,6 +33,8 @@ __all__ = [
     "exp_array",
     "dense_rows",
     "grid_keys",
+    "bucket_points",
+    "grid_nearest",
     "truncated_scores",
     "sparse_accumulate",
     "count_candidates",
@@ -435,6 +437,132 @@ def grid_keys(points, origin, cell, dims):
             key = key * dims[d] + c
         keys[i] = key
     return keys
+
+
+@njit(nogil=True, cache=True)
+def bucket_points(points, origin, cell, dims):
+    """Points sorted by cell key by a stable counting sort: ``(order, sorted points,
+    starts)``, ``starts[k]:starts[k + 1]`` the positions of cell ``k``'s points."""
+    n_points, n_dims = points.shape
+    keys = grid_keys(points, origin, cell, dims)
+    n_cells = 1
+    for d in range(n_dims):
+        n_cells *= dims[d]
+    starts = np.zeros(n_cells + 1, dtype=np.int64)
+    for key in keys:
+        starts[key + 1] += 1
+    for k in range(n_cells):
+        starts[k + 1] += starts[k]
+    fill = starts[:-1].copy()
+    order = np.empty(n_points, dtype=np.int64)
+    for i in range(n_points):
+        order[fill[keys[i]]] = i
+        fill[keys[i]] += 1
+    sorted_points = np.empty((n_points, n_dims))
+    for j in range(n_points):
+        for d in range(n_dims):
+            sorted_points[j, d] = points[order[j], d]
+    return order, sorted_points, starts
+
+
+@njit(nogil=True, cache=True, inline="always")
+def _scan_cells(q, points, order, a, b, best):
+    """Closest of ``points[a:b]`` to ``q`` into ``best`` = (squared distance, original
+    index, sorted position), ties to the smaller original index."""
+    for j in range(a, b):
+        d2 = 0.0
+        for d in range(q.shape[0]):
+            diff = q[d] - points[j, d]
+            d2 += diff * diff
+        if d2 < best[0] or (d2 == best[0] and order[j] < best[1]):
+            best[0] = d2
+            best[1] = order[j]
+
+
+@njit(nogil=True, cache=True)
+def grid_nearest(queries, points, order, starts, origin, cell, dims, lo, hi, d2_out, index_out):
+    """Squared distance from each query ``lo <= n < hi`` to its nearest point, and that
+    point's original index (the smaller one on ties), by rings of cells around the query's
+    cell (clipped to the grid) until no unvisited cell can hold a closer point.
+
+    ``points``, ``order`` and ``starts`` are :func:`bucket_points`' (sorted by cell key, the
+    last dimension fastest). A ring is left when the squared
+    distance found is at most the least squared distance from the query to any cell outside
+    the box searched so far: for each axis and side with cells beyond the box, the gap to
+    the box's face along that axis plus, on every other axis, the query's distance outside
+    the grid's span (so a query far outside the grid stops after a ring or two).
+    """
+    n_dims = queries.shape[1]
+    last = n_dims - 1
+    stride = np.ones(n_dims, dtype=np.int64)
+    for d in range(n_dims - 2, -1, -1):
+        stride[d] = stride[d + 1] * dims[d + 1]
+    c = np.empty(n_dims, dtype=np.int64)
+    lo_c = np.empty(n_dims, dtype=np.int64)
+    hi_c = np.empty(n_dims, dtype=np.int64)
+    cur = np.empty(n_dims, dtype=np.int64)
+    out = np.empty(n_dims)
+    best = np.empty(2)
+    for n in range(lo, hi):
+        q = queries[n]
+        outside2 = 0.0
+        for d in range(n_dims):
+            c[d] = min(max(int(np.floor((q[d] - origin[d]) / cell)), 0), dims[d] - 1)
+            below = origin[d] - q[d]
+            above = q[d] - (origin[d] + dims[d] * cell)
+            out[d] = max(below, above, 0.0)
+            outside2 += out[d] * out[d]
+        best[0] = np.inf
+        best[1] = np.inf
+        k = 0
+        while True:
+            for d in range(n_dims):
+                lo_c[d] = max(c[d] - k, 0)
+                hi_c[d] = min(c[d] + k, dims[d] - 1)
+                cur[d] = lo_c[d]
+            while True:
+                # one row of cells along the last axis: whole when it lies on the ring,
+                # else only its two ends (the cells at distance k along the last axis)
+                base = 0
+                on_ring = k == 0
+                for d in range(last):
+                    base += cur[d] * stride[d]
+                    if abs(cur[d] - c[d]) == k:
+                        on_ring = True
+                if on_ring:
+                    _scan_cells(q, points, order, starts[base + lo_c[last]], starts[base + hi_c[last] + 1], best)
+                else:
+                    if c[last] - k >= 0:
+                        key = base + c[last] - k
+                        _scan_cells(q, points, order, starts[key], starts[key + 1], best)
+                    if c[last] + k < dims[last]:
+                        key = base + c[last] + k
+                        _scan_cells(q, points, order, starts[key], starts[key + 1], best)
+                d = last - 1
+                while d >= 0:
+                    cur[d] += 1
+                    if cur[d] <= hi_c[d]:
+                        break
+                    cur[d] = lo_c[d]
+                    d -= 1
+                if d < 0:
+                    break
+            bound = np.inf
+            for d in range(n_dims):
+                rest = outside2 - out[d] * out[d]
+                if lo_c[d] > 0:
+                    gap = max(q[d] - (origin[d] + lo_c[d] * cell), 0.0)
+                    bound = min(bound, gap * gap + rest)
+                if hi_c[d] < dims[d] - 1:
+                    gap = max(origin[d] + (hi_c[d] + 1) * cell - q[d], 0.0)
+                    bound = min(bound, gap * gap + rest)
+            # (bound is inf when the box holds the whole grid; the margin covers the rounding
+            # of a point's cell against the face, and keeps exact ties for the ring that decides them)
+            if best[0] < bound * (1.0 - 1e-12):
+                break
+            k += 1
+        d2_out[n] = best[0]
+        index_out[n] = np.int64(best[1])
 
 
 @njit(nogil=True, cache=True)
