@@ -538,14 +538,7 @@ def grid_nearest(queries, points, order, starts, origin, cell, dims, lo, hi, d2_
                     if c[last] + k < dims[last]:
                         key = base + c[last] + k
                         _scan_cells(q, points, order, starts[key], starts[key + 1], best)
-                d = last - 1
-                while d >= 0:
-                    cur[d] += 1
-                    if cur[d] <= hi_c[d]:
-                        break
-                    cur[d] = lo_c[d]
-                    d -= 1
-                if d < 0:
+                if not _advance(cur, lo_c, hi_c, last - 1):
                     break
             bound = np.inf
             for d in range(n_dims):
