@@ -453,3 +453,13 @@ def test_nearest_points_equal_brute_force(seed, dims, n_moving, n_fixed, layout)
     # on the grid (1-3 D) ties go to the smaller index (integer coordinates: exact ties)
     if layout == "lattice" and dims <= 3:
         assert np.array_equal(index, np.argmin(brute, axis=1))
+
+
+def test_nearest_points_of_a_set_spanning_more_than_float64s_range():
+    # the extent overflows: the grid gives way to the k-d tree instead of failing
+    from centrality_vision.registration._estep import _nearest
+
+    moving = np.array([[-1e308, 0.0], [1e308, 0.0], [0.0, 1.0]])
+    d2, index = _nearest(moving, np.array([[1.0, 1.0], [-2.0, 1.0]]))
+    np.testing.assert_array_equal(index, [2, 2])
+    np.testing.assert_allclose(d2, [1.0, 4.0])

@@ -346,8 +346,11 @@ def _nearest_grid(points):
     if n_dims > 3:
         return None
     origin = points.min(axis=0)
-    extent = points.max(axis=0) - origin
+    with np.errstate(over="ignore"):
+        extent = points.max(axis=0) - origin
     largest = float(extent.max())
+    if not math.isfinite(largest):  # coordinates spanning more than float64's range
+        return None
     spread = extent[extent > 1e-12 * largest]
     # cell^D' = 2 / M of the volume spanned on the D' axes with any extent
     cell = 1.0
