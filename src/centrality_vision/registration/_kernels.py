@@ -189,9 +189,13 @@ def _max(row, n):
 
 @njit(nogil=True, cache=True, fastmath=_REDUCE)
 def _sum(row, a, b):
+    """``sum(row[a:b])``. (Every loop over part of an array here runs over a slice from 0:
+    a loop from an arbitrary start keeps numba's negative-index wraparound, which stops
+    LLVM from vectorising it; measured 4-6x slower over 1,000 to 90,000 terms.)"""
+    part = row[a:b]
     total = 0.0
-    for m in range(a, b):
-        total += row[m]
+    for m in range(part.shape[0]):
+        total += part[m]
     return total
 
 
@@ -199,8 +203,9 @@ def _sum(row, a, b):
 def _exp_shifted(row, a, b, shift):
     """``row[a:b] = exp(max(row[a:b] - shift, -700))`` in place: the clamp keeps every value
     normal (exp(-700) ~ 1e-304 adds nothing to a sum whose largest term is 1)."""
-    for m in range(a, b):
-        row[m] = fast_exp(max(row[m] - shift, _FLOOR))
+    part = row[a:b]  # (a slice from 0: see _sum)
+    for m in range(part.shape[0]):
+        part[m] = fast_exp(max(part[m] - shift, _FLOOR))
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
@@ -640,8 +645,9 @@ def truncated_scores(
         r = max(smax, log_c)
         if r == -np.inf:
             r = 0.0
-        for k in range(start, used):
-            value[k] = max(value[k] - r, _FLOOR)
+        kept = value[start:used]  # (a slice from 0: see _sum)
+        for k in range(kept.shape[0]):
+            kept[k] = max(kept[k] - r, _FLOOR)
         ref[n - lo] = r
         best[n] = arg if (arg >= 0 and smax >= log_c) else -1
         row_ptr[n - lo + 1] = used
