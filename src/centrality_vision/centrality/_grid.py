@@ -54,12 +54,19 @@ def grid_brandes(foreground, offs, sources, weights):
     lists = np.empty(0, dtype=np.int64)  # no adjacency lists: the grid mode
     heads = np.empty(0, dtype=np.int32)
     n_pixels = np.count_nonzero(foreground)
-    succ = np.empty(n_pixels * offs.shape[0], dtype=np.int64)
-    first = np.empty(n_pixels + 1, dtype=np.int64)
+    # the hop-count search's node indices, unsigned; negative offsets wrap (see
+    # _kernels._brandes_source_bfs)
+    order_u = np.empty(size, dtype=np.uint64)
+    offs_u = offs.astype(np.uint64)
+    succ = np.empty(n_pixels * offs.shape[0], dtype=np.uint64)
+    first = np.empty(n_pixels + 1, dtype=np.uint64)
     n_log = 0
     for i in range(sources.shape[0]):
         s, w = sources[i], weights[i]
-        if not _kernels._brandes_source_bfs(lists, heads, offs, True, s, hops, order, sigma, coef, bc, w, succ, first):
+        found = _kernels._brandes_source_bfs(
+            lists, heads, offs_u, True, np.uint64(s), hops, order_u, sigma, coef, bc, w, succ, first
+        )
+        if not found:
             n_log += 1
             _kernels._brandes_source_bfs_log(lists, heads, offs, True, s, hops, order, sigma, coef, bc, w)
     return bc, n_log
