@@ -229,3 +229,69 @@ def test_float32_exponential_is_within_its_bound():
     rel = np.abs(out.astype(float) / np.exp(t.astype(float)) - 1.0)
     assert rel.max() < 2e-7
     assert out[-1] == 1.0
+
+
+def _band_cases():
+    rng = np.random.default_rng(17)
+    for n_dims in (2, 3):
+        for n_moving, n_fixed in ((300, 260), (700, 513)):
+            for sigma2 in (1e-2, 1e-4, 1e-8):
+                for w in (0.0, 0.2):
+                    fixed = rng.random((n_fixed, n_dims))
+                    fixed[:5] += 3.0  # a few rows far outside the moving set
+                    yield rng.random((n_moving, n_dims)) * [2.0, 1.0, 0.5][:n_dims], fixed, sigma2, w
+
+
+@pytest.mark.parametrize("single", [False, True])
+def test_band_of_exponentials_matches_every_term(single):
+    """From 256 moving points with ``tau``, each row takes its exponentials over a band of the
+    moving points sorted along their widest axis. Against the same kernel with every term:
+    each posterior entry left out is below exp(-tau) of the row's reference term, so P1
+    differs by at most N exp(-tau), P^T 1 and log den by M exp(-tau), P X by N exp(-tau)
+    max |X| (plus rounding), and ``best`` is the same."""
+    from centrality_vision.registration._estep import _band_axis, _default_tau
+
+    banded = 0
+    for moving_t, fixed, sigma2, w in _band_cases():
+        n_moving, n_fixed = moving_t.shape[0], fixed.shape[0]
+        tau = _default_tau(n_moving)
+        inv2s2 = 1.0 / (2.0 * sigma2)
+        banded += _band_axis(moving_t, inv2s2, tau) is not None
+        log_c = log_outlier_constant(sigma2, w, fixed.shape[1], n_moving, n_fixed)
+        p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, None, single, tau)
+        r_p1, r_px, r_pt1, r_log_den, r_best = _dense(moving_t, fixed, inv2s2, log_c, None, single)
+        left_out = math.exp(-tau)
+        rounding = 1e-13 if not single else 1e-6
+        assert np.all(np.abs(p1 - r_p1) <= n_fixed * left_out + rounding * r_p1)
+        assert np.all(np.abs(pt1 - r_pt1) <= n_moving * left_out + rounding * r_pt1)
+        assert np.all(np.abs(log_den - r_log_den) <= n_moving * left_out + 1e-15 * (1.0 + np.abs(r_log_den)))
+        bound = (n_fixed * left_out + rounding * r_p1) * np.max(np.abs(fixed))
+        assert np.all(np.abs(px - r_px) <= bound[:, None] + 1e-300)
+        np.testing.assert_array_equal(best, r_best)
+    assert banded >= 12  # the small sigma2 of every size and dimension
+
+
+def test_band_keeps_ties_to_the_first_point_and_threads_do_not_change_it():
+    from centrality_vision._parallel import get_num_threads, set_num_threads
+
+    big = np.random.default_rng(1).random((400, 2)) * [3.0, 1.0]
+    moving_big = np.vstack([big, big])  # each point twice: the first copy wins, as without the band
+    got = _dense(moving_big, big, 1.0 / (2.0 * 1e-6), -math.inf, None, False, 40.0)
+    np.testing.assert_array_equal(got[4], np.arange(400))
+    rng = np.random.default_rng(12)
+    moving_t, fixed = rng.random((1100, 2)) * [4.0, 1.0], rng.random((1000, 2)) * [4.0, 1.0]
+    before = get_num_threads()
+    try:
+        runs = []
+        for threads in (1, 2, 3):
+            set_num_threads(threads)
+            runs.append(_e_step(moving_t, fixed, 1e-4, 0.1, method="dense"))
+    finally:
+        set_num_threads(before)
+    for other in runs[1:]:
+        np.testing.assert_array_equal(runs[0].p1, other.p1)
+        np.testing.assert_array_equal(runs[0].px, other.px)
+        np.testing.assert_array_equal(runs[0].best, other.best)
+    reference = _reference(moving_t, fixed, 1e-4, 0.1)
+    np.testing.assert_allclose(runs[0].p1, reference[0], rtol=1e-10, atol=1e-12 * reference[0].max())
+    np.testing.assert_array_equal(runs[0].best, reference[4])

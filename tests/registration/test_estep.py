@@ -401,20 +401,21 @@ def test_planner_takes_up_an_earlier_probe_when_sigma2_swings_back(monkeypatch):
     assert planner.winner == "dense" and fake.calls[-1] == "dense"
 
 
-def test_planner_times_the_dense_path_once_and_runs_it_again_only_to_win(monkeypatch):
-    # first probe: dense 10 s, truncated 16 s (not a close call); dense wins
-    durations = {"dense": [10.0, 10.0, 10.0], "truncated": [16.0, 4.0, 30.0]}
+def test_planner_reuses_a_dense_time_from_a_nearby_larger_sigma2(monkeypatch):
+    # first probe at 1e-3: dense 10 s, truncated 16 s (not a close call); dense wins
+    durations = {"dense": [10.0, 10.0, 10.0], "truncated": [16.0, 4.0, 30.0, 30.0]}
     planner, _, fake = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 0.0})
     assert planner.winner == "dense" and fake.calls == ["dense", "truncated"]
     big = np.zeros((1100, 2))
-    # 1000x smaller sigma2: a new probe runs the truncated path alone (4 s against dense's
-    # known 10 s; no re-timing of the dense runner-up) and returns its statistics
-    assert planner(big, big, 1e-6, 0.0) == "truncated"
+    # at half the sigma2 the truncated path is predicted 8 s: a probe, in which dense's time
+    # at 1e-3 bounds its time (it only falls as sigma2 shrinks): the truncated path runs
+    # alone (4 s) and its statistics are returned
+    assert planner(big, big, 0.5e-3, 0.0) == "truncated"
     assert planner.probes == 2 and planner.winner == "truncated"
     assert fake.calls == ["dense", "truncated", "truncated"]
-    # back up: the truncated path takes 30 s, dense's known 10 s wins and runs once
+    # 200x above: no dense time bounds it there, so dense is timed again, and it wins
     assert planner(big, big, 1e-1, 0.0) == "dense"
-    assert planner.probes == 3 and fake.calls[2:] == ["truncated", "truncated", "dense"]
+    assert planner.probes == 3 and fake.calls[3:] == ["dense", "truncated"]
 
 
 @settings(max_examples=60, deadline=None)

@@ -797,9 +797,11 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         within 1e-3 of each other even where the data pull elsewhere); use about 0.1 - 1
         for uncertain landmarks.
     method : {'auto', 'dense', 'truncated', 'fgt'}, default='auto'
-        E-step path: every pair ('dense'); for each fixed point only the moving points whose
-        term is above exp(-36.8)/M of its largest ('truncated', a cell grid: equal to dense to
-        rounding); a fast Gauss transform ('fgt', about 1e-8 of the total weight; CPD only,
+        E-step path: every pair's score ('dense'; from 256 moving points the exponentials
+        only over the band of moving points, sorted along one axis, that can hold a term
+        above exp(-36.8)/M of the row's largest); for each fixed point only the moving
+        points whose term is above that ('truncated', a cell grid); both equal every term's
+        sum to rounding; a fast Gauss transform ('fgt', about 1e-8 of the total weight; CPD only,
         not GPD). 'auto' takes the fastest by timing the paths during the fit
         (``registration._estep.EStepPlanner``; always dense below 2^20 pairs).
     n_neighbors : int, optional

@@ -12,6 +12,10 @@ vectorised loops over row buffers that stay in L1:
 3. the rows, four at a time, normalised by ``sum_m e_mn + c exp(-ref_n)`` and added into
    the sufficient statistics ``P1`` and ``P X``; ``P^T 1`` and ``log den`` per row.
 
+With the moving points sorted along one axis, step 2 runs only over each row's band of
+points that can hold a term above ``exp(-tau)`` (see :func:`dense_rows`), and step 3 over
+the union of the four rows' bands.
+
 The truncated path visits, for each fixed point, only the moving points within
 ``sqrt(d_min^2 + 2 sigma2 tau')`` of it (a uniform grid of cells, searched by sorted cell
 keys), which drops only terms below ``exp(-tau)`` of the row's largest one.
@@ -257,13 +261,14 @@ _GROUP = 4  # rows accumulated together
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
-def _first_equal(row, value):
-    """The first ``m`` with ``row[m] == value`` (``M - 1`` if none), as a vectorised minimum."""
+def _first_equal(row, value, order):
+    """The least ``order[m]`` with ``row[m] == value`` (``order[M - 1]`` if none), as a
+    vectorised minimum: the first such moving point in the caller's numbering."""
     n = row.shape[0]
-    first = n
+    first = np.int64(1) << 62
     for m in range(n):
-        first = min(first, m if row[m] == value else n)
-    return first if first < n else n - 1
+        first = min(first, order[m] if row[m] == value else np.int64(1) << 62)
+    return first if first < (np.int64(1) << 62) else order[n - 1]
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
@@ -340,6 +345,10 @@ def dense_rows(
     prior_scale,
     inv2phi2,
     single,
+    key,
+    axis,
+    tau,
+    order,
     scores,
     rows,
     coef,
@@ -353,7 +362,8 @@ def dense_rows(
 
     ``yt`` is the moving set transposed (D x M); scratch: ``scores`` (M float64), ``rows``
     (4 x M zeros: float64, or float32 with ``single``) and ``coef`` (D + 1 x 4). ``p1`` and
-    ``pxt`` (D x M) are added to, ``pt1``, ``log_den`` and ``best`` written at ``n``.
+    ``pxt`` (D x M) are added to, ``pt1``, ``log_den`` and ``best`` written at ``n``;
+    ``order[m]`` is moving point ``m``'s index in the caller's numbering (``best`` holds it).
 
     Per row: scores ``s_m = -|x_n - y_m|^2 inv2s2`` (plus the prior), their maximum ``smax``
     (``best[n]`` its first position, or -1 when ``smax < log c``), the shift
@@ -361,12 +371,23 @@ def dense_rows(
     and the denominator ``den = sum_m e_m + exp(log c - r)``: ``P[m, n] = e_m / den``. With
     ``single`` the terms are :func:`_exp_row_single`'s float32 ones (clamped at ``exp(-87)``),
     every sum still in float64.
+
+    Band (``key`` not empty; no prior): the moving points are sorted along ``axis`` and
+    ``key`` holds that coordinate. ``s_m <= -(x_n - key_m)^2 inv2s2``, so every term above
+    ``exp(-tau)`` of ``exp(r)`` lies where ``(x_n - key_m)^2 <= (tau - r) / inv2s2``: the
+    exponentials are taken only over that run of the sorted points (two binary searches)
+    and the rest of the row is zero, as in the truncated path. The scores and the maximum
+    still cover every pair.
     """
     n_dims, n_moving = yt.shape
     has_prior = log_weight.shape[0] > 0
+    band = key.shape[0] > 0
+    span = np.empty((2, _GROUP), dtype=np.int64)
     for g in range(lo, hi, _GROUP):
         size = min(_GROUP, hi - g)
         coef[:, :] = 0.0
+        lo_g = n_moving
+        hi_g = 0
         for j in range(size):
             n = g + j
             _scores(x, n, yt, inv2s2, scores)
@@ -377,12 +398,23 @@ def dense_rows(
                     scores[m] += prior_scale * (log_weight[m] - dv * dv * inv2phi2)
             smax = _max(scores, n_moving)
             r = max(smax, log_c)
-            best[n] = _first_equal(scores, smax) if smax >= log_c else -1
+            best[n] = _first_equal(scores, smax, order) if smax >= log_c else -1
+            a = 0
+            b = n_moving
+            if band:
+                half = np.sqrt(max(tau - r, 0.0) / inv2s2)
+                a = np.searchsorted(key, x[n, axis] - half)
+                b = np.searchsorted(key, x[n, axis] + half, side="right")
+            span[0, j] = a
+            span[1, j] = b
+            lo_g = min(lo_g, a)
+            hi_g = max(hi_g, b)
+            # (every loop over part of a row runs over a slice from 0: see _sum)
             if single:
-                _exp_row_single(scores, r, rows[j])
+                _exp_row_single(scores[a:b], r, rows[j, a:b])
             else:
-                _exp_row(scores, r, rows[j])
-            total = _sum(rows[j], 0, n_moving)
+                _exp_row(scores[a:b], r, rows[j, a:b])
+            total = _sum(rows[j], a, b)
             den = total + np.exp(log_c - r)
             inv = 1.0 / den
             log_den[n] = r + np.log(den)
@@ -390,15 +422,25 @@ def dense_rows(
             coef[0, j] = inv
             for d in range(n_dims):
                 coef[d + 1, j] = x[n, d] * inv
-        _accumulate_group(rows, coef, p1, pxt)
+        if lo_g >= hi_g:
+            continue  # no moving point within any of these rows' bands
+        if band:
+            for j in range(size):  # this group's span of each row outside its own band: zero
+                rows[j, lo_g : span[0, j]] = 0.0
+                rows[j, span[1, j] : hi_g] = 0.0
+        _accumulate_group(rows, coef, p1, pxt, lo_g, hi_g)
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
-def _accumulate_group(rows, coef, p1, pxt):
+def _accumulate_group(rows, coef, p1, pxt, a, b):
     """``p1 += sum_j coef[0, j] rows[j]`` and ``pxt[d] += sum_j coef[d + 1, j] rows[j]`` over
-    the four rows, in one pass for D = 2 and 3 (a row with zero coefficients adds nothing)."""
-    n_dims, n_moving = pxt.shape
-    r0, r1, r2, r3 = rows[0], rows[1], rows[2], rows[3]
+    the four rows' columns ``a:b``, in one pass for D = 2 and 3 (a row with zero coefficients
+    adds nothing)."""
+    n_dims = pxt.shape[0]
+    n_moving = b - a
+    r0, r1, r2, r3 = rows[0, a:b], rows[1, a:b], rows[2, a:b], rows[3, a:b]
+    p1 = p1[a:b]
+    pxt = pxt[:, a:b]
     c0, c1, c2, c3 = coef[0, 0], coef[0, 1], coef[0, 2], coef[0, 3]
     if n_dims == 2:
         a0, a1, a2, a3 = coef[1, 0], coef[1, 1], coef[1, 2], coef[1, 3]
