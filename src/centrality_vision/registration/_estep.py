@@ -321,18 +321,22 @@ def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False, tau=None):
     return p1_out, px, *out
 
 
+def _cells(extent: np.ndarray, cell: float) -> tuple[float, np.ndarray]:
+    """``(cell, cells per axis)`` of a grid over ``extent`` with cells of side ``cell``, at
+    most 2**20 per axis (keeping 3D keys far from int64 overflow)."""
+    cell = max(cell, float(extent.max()) / 2**20, 1e-300)
+    return cell, np.floor(extent / cell).astype(np.int64) + 1
+
+
 class _Grid:
     """Moving points sorted into cubic cells of side ``cell`` (for the truncated path)."""
 
     def __init__(self, points: np.ndarray, cell: float):
         lo = points.min(axis=0)
         extent = points.max(axis=0) - lo
-        # at most 2**20 cells per axis keeps keys far from int64 overflow in 3D
-        cell = max(cell, float(extent.max()) / 2**20, 1e-300)
         self.origin = lo
-        self.cell = cell
-        self.dims = np.floor(extent / cell).astype(np.int64) + 1
-        keys = K.grid_keys(points, lo, cell, self.dims)
+        self.cell, self.dims = _cells(extent, cell)
+        keys = K.grid_keys(points, lo, self.cell, self.dims)
         self.order = np.argsort(keys, kind="stable")
         self.keys = keys[self.order]
         self.points = np.ascontiguousarray(points[self.order])
@@ -405,11 +409,9 @@ def _nearest_grid(points):
     cell = 1.0
     if spread.size:
         cell = (float(np.prod(spread / largest)) * 2.0 / n_points) ** (1.0 / spread.size) * largest
-    cell = max(cell, largest / 2**20, 1e-300)
-    dims = np.floor(extent / cell).astype(np.int64) + 1
+    cell, dims = _cells(extent, cell)
     while int(np.prod(dims)) > 4 * n_points + 64:  # a long thin set: fewer, larger cells
-        cell *= 2.0
-        dims = np.floor(extent / cell).astype(np.int64) + 1
+        cell, dims = _cells(extent, 2.0 * cell)
     order, sorted_points, starts = K.bucket_points(points, origin, cell, dims)
     if n_points > _CROWDED and int(np.max(np.diff(starts))) > _CROWDED:
         return None
@@ -923,7 +925,7 @@ class EStepPlanner:
         if (
             len(ranked) > 1
             and measured[ranked[1]] < self.retime_factor * measured[ranked[0]]
-            and ranked[1] in results  # (the dense path's least time needs no second look)
+            and ranked[1] in results  # (a dense time taken at a nearby larger sigma2 is a bound already)
         ):
             # a close call: one timing on a busy machine can be off by more than the gap, and
             # load only ever adds time, so the runner-up keeps the least of two

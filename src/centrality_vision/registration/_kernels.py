@@ -193,9 +193,10 @@ def _max(row, n):
 
 @njit(nogil=True, cache=True, fastmath=_REDUCE)
 def _sum(row, a, b):
-    """``sum(row[a:b])``. (Every loop over part of an array here runs over a slice from 0:
-    a loop from an arbitrary start keeps numba's negative-index wraparound, which stops
-    LLVM from vectorising it; measured 4-6x slower over 1,000 to 90,000 terms.)"""
+    """``sum(row[a:b])``. (Every loop here that should vectorise over part of an array runs
+    over a slice from 0: a loop from an arbitrary start keeps numba's negative-index
+    wraparound, which stops LLVM from vectorising it; measured 4-6x slower over 1,000 to
+    90,000 terms.)"""
     part = row[a:b]
     total = 0.0
     for m in range(part.shape[0]):
@@ -265,10 +266,11 @@ def _first_equal(row, value, order):
     """The least ``order[m]`` with ``row[m] == value`` (``order[M - 1]`` if none), as a
     vectorised minimum: the first such moving point in the caller's numbering."""
     n = row.shape[0]
-    first = np.int64(1) << 62
+    none = np.int64(1) << 62
+    first = none
     for m in range(n):
-        first = min(first, order[m] if row[m] == value else np.int64(1) << 62)
-    return first if first < (np.int64(1) << 62) else order[n - 1]
+        first = min(first, order[m] if row[m] == value else none)
+    return first if first < none else order[n - 1]
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
