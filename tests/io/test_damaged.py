@@ -31,6 +31,15 @@ def test_a_mat_file_that_crashed_scipy_is_an_input_error(tmp_path):
         read_points(path)
 
 
+@pytest.mark.parametrize("line", [b"property", b"property list"])
+def test_a_ply_property_line_without_its_type_is_an_input_error(tmp_path, line):
+    # found by the mutation test below: the header check indexed the missing words
+    path = tmp_path / "cut.ply"
+    path.write_bytes(b"ply\nformat ascii 1.0\nelement vertex 1\n" + line + b"\nend_header\n1 2 3\n")
+    with pytest.raises(InputError, match="cut.ply"):
+        read_points(path)
+
+
 def test_a_damaged_ply_header_is_an_input_error_not_an_exit(tmp_path):
     path = tmp_path / "bad.ply"  # meshio.read prints and calls sys.exit(1) on this one
     path.write_bytes(b"plyX\nformat ascii 1.0\nelement vertex 1\nproperty float x\nend_header\n1\n")

@@ -455,8 +455,10 @@ def _ply_vertex_count(path: Path, data: bytes) -> int:
         elif words[:1] == ["element"] and len(words) == 3 and words[2].isdigit():
             elements.append([words[1], int(words[2]), 0])
         elif words[:1] == ["property"] and elements:
-            # a list property takes at least its count's bytes; a scalar its size
-            elements[-1][2] += _PLY_SIZES.get(words[2] if words[1] == "list" else words[1], 1)
+            # a list property takes at least its count's bytes; a scalar its size (a damaged
+            # line without its type counts one byte: the reader refuses it later)
+            kind = words[2:3] if words[1:2] == ["list"] else words[1:2]
+            elements[-1][2] += _PLY_SIZES.get(kind[0] if kind else "", 1)
     vertex = [element for element in elements if element[0] == "vertex"]
     if not vertex:
         raise InputError(f"{path}: the PLY file has no vertex element.")
