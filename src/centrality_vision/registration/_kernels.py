@@ -442,12 +442,13 @@ def _accumulate_group(rows, coef, p1, pxt, a, b):
     n_moving = b - a
     r0, r1, r2, r3 = rows[0, a:b], rows[1, a:b], rows[2, a:b], rows[3, a:b]
     p1 = p1[a:b]
-    pxt = pxt[:, a:b]
+    # (each row of P X sliced on its own: a row of the 2D slice pxt[:, a:b] is typed with
+    # an unknown stride, and its loop does not vectorise; measured 3.4x slower)
     c0, c1, c2, c3 = coef[0, 0], coef[0, 1], coef[0, 2], coef[0, 3]
     if n_dims == 2:
         a0, a1, a2, a3 = coef[1, 0], coef[1, 1], coef[1, 2], coef[1, 3]
         b0, b1, b2, b3 = coef[2, 0], coef[2, 1], coef[2, 2], coef[2, 3]
-        q0, q1 = pxt[0], pxt[1]
+        q0, q1 = pxt[0, a:b], pxt[1, a:b]
         for m in range(n_moving):
             e0, e1, e2, e3 = np.float64(r0[m]), np.float64(r1[m]), np.float64(r2[m]), np.float64(r3[m])
             p1[m] += (e0 * c0 + e1 * c1) + (e2 * c2 + e3 * c3)
@@ -457,7 +458,7 @@ def _accumulate_group(rows, coef, p1, pxt, a, b):
         a0, a1, a2, a3 = coef[1, 0], coef[1, 1], coef[1, 2], coef[1, 3]
         b0, b1, b2, b3 = coef[2, 0], coef[2, 1], coef[2, 2], coef[2, 3]
         z0, z1, z2, z3 = coef[3, 0], coef[3, 1], coef[3, 2], coef[3, 3]
-        q0, q1, q2 = pxt[0], pxt[1], pxt[2]
+        q0, q1, q2 = pxt[0, a:b], pxt[1, a:b], pxt[2, a:b]
         for m in range(n_moving):
             e0, e1, e2, e3 = np.float64(r0[m]), np.float64(r1[m]), np.float64(r2[m]), np.float64(r3[m])
             p1[m] += (e0 * c0 + e1 * c1) + (e2 * c2 + e3 * c3)
@@ -466,7 +467,7 @@ def _accumulate_group(rows, coef, p1, pxt, a, b):
             q2[m] += (e0 * z0 + e1 * z1) + (e2 * z2 + e3 * z3)
     else:
         for t in range(n_dims + 1):
-            acc = p1 if t == 0 else pxt[t - 1]
+            acc = p1 if t == 0 else pxt[t - 1, a:b]
             c0, c1, c2, c3 = coef[t, 0], coef[t, 1], coef[t, 2], coef[t, 3]
             for m in range(n_moving):
                 e0, e1, e2, e3 = np.float64(r0[m]), np.float64(r1[m]), np.float64(r2[m]), np.float64(r3[m])
