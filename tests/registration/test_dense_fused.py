@@ -12,6 +12,7 @@ from centrality_vision.registration._estep import (
     CentralityPrior,
     _dense,
     _e_step,
+    fixed_to_moving,
     log_outlier_constant,
 )
 
@@ -295,3 +296,44 @@ def test_band_keeps_ties_to_the_first_point_and_threads_do_not_change_it():
     reference = _reference(moving_t, fixed, 1e-4, 0.1)
     np.testing.assert_allclose(runs[0].p1, reference[0], rtol=1e-10, atol=1e-12 * reference[0].max())
     np.testing.assert_array_equal(runs[0].best, reference[4])
+
+
+def test_fixed_to_moving_equals_the_e_step_best():
+    """The E-steps of a fit skip ``best`` (``want_best=False``: None, every other statistic
+    bit for bit the same) and :func:`fixed_to_moving` computes it for one state: the same as
+    the dense E-step's, with and without the band, a prior, outliers and exact ties."""
+    rng = np.random.default_rng(21)
+    for n_dims in (2, 3, 4):
+        base = rng.random((300, n_dims)) * np.r_[3.0, np.ones(n_dims - 1)]  # a band from 256
+        moving_t = np.vstack([base, base[:40]])  # 40 exact ties: the first copy wins
+        fixed = np.vstack([base[::2] + 1e-3 * rng.normal(size=base[::2].shape), rng.random((30, n_dims)) * 9])
+        m = moving_t.shape[0]
+        prior = CentralityPrior(np.log(rng.random(m) + 0.1), rng.random(m), rng.random(fixed.shape[0]), 2.0, 0.5)
+        for sigma2 in (1.0, 1e-3, 1e-6):
+            for w in (0.0, 0.3):
+                for pri in (None, prior):
+                    full = _e_step(moving_t, fixed, sigma2, w, pri, method="dense")
+                    lean = _e_step(moving_t, fixed, sigma2, w, pri, method="dense", want_best=False)
+                    assert lean.best is None
+                    for name in ("p1", "pt1", "px"):
+                        np.testing.assert_array_equal(getattr(lean, name), getattr(full, name))
+                    assert lean.neg_log_likelihood == full.neg_log_likelihood
+                    got = fixed_to_moving(moving_t, fixed, sigma2, w, pri)
+                    np.testing.assert_array_equal(got, full.best)
+                    reference = _reference(moving_t, fixed, sigma2, w, pri)[4]
+                    np.testing.assert_array_equal(got, reference)
+
+
+def test_fit_reports_the_last_e_step_best():
+    """A fit's ``fixed_to_moving_`` (computed once at the end) is the dense E-step's ``best``
+    at the fitted state, and ``posteriors_.best`` holds it too."""
+    rng = np.random.default_rng(3)
+    moving = rng.random((400, 2))
+    fixed = (moving @ np.array([[0.9, -0.3], [0.3, 0.9]]))[rng.permutation(400)] + 0.005 * rng.normal(size=(400, 2))
+    for est in (RigidCPD(method="dense", w=0.1), NonRigidCPD(method="dense", max_iter=300)):
+        est.fit(moving, fixed)
+        moving_t, fixed_n, sigma2, w, prior = est._posterior_state
+        want = _e_step(moving_t, fixed_n, sigma2, w, prior, method="dense").best
+        np.testing.assert_array_equal(est.fixed_to_moving_, want)
+        np.testing.assert_array_equal(est.posteriors_.best, want)
+        assert (want >= 0).mean() > 0.9

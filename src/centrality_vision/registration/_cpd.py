@@ -50,6 +50,7 @@ from ._estep import (
     EStepPlanner,
     _e_step,
     dense_posterior,
+    fixed_to_moving,
     knn_posterior,
     knn_posterior_matrix,
 )
@@ -638,6 +639,8 @@ class _CPD(BaseEstimator):
             "method": history["method"],
             "w": np.array(history["w"]),
         }
+        if post.best is None:  # the E-steps skip it (a third of an E-step): once, for the last state
+            post = replace(post, best=fixed_to_moving(moving_t, fixed, sigma2, w_e, current_prior))
         self.fixed_to_moving_ = post.best
         self.posteriors_ = (
             post
@@ -683,8 +686,17 @@ class _CPD(BaseEstimator):
     def _e_step_of(self, fixed, planner):
         """``e_step(moving_t, sigma2, w, prior) -> Posteriors`` of this fit: CPD's or the k-NN model's."""
         if self.n_neighbors is None:
+            # (``best`` from the last state only: see the end of _run)
             return lambda moving_t, sigma2, w, prior: _e_step(
-                moving_t, fixed, sigma2, w, prior, method=self.method, planner=planner, precision=self.precision
+                moving_t,
+                fixed,
+                sigma2,
+                w,
+                prior,
+                method=self.method,
+                planner=planner,
+                precision=self.precision,
+                want_best=False,
             )
         from scipy.spatial import cKDTree
 

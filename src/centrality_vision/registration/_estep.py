@@ -132,9 +132,10 @@ class Posteriors:
     neg_log_likelihood : float
         ``-sum_n log(sum_m exp(s_mn) + c) + N D/2 log sigma2`` (constants dropped), CPD's
         objective up to a constant.
-    best : ndarray of shape (N,)
+    best : ndarray of shape (N,) or None
         For each fixed point, the moving point of largest posterior, or -1 where the outlier
-        component is more probable than any moving point.
+        component is more probable than any moving point; None from a dense E-step asked
+        not to compute it (``want_best=False``).
     """
 
     p1: np.ndarray
@@ -142,7 +143,7 @@ class Posteriors:
     px: np.ndarray
     n_p: float
     neg_log_likelihood: float
-    best: np.ndarray
+    best: np.ndarray | None
     method: str = "dense"
 
 
@@ -244,8 +245,9 @@ def _band_axis(moving_t, inv2s2, tau) -> int | None:
     return axis if 2.0 * math.sqrt(tau / inv2s2) < extent[axis] else None
 
 
-def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False, tau=None):
-    """Every pair (see :func:`_kernels.dense_rows`); ``single``: the exponentials in float32.
+def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False, tau=None, want_best=True):
+    """Every pair (see :func:`_kernels.dense_rows`); ``single``: the exponentials in float32;
+    ``want_best=False`` returns None for ``best`` (see :func:`fixed_to_moving`).
 
     With ``tau`` (and no prior, from :data:`_BAND_POINTS` moving points) each row takes its
     exponentials only over the band of the moving points, sorted along their widest axis,
@@ -273,7 +275,7 @@ def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False, tau=None):
         x = np.ascontiguousarray(fixed[row_order])
     pt1 = np.empty(n_fixed)
     log_den = np.empty(n_fixed)
-    best = np.empty(n_fixed, dtype=np.int64)
+    best = np.empty(n_fixed if want_best else 0, dtype=np.int64)
     dtype = np.float32 if single else np.float64
     band_tau = math.inf if tau is None else float(tau)
 
@@ -310,15 +312,40 @@ def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False, tau=None):
 
     p1, pxt = _reduce_rows(work, n_fixed, n_moving, n_dims)
     if axis is None:
-        return p1, pxt.T.copy(), pt1, log_den, best
+        return p1, pxt.T.copy(), pt1, log_den, best if want_best else None
     p1_out = np.empty(n_moving)
     p1_out[order] = p1
     px = np.empty((n_moving, n_dims))
     px[order] = pxt.T
     out = [np.empty_like(a) for a in (pt1, log_den, best)]
     for a, o in zip((pt1, log_den, best), out):
-        o[row_order] = a
-    return p1_out, px, *out
+        if a.size:
+            o[row_order] = a
+    return p1_out, px, out[0], out[1], out[2] if want_best else None
+
+
+def fixed_to_moving(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = None) -> np.ndarray:
+    """For each fixed point the moving point of largest posterior (the first, in the moving
+    set's order, of equal ones), or -1 where the outlier component is more probable: the
+    ``best`` of a dense E-step at this state, which a fit's E-steps skip (``want_best=False``)
+    and compute once for their last state (a third of an E-step's work)."""
+    n_moving, n_dims = moving_t.shape
+    n_fixed = fixed.shape[0]
+    inv2s2 = 1.0 / (2.0 * sigma2)
+    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    lw, vy, vx, scale, inv2phi2 = _prior_arrays(prior)
+    yt = np.ascontiguousarray(moving_t.T)
+    order = np.arange(n_moving)
+    best = np.empty(n_fixed, dtype=np.int64)
+
+    def task(lo, hi):
+        K.dense_best(fixed, yt, lo, hi, inv2s2, log_c, lw, vy, vx, scale, inv2phi2, order, best)
+
+    if n_fixed * n_moving < _SERIAL_PAIRS:
+        task(0, n_fixed)
+    else:
+        run_chunks(task, n_fixed)
+    return best
 
 
 def _cells(extent: np.ndarray, cell: float) -> tuple[float, np.ndarray]:
@@ -730,15 +757,16 @@ def _choose(moving_t, fixed, sigma2, prior, tau, eps):
     return min(costs, key=costs.get), cached
 
 
-def _run(method, moving_t, fixed, sigma2, w, prior, tau, eps, cached, single=False):
+def _run(method, moving_t, fixed, sigma2, w, prior, tau, eps, cached, single=False, want_best=True):
     """One E-step by the given path; ``cached`` holds what :func:`_model_costs` computed;
-    ``single``: the dense path's exponentials in float32 (the other paths ignore it)."""
+    ``single``: the dense path's exponentials in float32 (the other paths ignore it);
+    ``want_best=False`` lets the dense path leave ``best`` None."""
     n_moving, n_dims = moving_t.shape
     n_fixed = fixed.shape[0]
     inv2s2 = 1.0 / (2.0 * sigma2)
     log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
     if method == "dense":
-        p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, prior, single, tau)
+        p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, prior, single, tau, want_best)
     elif method == "fgt":
         p1, px, pt1, log_den, best = _fgt(moving_t, fixed, sigma2, log_c, eps, cached.get("nearest"))
     else:
@@ -869,17 +897,19 @@ class EStepPlanner:
     def _restore(self, state):
         self._sigma2, self.winner, self._at_probe, self._truncated_work, _ = state
 
-    def __call__(self, moving_t, fixed, sigma2, w, prior=None, *, tau=None, eps=1e-8, precision="float64"):
+    def __call__(
+        self, moving_t, fixed, sigma2, w, prior=None, *, tau=None, eps=1e-8, precision="float64", want_best=True
+    ):
         """One E-step (see :func:`_e_step` for the arguments) by the path the planner picks."""
         tau = _default_tau(moving_t.shape[0]) if tau is None else tau
         single = _single(precision)
         if moving_t.shape[0] * fixed.shape[0] <= _PLAN_PAIRS:
             self.winner = "dense"
-            return _run("dense", moving_t, fixed, sigma2, w, prior, tau, eps, {}, single)
+            return _run("dense", moving_t, fixed, sigma2, w, prior, tau, eps, {}, single, want_best)
         self._total += 1
         if (self.hold and self.winner is not None) or not self._due(sigma2, moving_t.shape[1]):
             self._calls += 1
-            return _run(self.winner, moving_t, fixed, sigma2, w, prior, tau, eps, {}, single)
+            return _run(self.winner, moving_t, fixed, sigma2, w, prior, tau, eps, {}, single, want_best)
         costs, cached = _model_costs(moving_t, fixed, sigma2, prior, tau, eps)
         setup = cached["setup"]
         order = sorted((c, m) for m, c in costs.items() if math.isfinite(c))
@@ -896,7 +926,7 @@ class EStepPlanner:
 
         def timed(path):
             start = time.perf_counter()
-            results[path] = _run(path, moving_t, fixed, sigma2, w, prior, tau, eps, cached, single)
+            results[path] = _run(path, moving_t, fixed, sigma2, w, prior, tau, eps, cached, single, want_best)
             # the nearest points and the grid were built once for the probe; outside it
             # the path builds them itself, so their time counts as its own
             seconds = time.perf_counter() - start + setup[path]
@@ -960,6 +990,7 @@ def _e_step(
     eps=1e-8,
     planner: EStepPlanner | None = None,
     precision="float64",
+    want_best=True,
 ):
     """The shared E-step; see the module docstring.
 
@@ -974,18 +1005,23 @@ def _e_step(
 
     ``precision``: 'float64', or 'float32' for the dense path's exponentials in float32 (see
     :data:`PRECISIONS`); the truncated and FGT paths ignore it.
+
+    ``want_best=False``: the dense path may leave ``Posteriors.best`` None (a fit computes it
+    once, for its last state, by :func:`fixed_to_moving`).
     """
     if tau is None:
         tau = _default_tau(moving_t.shape[0])
     if method == "auto":
         if planner is not None:
-            return planner(moving_t, fixed, sigma2, w, log_prior, tau=tau, eps=eps, precision=precision)
+            return planner(
+                moving_t, fixed, sigma2, w, log_prior, tau=tau, eps=eps, precision=precision, want_best=want_best
+            )
         method, cached = _choose(moving_t, fixed, sigma2, log_prior, tau, eps)
     else:
         cached = {}
     if method == "fgt" and log_prior is not None and log_prior.scale != 0:
         raise InputError("`method='fgt'` computes CPD's posterior only; GPD's prior needs 'dense' or 'truncated'.")
-    return _run(method, moving_t, fixed, sigma2, w, log_prior, tau, eps, cached, _single(precision))
+    return _run(method, moving_t, fixed, sigma2, w, log_prior, tau, eps, cached, _single(precision), want_best)
 
 
 def dense_posterior(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None) -> np.ndarray:

@@ -35,6 +35,7 @@ __all__ = [
     "fast_exp",
     "fast_exp_single",
     "exp_array",
+    "dense_best",
     "dense_rows",
     "grid_keys",
     "bucket_points",
@@ -366,6 +367,7 @@ def dense_rows(
     (4 x M zeros: float64, or float32 with ``single``) and ``coef`` (D + 1 x 4). ``p1`` and
     ``pxt`` (D x M) are added to, ``pt1``, ``log_den`` and ``best`` written at ``n``;
     ``order[m]`` is moving point ``m``'s index in the caller's numbering (``best`` holds it).
+    An empty ``best`` skips it (a fit needs it only from its last E-step: :func:`dense_best`).
 
     Per row: scores ``s_m = -|x_n - y_m|^2 inv2s2`` (plus the prior), their maximum ``smax``
     (``best[n]`` its first position, or -1 when ``smax < log c``), the shift
@@ -382,8 +384,8 @@ def dense_rows(
     still cover every pair.
     """
     n_dims, n_moving = yt.shape
-    has_prior = log_weight.shape[0] > 0
     band = key.shape[0] > 0
+    want_best = best.shape[0] > 0
     span = np.empty((2, _GROUP), dtype=np.int64)
     for g in range(lo, hi, _GROUP):
         size = min(_GROUP, hi - g)
@@ -392,15 +394,10 @@ def dense_rows(
         hi_g = 0
         for j in range(size):
             n = g + j
-            _scores(x, n, yt, inv2s2, scores)
-            if has_prior:
-                vn = v_fixed[n]
-                for m in range(n_moving):
-                    dv = vn - v_moving[m]
-                    scores[m] += prior_scale * (log_weight[m] - dv * dv * inv2phi2)
-            smax = _max(scores, n_moving)
+            smax = _row_scores(x, n, yt, inv2s2, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, scores)
             r = max(smax, log_c)
-            best[n] = _first_equal(scores, smax, order) if smax >= log_c else -1
+            if want_best:
+                best[n] = _first_equal(scores, smax, order) if smax >= log_c else -1
             a = 0
             b = n_moving
             if band:
@@ -431,6 +428,32 @@ def dense_rows(
                 rows[j, lo_g : span[0, j]] = 0.0
                 rows[j, span[1, j] : hi_g] = 0.0
         _accumulate_group(rows, coef, p1, pxt, lo_g, hi_g)
+
+
+@njit(nogil=True, cache=True, inline="always")
+def _row_scores(x, n, yt, inv2s2, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, scores):
+    """Row ``n``'s scores (plus the prior when ``log_weight`` is not empty) into ``scores``;
+    returns their maximum. :func:`dense_rows` and :func:`dense_best` share it, so that both
+    see the same values."""
+    n_moving = yt.shape[1]
+    _scores(x, n, yt, inv2s2, scores)
+    if log_weight.shape[0] > 0:
+        vn = v_fixed[n]
+        for m in range(n_moving):
+            dv = vn - v_moving[m]
+            scores[m] += prior_scale * (log_weight[m] - dv * dv * inv2phi2)
+    return _max(scores, n_moving)
+
+
+@njit(nogil=True, cache=True, fastmath=_CONTRACT)
+def dense_best(x, yt, lo, hi, inv2s2, log_c, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, order, best):
+    """``best[n]`` for fixed points ``lo <= n < hi`` as :func:`dense_rows` computes it: the
+    first moving point (least ``order[m]``) of largest score, or -1 when that score is below
+    ``log c``. About a third of an E-step's work."""
+    scores = np.empty(yt.shape[1])
+    for n in range(lo, hi):
+        smax = _row_scores(x, n, yt, inv2s2, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, scores)
+        best[n] = _first_equal(scores, smax, order) if smax >= log_c else -1
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
