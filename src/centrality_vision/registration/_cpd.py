@@ -687,6 +687,7 @@ class _CPD(BaseEstimator):
         """``e_step(moving_t, sigma2, w, prior) -> Posteriors`` of this fit: CPD's or the k-NN model's."""
         if self.n_neighbors is None:
             # (``best`` from the last state only: see the end of _run)
+            memo = {}  # the dense path's sorted fixed points, kept over the fit
             return lambda moving_t, sigma2, w, prior: _e_step(
                 moving_t,
                 fixed,
@@ -697,6 +698,7 @@ class _CPD(BaseEstimator):
                 planner=planner,
                 precision=self.precision,
                 want_best=False,
+                memo=memo,
             )
         from scipy.spatial import cKDTree
 
