@@ -5,8 +5,8 @@ import pytest
 from sklearn.exceptions import NotFittedError
 
 from centrality_vision.exceptions import InputError
-from centrality_vision.registration import AffineCPD, NonRigidCPD, RigidCPD
-from centrality_vision.registration._lowrank import PivotedCholesky, low_rank_eigh, nystrom_field
+from centrality_vision.registration import AffineCPD, NonRigidCPD, RigidCPD, _lowrank
+from centrality_vision.registration._lowrank import PivotedCholesky, low_rank_eigh, nystrom_field, weighted_gram
 from centrality_vision.registration._multiscale import ComposedTransform, MultiscaleCPD, compress_field
 from centrality_vision.transforms import NonRigidTransform
 
@@ -163,3 +163,37 @@ def test_multiscale_rejects_a_non_cpd_estimator_and_unfitted_use():
         MultiscaleCPD(object()).fit(np.zeros((5, 2)), np.zeros((5, 2)))
     with pytest.raises(NotFittedError, match="not fitted"):  # the one not-fitted error of every estimator
         MultiscaleCPD(RigidCPD()).transform(np.zeros((2, 2)))
+
+
+@pytest.mark.parametrize("n, rank", [(1, 1), (7, 3), (511, 4), (512, 5), (1300, 47), (2049, 10)])
+def test_weighted_gram_matches_numpy_and_is_symmetric(n, rank):
+    """Q^T d(p) Q by blocks of 512 points and 2 x 2 tiles: odd and even ranks, a block's
+    edge, fewer points than one block; exactly symmetric."""
+    rng = np.random.default_rng(n + rank)
+    q = rng.normal(size=(n, rank))
+    p = rng.random(n)
+    got = weighted_gram(np.ascontiguousarray(q.T), p)
+    want = q.T @ (p[:, None] * q)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12 * np.abs(want).max())
+    np.testing.assert_array_equal(got, got.T)
+
+
+def test_weighted_gram_in_chunks_is_the_same_for_any_thread_count(monkeypatch):
+    from centrality_vision._parallel import get_num_threads, set_num_threads
+
+    rng = np.random.default_rng(4)
+    q = rng.normal(size=(5000, 9))
+    p = rng.random(5000)
+    serial = weighted_gram(np.ascontiguousarray(q.T), p)
+    monkeypatch.setattr(_lowrank, "_SERIAL_WEIGHTED_GRAM", 0)  # the chunked path at this size
+    before = get_num_threads()
+    runs = []
+    try:
+        for threads in (1, 2, 3):
+            set_num_threads(threads)
+            runs.append(weighted_gram(np.ascontiguousarray(q.T), p))
+    finally:
+        set_num_threads(before)
+    for other in runs[1:]:
+        np.testing.assert_array_equal(runs[0], other)
+    np.testing.assert_allclose(runs[0], serial, rtol=1e-12, atol=1e-12 * np.abs(serial).max())

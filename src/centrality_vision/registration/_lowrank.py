@@ -25,12 +25,18 @@ import math
 import numpy as np
 from numba import njit
 
+from .._parallel import run_chunks
 from .._validation import ANY_DIMS, as_points, check_float, check_int
 from ..exceptions import InputError
 from ._kernels import fast_exp
 
-__all__ = ["PivotedCholesky", "pivoted_cholesky", "low_rank_eigh", "nystrom_field"]
+__all__ = ["PivotedCholesky", "pivoted_cholesky", "low_rank_eigh", "nystrom_field", "weighted_gram"]
 
+# weighted_gram: moving points per block (the block's K rows of Q^T and of Q^T d(p) stay in
+# L2: 512 was 1.1-1.4x faster than 1,024 and 1.0-1.1x faster than 256, from 500 to 20,000
+# points), and blocks per chunk of the pool from this many multiply-adds.
+_GRAM_BLOCK = 512
+_SERIAL_WEIGHTED_GRAM = 1 << 25
 # Columns of L stored per row at first; doubled when full (a row as wide as ``max_rank``
 # spreads the few columns usually needed over far more memory: 2x slower at 100,000 points).
 _FIRST_WIDTH = 64
@@ -190,6 +196,94 @@ def low_rank_eigh(points, beta, rank, *, tol=1e-12):
     values, v = values[keep], v[:, keep]
     vectors = factor.T @ (v / np.sqrt(values))
     return values, vectors
+
+
+@njit(nogil=True, cache=True, fastmath={"contract", "reassoc", "nnan", "ninf", "nsz"})
+def _weighted_gram_part(qt, p, lo, hi, out):
+    """``out = sum_{lo <= m < hi} p[m] q_m q_m^T`` (lower triangle; ``qt`` is Q^T, K x M), by
+    blocks of :data:`_GRAM_BLOCK` moving points and tiles of 2 x 2 entries (four dot products
+    share each load)."""
+    n_rank = qt.shape[0]
+    out[:, :] = 0.0
+    wq = np.empty((n_rank, _GRAM_BLOCK))
+    for start in range(lo, hi, _GRAM_BLOCK):
+        end = min(start + _GRAM_BLOCK, hi)
+        n = end - start
+        weight = p[start:end]
+        for i in range(n_rank):
+            qi = qt[i, start:end]
+            wi = wq[i, :n]
+            for m in range(n):
+                wi[m] = qi[m] * weight[m]
+        for i in range(0, n_rank - 1, 2):
+            a0, a1 = wq[i, :n], wq[i + 1, :n]
+            for j in range(0, i + 1, 2):
+                b0, b1 = qt[j, start:end], qt[j + 1, start:end]
+                s00 = s01 = s10 = s11 = 0.0
+                for m in range(n):
+                    x0, x1, y0, y1 = a0[m], a1[m], b0[m], b1[m]
+                    s00 += x0 * y0
+                    s01 += x0 * y1
+                    s10 += x1 * y0
+                    s11 += x1 * y1
+                out[i, j] += s00
+                out[i, j + 1] += s01
+                out[i + 1, j] += s10
+                out[i + 1, j + 1] += s11
+        if n_rank % 2:
+            a = wq[n_rank - 1, :n]
+            for j in range(n_rank):
+                b = qt[j, start:end]
+                total = 0.0
+                for m in range(n):
+                    total += a[m] * b[m]
+                out[n_rank - 1, j] += total
+
+
+def weighted_gram(qt: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """``Q^T d(p) Q`` (K x K, symmetric) from ``qt`` = Q^T (K x M, C-contiguous).
+
+    The non-rigid M-step's Woodbury system, once per iteration. One thread: 2.1-2.7x faster
+    than BLAS's ``Q.T @ (p[:, None] * Q)`` from 500 to 20,000 points at ranks 47-139 (69
+    against 176 us at 1,000 points). From 2^25 multiply-adds the moving points are split
+    into chunks that depend on M alone, summed in chunk order: the same result for any
+    number of threads.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> q = np.random.default_rng(0).random((300, 7))
+    >>> p = np.random.default_rng(1).random(300)
+    >>> bool(np.allclose(weighted_gram(np.ascontiguousarray(q.T), p), q.T @ (p[:, None] * q)))
+    True
+    """
+    n_rank, n = qt.shape
+    if n * n_rank * n_rank < _SERIAL_WEIGHTED_GRAM:
+        out = np.empty((n_rank, n_rank))
+        _weighted_gram_part(qt, p, 0, n, out)
+    else:
+        blocks = -(-n // _GRAM_BLOCK)
+        n_chunks = min(blocks, 16)
+        edges = [min(n, (i * blocks // n_chunks) * _GRAM_BLOCK) for i in range(n_chunks + 1)]
+        parts = np.empty((n_chunks, n_rank, n_rank))
+
+        def task(lo, hi):
+            for c in range(lo, hi):
+                _weighted_gram_part(qt, p, edges[c], edges[c + 1], parts[c])
+
+        run_chunks(task, n_chunks)
+        out = parts[0]
+        for c in range(1, n_chunks):
+            out += parts[c]
+    _mirror_lower(out)
+    return out
+
+
+@njit(nogil=True, cache=True)
+def _mirror_lower(a):
+    for i in range(a.shape[0]):
+        for j in range(i):
+            a[j, i] = a[i, j]
 
 
 def nystrom_field(points, pivots, factor, coefficients):
