@@ -5,6 +5,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from centrality_vision.exceptions import InputError
 from centrality_vision.registration import GPD, AffineCPD, NonRigidCPD, RigidCPD
@@ -257,7 +259,7 @@ def test_band_of_exponentials_matches_every_term(single):
         n_moving, n_fixed = moving_t.shape[0], fixed.shape[0]
         tau = _default_tau(n_moving)
         inv2s2 = 1.0 / (2.0 * sigma2)
-        banded += _band_axis(np.ascontiguousarray(moving_t.T), inv2s2, tau) is not None
+        banded += _band_axis(np.ptp(moving_t, axis=0), n_moving, inv2s2, tau) is not None
         log_c = log_outlier_constant(sigma2, w, fixed.shape[1], n_moving, n_fixed)
         p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, None, single, tau)
         r_p1, r_px, r_pt1, r_log_den, r_best = _dense(moving_t, fixed, inv2s2, log_c, None, single)
@@ -356,3 +358,35 @@ def test_memo_of_sorted_fixed_points_changes_nothing():
                 for name in ("p1", "pt1", "px", "best"):
                     np.testing.assert_array_equal(getattr(kept, name), getattr(plain, name))
     assert set(memo["rows"]) == {0, 1}  # both axes were banded for the last fixed array
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    values=st.lists(st.integers(-3, 3).map(float), min_size=1, max_size=60),
+    seed=st.integers(0, 2**32 - 1),
+    budget=st.integers(0, 400),
+)
+def test_refined_order_is_the_stable_argsort(values, seed, budget):
+    """Insertion from any starting permutation ends at the stable argsort (ties by index),
+    or reports that it ran out of moves."""
+    from centrality_vision.registration import _kernels as K
+
+    values = np.asarray(values)
+    order = np.random.default_rng(seed).permutation(values.size)
+    if K.refine_order(values, order, budget):
+        np.testing.assert_array_equal(order, np.argsort(values, kind="stable"))
+    else:
+        assert sorted(order.tolist()) == list(range(values.size))  # still a permutation
+
+
+def test_moving_order_from_the_memo_equals_a_fresh_sort():
+    from centrality_vision.registration._estep import _moving_order
+
+    rng = np.random.default_rng(2)
+    memo = {}
+    points = rng.random(800)
+    for step in range(6):
+        points = points + rng.normal(0.0, 10.0 ** -(step % 3 + 1), points.size)  # small and large moves
+        points[:50] = points[50:100]  # exact ties
+        got = _moving_order(points, 0, memo)
+        np.testing.assert_array_equal(got, np.argsort(points, kind="stable"))

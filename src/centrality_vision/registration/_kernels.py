@@ -37,6 +37,10 @@ __all__ = [
     "exp_array",
     "dense_best",
     "dense_rows",
+    "transpose_extent",
+    "refine_order",
+    "gather_columns",
+    "scatter_statistics",
     "grid_keys",
     "bucket_points",
     "grid_nearest",
@@ -454,6 +458,84 @@ def dense_best(x, yt, lo, hi, inv2s2, log_c, log_weight, v_moving, v_fixed, prio
     for n in range(lo, hi):
         smax = _row_scores(x, n, yt, inv2s2, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, scores)
         best[n] = _first_equal(scores, smax, order) if smax >= log_c else -1
+
+
+@njit(nogil=True, cache=True)
+def transpose_extent(points):
+    """``(points.T as a C array, the extent max - min along each axis)`` in one pass."""
+    n_points, n_dims = points.shape
+    yt = np.empty((n_dims, n_points))
+    low = np.full(n_dims, np.inf)
+    high = np.full(n_dims, -np.inf)
+    for i in range(n_points):
+        for d in range(n_dims):
+            v = points[i, d]
+            yt[d, i] = v
+            low[d] = min(low[d], v)
+            high[d] = max(high[d], v)
+    return yt, high - low
+
+
+@njit(nogil=True, cache=True)
+def refine_order(values, order, max_moves):
+    """Sort ``order`` in place by ``(values[i], i)`` (the order of a stable argsort) by
+    insertion from its current, nearly sorted state; gives up (returns False, ``order``
+    then some permutation) after ``max_moves`` moves. The order is total, so every start
+    that finishes ends at the same permutation."""
+    moves = 0
+    for k in range(1, order.shape[0]):
+        item = order[k]
+        v = values[item]
+        j = k - 1
+        while j >= 0:
+            other = order[j]
+            w = values[other]
+            if w < v or (w == v and other < item):
+                break
+            order[j + 1] = other
+            j -= 1
+            moves += 1
+        order[j + 1] = item
+        if moves > max_moves:
+            return False
+    return True
+
+
+@njit(nogil=True, cache=True)
+def gather_columns(yt, order):
+    """``yt[:, order]`` as a C array."""
+    n_dims = yt.shape[0]
+    out = np.empty((n_dims, order.shape[0]))
+    for d in range(n_dims):
+        for j in range(order.shape[0]):
+            out[d, j] = yt[d, order[j]]
+    return out
+
+
+@njit(nogil=True, cache=True)
+def scatter_statistics(p1, pxt, order, pt1, log_den, row_order):
+    """The dense path's statistics back in the callers' numbering: ``P1`` and ``P X`` (M x D)
+    from the sorted moving points' ``p1`` and ``pxt`` (D x M), ``P^T 1`` and the log
+    denominators from the sorted fixed points' (an empty ``order`` / ``row_order``: not
+    sorted)."""
+    n_dims, n_moving = pxt.shape
+    p1_out = np.empty(n_moving)
+    px = np.empty((n_moving, n_dims))
+    sorted_moving = order.shape[0] > 0
+    for j in range(n_moving):
+        m = order[j] if sorted_moving else j
+        p1_out[m] = p1[j]
+        for d in range(n_dims):
+            px[m, d] = pxt[d, j]
+    if row_order.shape[0] == 0:
+        return p1_out, px, pt1, log_den
+    pt1_out = np.empty_like(pt1)
+    log_den_out = np.empty_like(log_den)
+    for j in range(pt1.shape[0]):
+        n = row_order[j]
+        pt1_out[n] = pt1[j]
+        log_den_out[n] = log_den[j]
+    return p1_out, px, pt1_out, log_den_out
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
