@@ -129,6 +129,11 @@ def initial_sigma2(moving, fixed) -> float:
     """
     moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
     fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
+    return _initial_sigma2(moving, fixed)
+
+
+def _initial_sigma2(moving, fixed) -> float:
+    """:func:`initial_sigma2` of checked arrays (a fit calls it three times)."""
     centre = fixed.mean(axis=0)
     x, y = fixed - centre, moving - centre
     n_fixed, n_moving, n_dims = x.shape[0], y.shape[0], x.shape[1]
@@ -478,12 +483,12 @@ class _CPD(BaseEstimator):
 
     def _run(self, moving, moving_n, fixed, frame, true_n, start, landmarks, prior):
         n_fixed, n_dims = fixed.shape
-        spread = max(initial_sigma2(fixed, fixed), initial_sigma2(moving_n, moving_n))
+        spread = max(_initial_sigma2(fixed, fixed), _initial_sigma2(moving_n, moving_n))
         spread = 1.0 if spread <= 0 else max(spread, 1e-280)  # keeps 1 / (2 floor) finite
         floor = _SIGMA2_FLOOR * spread
         state = self._init_state(moving_n, fixed, start)
         moving_t = self._apply(state, self._work)
-        sigma2 = initial_sigma2(moving_t, fixed) if self.sigma2 is None else float(self.sigma2)
+        sigma2 = _initial_sigma2(moving_t, fixed) if self.sigma2 is None else float(self.sigma2)
         sigma2 = max(sigma2, floor)
         sigma2_start = sigma2
         auto_w = isinstance(self.w, str)

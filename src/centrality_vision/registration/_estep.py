@@ -376,10 +376,14 @@ def fixed_to_moving(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = 
     def task(lo, hi):
         K.dense_best(fixed, yt, lo, hi, inv2s2, log_c, lw, vy, vx, scale, inv2phi2, order, best)
 
-    if n_fixed * n_moving < _SERIAL_PAIRS:
-        task(0, n_fixed)
-    else:
+    pairs = n_fixed * n_moving
+    if pairs >= _SERIAL_PAIRS:
         run_chunks(task, n_fixed)
+    elif pairs >= _PAIR_PAIRS and get_num_threads() > 1:
+        edges = [0, int(n_fixed * _CALLER_SHARE), n_fixed]
+        _two_halves(lambda a, b: task(edges[a], edges[b]))
+    else:
+        task(0, n_fixed)
     return best
 
 

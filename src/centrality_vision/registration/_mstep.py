@@ -133,8 +133,8 @@ class LowRankKernel:
         self.vectors_t = np.ascontiguousarray(self.vectors.T)  # Q^T, for weighted_gram
 
     def apply(self, w: np.ndarray) -> np.ndarray:
-        """``G w``."""
-        return ((self.values[:, None] * (self.vectors_t @ w)).T @ self.vectors_t).T
+        """``G w`` (M x D, C-ordered)."""
+        return _low_rank_times(self.vectors_t, self.values, np.ascontiguousarray(w, dtype=float))
 
 
 def kernel_times(kernel, w: np.ndarray) -> np.ndarray:
@@ -241,3 +241,31 @@ def _low_rank_step(qt, values, inner, p1, px, pt1, moving, fixed, ls2, n_p):
             g_term += w[d, m] * field[d, m]
         y_py += p1[m] * sq
     return w_out, moved, (x_px - 2.0 * tr_pxy + y_py) / (n_p * n_dims), g_term
+
+
+@njit(nogil=True, cache=True, fastmath={"contract", "reassoc", "nsz"})
+def _low_rank_times(qt, values, w):
+    """``Q diag(values) Q^T w`` (M x D) along the contiguous rows of ``qt`` = Q^T (K x M)."""
+    n_rank, n_points = qt.shape
+    n_dims = w.shape[1]
+    wt = np.empty((n_dims, n_points))
+    for m in range(n_points):
+        for d in range(n_dims):
+            wt[d, m] = w[m, d]
+    field = np.zeros((n_dims, n_points))
+    for d in range(n_dims):
+        wd = wt[d]
+        fd = field[d]
+        for k in range(n_rank):
+            q = qt[k]
+            total = 0.0
+            for m in range(n_points):
+                total += q[m] * wd[m]
+            c = values[k] * total
+            for m in range(n_points):
+                fd[m] += c * q[m]
+    out = np.empty((n_points, n_dims))
+    for m in range(n_points):
+        for d in range(n_dims):
+            out[m, d] = field[d, m]
+    return out
