@@ -37,63 +37,60 @@ __all__ = ["PivotedCholesky", "pivoted_cholesky", "low_rank_eigh", "nystrom_fiel
 # points), and blocks per chunk of the pool from this many multiply-adds.
 _GRAM_BLOCK = 512
 _SERIAL_WEIGHTED_GRAM = 1 << 25
-# Columns of L stored per row at first; doubled when full (a row as wide as ``max_rank``
-# spreads the few columns usually needed over far more memory: 2x slower at 100,000 points).
+# Columns of L stored at first (rows of L^T); doubled when full (room for ``max_rank`` at
+# once can be far more memory than the few columns usually needed).
 _FIRST_WIDTH = 64
 
 
-@njit(nogil=True, cache=True, fastmath={"contract", "reassoc"})
-def _dot(a, b, k):
-    """``sum_q a[q] b[q]`` for ``q < k`` (reassociated: vectorised)."""
-    total = 0.0
-    for q in range(k):
-        total += a[q] * b[q]
-    return total
-
-
 @njit(nogil=True, cache=True, fastmath={"contract"})
-def _column(points, pivot, inv2b2, rows, k, out):
-    """``out[j] = G[j, pivot] - sum_{q < k} rows[j, q] rows[pivot, q]`` (``rows`` is ``L``,
-    M x width, row-major: each sum is one contiguous dot product)."""
+def _column(points, pivot, inv2b2, lt, k, out):
+    """``out[j] = G[j, pivot] - sum_{q < k} L[j, q] L[pivot, q]`` with ``lt`` = L^T (rows
+    = columns of L): the sum as ``k`` passes along contiguous rows (measured 1.3-2.1x faster
+    than a short dot product per point, from 1,000 to 100,000 points)."""
     n_dims = points.shape[1]
-    at_pivot = rows[pivot]
     for j in range(points.shape[0]):
         d2 = 0.0
         for d in range(n_dims):
             diff = points[j, d] - points[pivot, d]
             d2 += diff * diff
-        out[j] = fast_exp(max(-d2 * inv2b2, -700.0)) - _dot(rows[j], at_pivot, k)
+        out[j] = fast_exp(max(-d2 * inv2b2, -700.0))
+    for q in range(k):
+        c = lt[q, pivot]
+        row = lt[q]
+        for j in range(out.shape[0]):
+            out[j] -= c * row[j]
 
 
 @njit(nogil=True, cache=True, fastmath={"contract"})
-def _take(col, pivot, k, rows, diag):
-    """Scale ``col`` into column ``k`` of ``rows`` and take its squares off ``diag``."""
+def _take(col, pivot, k, lt, diag):
+    """Scale ``col`` into row ``k`` of ``lt`` (column ``k`` of L) and take its squares off ``diag``."""
     scale = 1.0 / np.sqrt(diag[pivot])
+    row = lt[k]
     for j in range(col.shape[0]):
         c = col[j] * scale
-        rows[j, k] = c
+        row[j] = c
         diag[j] = max(diag[j] - c * c, 0.0)
     diag[pivot] = 0.0
 
 
 @njit(nogil=True, cache=True, fastmath={"contract"})
-def _factor(points, inv2b2, target, rows, diag, pivots, start):
-    """Columns ``start, start + 1, ...`` of the factorisation, until ``rows`` is full or the
+def _factor(points, inv2b2, target, lt, diag, pivots, start):
+    """Columns ``start, start + 1, ...`` of the factorisation, until ``lt`` is full or the
     stopping rule holds; returns the number of columns taken so far. One thread: a column
     is a memory-bound pass, and per-column dispatch to a pool measured slower from 1,000 to
     300,000 points (1.5-3x at 3,000-30,000)."""
     n = points.shape[0]
     col = np.empty(n)
-    for k in range(start, rows.shape[1]):
+    for k in range(start, lt.shape[0]):
         if diag.sum() <= target:
             return k
         pivot = np.argmax(diag)
         if diag[pivot] <= 0.0:
             return k
-        _column(points, pivot, inv2b2, rows, k, col)
-        _take(col, pivot, k, rows, diag)
+        _column(points, pivot, inv2b2, lt, k, col)
+        _take(col, pivot, k, lt, diag)
         pivots[k] = pivot
-    return rows.shape[1]
+    return lt.shape[0]
 
 
 class PivotedCholesky:
@@ -142,16 +139,16 @@ class PivotedCholesky:
         diag = np.ones(n)
         pivots = np.empty(max_rank, dtype=np.int64)
         target = tol * n
-        rows = np.empty((n, min(max_rank, _FIRST_WIDTH)))  # L, row-major: M dot products a column
+        lt = np.empty((min(max_rank, _FIRST_WIDTH), n))  # L^T: a column of L per row
         count = 0
         while True:
-            count = _factor(points, inv2b2, target, rows, diag, pivots, count)
-            if count < rows.shape[1] or count == max_rank:
+            count = _factor(points, inv2b2, target, lt, diag, pivots, count)
+            if count < lt.shape[0] or count == max_rank:
                 break
-            wider = np.empty((n, min(2 * rows.shape[1], max_rank)))
-            wider[:, :count] = rows
-            rows = wider
-        self.factor = np.ascontiguousarray(rows[:, :count].T)
+            wider = np.empty((min(2 * lt.shape[0], max_rank), n))
+            wider[:count] = lt[:count]
+            lt = wider
+        self.factor = lt[:count] if count == lt.shape[0] else lt[:count].copy()
         self.pivots = pivots[:count].copy()
         self.residual_trace = float(diag.sum())
 
