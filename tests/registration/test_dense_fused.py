@@ -237,11 +237,14 @@ def test_float32_exponential_is_within_its_bound():
 def _band_cases():
     rng = np.random.default_rng(17)
     for n_dims in (2, 3):
-        for n_moving, n_fixed in ((300, 260), (700, 513)):
+        # (from ~1,200 moving points a narrow band restricts each row's scores too)
+        for n_moving, n_fixed in ((300, 260), (700, 513), (2500, 200)):
             for sigma2 in (1e-2, 1e-4, 1e-8):
                 for w in (0.0, 0.2):
                     fixed = rng.random((n_fixed, n_dims))
                     fixed[:5] += 3.0  # a few rows far outside the moving set
+                    # rows far off across the band's axis: their nearest-point scan gives up
+                    fixed[5:9, 1:] += 40.0
                     yield rng.random((n_moving, n_dims)) * [2.0, 1.0, 0.5][:n_dims], fixed, sigma2, w
 
 
@@ -277,10 +280,11 @@ def test_band_of_exponentials_matches_every_term(single):
 def test_band_keeps_ties_to_the_first_point_and_threads_do_not_change_it():
     from centrality_vision._parallel import get_num_threads, set_num_threads
 
-    big = np.random.default_rng(1).random((400, 2)) * [3.0, 1.0]
-    moving_big = np.vstack([big, big])  # each point twice: the first copy wins, as without the band
-    got = _dense(moving_big, big, 1.0 / (2.0 * 1e-6), -math.inf, None, False, 40.0)
-    np.testing.assert_array_equal(got[4], np.arange(400))
+    for n in (400, 1300):  # 2,600 moving points: each row's scores over its band's run only
+        big = np.random.default_rng(1).random((n, 2)) * [3.0, 1.0]
+        moving_big = np.vstack([big, big])  # each point twice: the first copy wins, as without the band
+        got = _dense(moving_big, big, 1.0 / (2.0 * 1e-6), -math.inf, None, False, 40.0)
+        np.testing.assert_array_equal(got[4], np.arange(n))
     rng = np.random.default_rng(12)
     moving_t, fixed = rng.random((1100, 2)) * [4.0, 1.0], rng.random((1000, 2)) * [4.0, 1.0]
     before = get_num_threads()

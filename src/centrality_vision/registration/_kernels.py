@@ -219,24 +219,32 @@ def _exp_shifted(row, a, b, shift):
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
-def _scores(x, n, yt, inv2s2, row):
-    """``row[m] = -|x_n - y_m|^2 inv2s2`` in one pass for D = 2 and 3."""
-    n_dims, n_moving = yt.shape
+def _scores_rows(x, n, y0, y1, y2, n_dims, inv2s2, row):
+    """``row[m] = -|x_n - y_m|^2 inv2s2`` for D = 2 (``y2`` unused) and 3 from the moving
+    set's coordinate rows (one loop: the full row and a band's run score alike)."""
     if n_dims == 2:
         x0, x1 = x[n, 0], x[n, 1]
-        y0, y1 = yt[0], yt[1]
-        for m in range(n_moving):
+        for m in range(row.shape[0]):
             d0 = x0 - y0[m]
             d1 = x1 - y1[m]
             row[m] = -(d0 * d0 + d1 * d1) * inv2s2
-    elif n_dims == 3:
+    else:
         x0, x1, x2 = x[n, 0], x[n, 1], x[n, 2]
-        y0, y1, y2 = yt[0], yt[1], yt[2]
-        for m in range(n_moving):
+        for m in range(row.shape[0]):
             d0 = x0 - y0[m]
             d1 = x1 - y1[m]
             d2 = x2 - y2[m]
             row[m] = -(d0 * d0 + d1 * d1 + d2 * d2) * inv2s2
+
+
+@njit(nogil=True, cache=True, fastmath=_CONTRACT)
+def _scores(x, n, yt, inv2s2, row):
+    """``row[m] = -|x_n - y_m|^2 inv2s2`` in one pass for D = 2 and 3."""
+    n_dims, n_moving = yt.shape
+    if n_dims == 2:
+        _scores_rows(x, n, yt[0], yt[1], yt[1], 2, inv2s2, row[:n_moving])
+    elif n_dims == 3:
+        _scores_rows(x, n, yt[0], yt[1], yt[2], 3, inv2s2, row[:n_moving])
     else:
         for m in range(n_moving):
             row[m] = 0.0
@@ -252,16 +260,19 @@ def _scores(x, n, yt, inv2s2, row):
 
 # ---------------------------------------------------------------------------------------------
 # The dense E-step. Per row of fixed points: the scores (and the prior) into a buffer, their
-# maximum and its first position, the exponentials into a second buffer and their sum, each
-# one vectorised loop over the row (held in L1); the rows are then added into the sufficient
-# statistics four at a time, so that P1 and P X are read and written once per four rows. The
-# exponential dominates (measured on one core: 0.6 ns a term, against 0.15-0.2 for a score,
-# 0.14 for the maximum, 0.07 for its position, 0.04 for the sum and 0.13 for the
-# accumulation). Scores and exponentials are not fused into one loop: that needs each row's
-# shift beforehand (its nearest moving point, from a k-d tree), and the tree's query alone
-# costs more than the passes it would save below about 10,000 points (0.65 ns a pair at
-# 1,000 points, 0.14 at 3,000), while a score-and-exponential loop costs as much as the two
-# loops (0.81 against 0.77 ns a term).
+# maximum (and its first position, when asked: a fit needs it only at its end), the
+# exponentials into a second buffer and their sum, each one vectorised loop over the row
+# (held in L1); the rows are then added into the sufficient statistics four at a time, so
+# that P1 and P X are read and written once per four rows. The exponential dominates
+# (measured on one core at 1,000 points, in compiled loops: 0.62 ns a term, against 0.15
+# for a score, 0.14 for the maximum, 0.12 for its position, 0.06 for the sum and 0.14 a row
+# for the accumulation). Scores and exponentials are not fused into one loop: that needs
+# each row's shift beforehand (its nearest moving point, from a k-d tree), and the tree's
+# query alone costs more than the passes it would save below about 10,000 points (0.65 ns
+# a pair at 1,000 points, 0.14 at 3,000), while a score-and-exponential loop costs as much
+# as the two loops (0.81 against 0.77 ns a term). Nor the scores and their maximum: numba's
+# loop that stores a score and keeps a running maximum did not vectorise (0.47-0.69 ns a
+# term against 0.27-0.33 for the two loops).
 
 _GROUP = 4  # rows accumulated together
 
@@ -355,6 +366,7 @@ def dense_rows(
     key,
     axis,
     tau,
+    score_band,
     order,
     scores,
     rows,
@@ -384,13 +396,17 @@ def dense_rows(
     ``key`` holds that coordinate. ``s_m <= -(x_n - key_m)^2 inv2s2``, so every term above
     ``exp(-tau)`` of ``exp(r)`` lies where ``(x_n - key_m)^2 <= (tau - r) / inv2s2``: the
     exponentials are taken only over that run of the sorted points (two binary searches)
-    and the rest of the row is zero, as in the truncated path. The scores and the maximum
-    still cover every pair.
+    and the rest of the row is zero, as in the truncated path. The scores and their maximum
+    are taken over the run that the row's nearest moving point bounds the same way (found
+    by scanning the sorted keys outwards from the row's own, at most ``M / 8`` of them, else
+    every pair is scored): that run holds every score within ``tau`` of the largest, so the
+    results are the same as from every pair.
     """
     n_dims, n_moving = yt.shape
     band = key.shape[0] > 0
     want_best = best.shape[0] > 0
     span = np.empty((2, _GROUP), dtype=np.int64)
+    scan_limit = max(32, n_moving // _SCAN_FRACTION)
     for g in range(lo, hi, _GROUP):
         size = min(_GROUP, hi - g)
         coef[:, :] = 0.0
@@ -398,10 +414,28 @@ def dense_rows(
         hi_g = 0
         for j in range(size):
             n = g + j
-            smax = _row_scores(x, n, yt, inv2s2, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, scores)
+            # the run [c, e) of the row whose scores are needed: all of it, or with the band
+            # the run that can hold a term above exp(-tau) of the row's largest, from its
+            # nearest moving point (found along the sorted keys), widened against rounding
+            c = 0
+            e = n_moving
+            if band and score_band:
+                d2 = _nearest_sorted(x, n, yt, key, axis, scan_limit)
+                if d2 < np.inf:
+                    r_low = max(-d2 * inv2s2, log_c)
+                    r_low -= 1e-9 * max(1.0, abs(r_low))
+                    half = np.sqrt(max(tau - r_low, 0.0) / inv2s2)
+                    c = np.searchsorted(key, x[n, axis] - half)
+                    e = np.searchsorted(key, x[n, axis] + half, side="right")
+            if c == 0 and e == n_moving:
+                smax = _row_scores(x, n, yt, inv2s2, log_weight, v_moving, v_fixed, prior_scale, inv2phi2, scores)
+            elif e > c:
+                smax = _part_scores(x, n, yt, c, e, inv2s2, scores)
+            else:  # the outlier term outweighs every pair by more than tau: r = log c, best -1
+                smax = -np.inf
             r = max(smax, log_c)
             if want_best:
-                best[n] = _first_equal(scores, smax, order) if smax >= log_c else -1
+                best[n] = _first_equal(scores[c:e], smax, order[c:e]) if smax >= log_c else -1
             a = 0
             b = n_moving
             if band:
@@ -432,6 +466,76 @@ def dense_rows(
                 rows[j, lo_g : span[0, j]] = 0.0
                 rows[j, span[1, j] : hi_g] = 0.0
         _accumulate_group(rows, coef, p1, pxt, lo_g, hi_g)
+
+
+# The band's nearest-point scan gives up after this fraction of the moving points (a row far
+# from the set across the band's axis) and the row is scored in full.
+_SCAN_FRACTION = 8
+
+
+@njit(nogil=True, cache=True, inline="always")
+def _nearest_sorted(x, n, yt, key, axis, limit):
+    """Squared distance from fixed point ``n`` to its nearest moving point, the moving points
+    sorted along ``axis`` (``key``): scanning outwards from ``x[n, axis]``'s place while the
+    key gap alone is below the best so far; ``inf`` after ``limit`` candidates."""
+    n_dims, n_moving = yt.shape
+    xa = x[n, axis]
+    start = np.searchsorted(key, xa)
+    best = np.inf
+    seen = 0
+    m = start
+    while m < n_moving:
+        gap = key[m] - xa
+        if gap * gap >= best:
+            break
+        d2 = 0.0
+        for d in range(n_dims):
+            diff = x[n, d] - yt[d, m]
+            d2 += diff * diff
+        best = min(best, d2)
+        m += 1
+        seen += 1
+        if seen > limit:
+            return np.inf
+    m = start - 1
+    while m >= 0:
+        gap = xa - key[m]
+        if gap * gap >= best:
+            break
+        d2 = 0.0
+        for d in range(n_dims):
+            diff = x[n, d] - yt[d, m]
+            d2 += diff * diff
+        best = min(best, d2)
+        m -= 1
+        seen += 1
+        if seen > limit:
+            return np.inf
+    return best
+
+
+@njit(nogil=True, cache=True, fastmath=_CONTRACT)
+def _part_scores(x, n, yt, c, e, inv2s2, scores):
+    """Row ``n``'s scores for the moving points ``c <= m < e`` (no prior) into
+    ``scores[c:e]``, by :func:`_scores` on that run; returns their maximum."""
+    part = scores[c:e]
+    n_dims = yt.shape[0]
+    if n_dims == 2:
+        _scores_rows(x, n, yt[0, c:e], yt[1, c:e], yt[1, c:e], 2, inv2s2, part)
+    elif n_dims == 3:
+        _scores_rows(x, n, yt[0, c:e], yt[1, c:e], yt[2, c:e], 3, inv2s2, part)
+    else:
+        for m in range(e - c):
+            part[m] = 0.0
+        for d in range(n_dims):
+            xd = x[n, d]
+            yd = yt[d, c:e]
+            for m in range(e - c):
+                diff = xd - yd[m]
+                part[m] += diff * diff
+        for m in range(e - c):
+            part[m] *= -inv2s2
+    return _max(part, e - c)
 
 
 @njit(nogil=True, cache=True, inline="always")

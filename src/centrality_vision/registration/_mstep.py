@@ -207,18 +207,7 @@ def _low_rank_step(qt, values, inner, p1, px, pt1, moving, fixed, ls2, n_p):
                 wd[m] -= c * q[m] * p1[m]
         for m in range(n_points):
             wd[m] /= ls2
-    field = np.zeros((n_dims, n_points))  # (G W)^T = (Q diag(values) Q^T W)^T
-    for d in range(n_dims):
-        wd = w[d]
-        fd = field[d]
-        for k in range(n_rank):
-            q = qt[k]
-            total = 0.0
-            for m in range(n_points):
-                total += q[m] * wd[m]
-            c = values[k] * total
-            for m in range(n_points):
-                fd[m] += c * q[m]
+    field = _field_t(qt, values, w)  # (G W)^T
     moved = np.empty((n_points, n_dims))
     w_out = np.empty((n_points, n_dims))
     x_px = 0.0
@@ -244,14 +233,11 @@ def _low_rank_step(qt, values, inner, p1, px, pt1, moving, fixed, ls2, n_p):
 
 
 @njit(nogil=True, cache=True, fastmath={"contract", "reassoc", "nsz"})
-def _low_rank_times(qt, values, w):
-    """``Q diag(values) Q^T w`` (M x D) along the contiguous rows of ``qt`` = Q^T (K x M)."""
+def _field_t(qt, values, wt):
+    """``(Q diag(values) Q^T W)^T`` (D x M) from ``wt`` = W^T, along the contiguous rows of
+    ``qt`` = Q^T (K x M)."""
     n_rank, n_points = qt.shape
-    n_dims = w.shape[1]
-    wt = np.empty((n_dims, n_points))
-    for m in range(n_points):
-        for d in range(n_dims):
-            wt[d, m] = w[m, d]
+    n_dims = wt.shape[0]
     field = np.zeros((n_dims, n_points))
     for d in range(n_dims):
         wd = wt[d]
@@ -264,8 +250,10 @@ def _low_rank_times(qt, values, w):
             c = values[k] * total
             for m in range(n_points):
                 fd[m] += c * q[m]
-    out = np.empty((n_points, n_dims))
-    for m in range(n_points):
-        for d in range(n_dims):
-            out[m, d] = field[d, m]
-    return out
+    return field
+
+
+@njit(nogil=True, cache=True)
+def _low_rank_times(qt, values, w):
+    """``Q diag(values) Q^T w`` (M x D, C-ordered)."""
+    return np.ascontiguousarray(_field_t(qt, values, np.ascontiguousarray(w.T)).T)
