@@ -251,6 +251,31 @@ def _band_axis(extent, n_moving, inv2s2, tau) -> int | None:
     return axis if 2.0 * math.sqrt(tau / inv2s2) < extent[axis] else None
 
 
+def _score_band(extent, n_moving, inv2s2, tau) -> bool:
+    """Whether the band also restricts each row's scores (see :data:`_SCORE_BAND_SAVED`):
+    the narrowest band, ``2 sqrt(tau / inv2s2)`` wide, leaves enough points out."""
+    narrowest = min(1.0, 2.0 * math.sqrt(tau / inv2s2) / max(extent, 1e-300))
+    return (1.0 - narrowest) * n_moving >= _SCORE_BAND_SAVED
+
+
+def _dense_cost(moving_t, n_fixed, sigma2, tau, prior, d2_nearest) -> float:
+    """The dense path's modelled cost (ns): every pair's score and exponential, or, with
+    the band (see :func:`_dense`), each row's exponentials (and, when restricted, scores)
+    over the share of the moving points within ``sqrt(2 sigma2 tau + d^2)`` along the band's
+    axis (``d`` the median distance to the nearest moving point), plus a row's search."""
+    n_moving = moving_t.shape[0]
+    pairs = float(n_moving) * n_fixed
+    inv2s2 = 1.0 / (2.0 * sigma2)
+    extent = np.ptp(moving_t, axis=0)
+    has_prior = prior is not None and prior.scale != 0
+    axis = None if has_prior else _band_axis(extent, n_moving, inv2s2, tau)
+    if axis is None:
+        return _COST_DENSE * pairs
+    share = min(1.0, 2.0 * math.sqrt(tau / inv2s2 + float(np.median(d2_nearest))) / max(extent[axis], 1e-300))
+    scored = share if _score_band(extent[axis], n_moving, inv2s2, tau) else 1.0
+    return pairs * (_COST_DENSE_SCORE * scored + (_COST_DENSE - _COST_DENSE_SCORE) * share) + _COST_DENSE_ROW * n_fixed
+
+
 def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False, tau=None, want_best=True, memo=None):
     """Every pair (see :func:`_kernels.dense_rows`); ``single``: the exponentials in float32;
     ``want_best=False`` returns None for ``best`` (see :func:`fixed_to_moving`); ``memo``:
@@ -287,9 +312,7 @@ def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False, tau=None, want_b
     best = np.empty(n_fixed if want_best else 0, dtype=np.int64)
     dtype = np.float32 if single else np.float64
     band_tau = math.inf if tau is None else float(tau)
-    # the narrowest band's share of the sorted moving points (see _SCORE_BAND_SAVED)
-    narrowest = 1.0 if axis is None else min(1.0, 2.0 * math.sqrt(band_tau / inv2s2) / max(extent[axis], 1e-300))
-    score_band = (1.0 - narrowest) * n_moving >= _SCORE_BAND_SAVED
+    score_band = axis is not None and _score_band(extent[axis], n_moving, inv2s2, band_tau)
 
     def work(lo, hi, p1, pxt):
         scores = np.empty(n_moving)
@@ -710,6 +733,11 @@ _FGT_MAX_BYTES = 2**32
 # sigma2 1..1e-12, load 5 on 2 cores), seconds per modelled second: dense 3.2-4.2,
 # truncated 3.4-8, FGT 2.5-5 where it is the fastest path (sigma2 >= 1e-2) and 2.3-10 below.
 _COST_DENSE, _COST_TRUNCATED, _COST_FGT = 0.6, 4.5, 0.4
+# The dense pair's score and maximum (a quarter of its one-thread time: 0.29 of 1.1 ns; the
+# rest is the exponential, its sum and the accumulation), and a banded row's own search
+# (its nearest moving point and four binary searches: about 250 pairs' work).
+_COST_DENSE_SCORE = 0.16
+_COST_DENSE_ROW = 150.0
 # The truncated path's fixed cost per row and per log2(M): its walk over the ~(2 x 4 + 2)^D
 # cells of its search box (two binary searches over the M moving points per row of cells;
 # measured 1.5-3 us per row in 2D at 3,000 and 20,000 points, load 5 on 2 cores), paid
@@ -766,10 +794,10 @@ def _model_costs(moving_t, fixed, sigma2, prior, tau, eps):
     """Estimated cost (ns) of each candidate path (the truncated one from 256 sampled rows),
     and what the paths can reuse: the nearest moving points and the truncated path's grid."""
     n_moving, n_fixed = moving_t.shape[0], fixed.shape[0]
-    costs = {"dense": _COST_DENSE * n_moving * n_fixed}
     start = time.perf_counter()
     nearest = _nearest(moving_t, fixed)
     t_nearest = time.perf_counter() - start
+    costs = {"dense": _dense_cost(moving_t, n_fixed, sigma2, tau, prior, nearest[0])}
     d2_min = _reach_d2(nearest[0])
     extra = _truncation_extra(sigma2, tau, prior)
     start = time.perf_counter()
