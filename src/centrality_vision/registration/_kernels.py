@@ -474,39 +474,34 @@ _SCAN_FRACTION = 8
 
 
 @njit(nogil=True, cache=True, inline="always")
+def _squared_distance(x, n, yt, m):
+    total = 0.0
+    for d in range(yt.shape[0]):
+        diff = x[n, d] - yt[d, m]
+        total += diff * diff
+    return total
+
+
+@njit(nogil=True, cache=True, inline="always")
 def _nearest_sorted(x, n, yt, key, axis, limit):
     """Squared distance from fixed point ``n`` to its nearest moving point, the moving points
     sorted along ``axis`` (``key``): scanning outwards from ``x[n, axis]``'s place while the
     key gap alone is below the best so far; ``inf`` after ``limit`` candidates."""
-    n_dims, n_moving = yt.shape
+    n_moving = yt.shape[1]
     xa = x[n, axis]
     start = np.searchsorted(key, xa)
     best = np.inf
     seen = 0
     m = start
-    while m < n_moving:
-        gap = key[m] - xa
-        if gap * gap >= best:
-            break
-        d2 = 0.0
-        for d in range(n_dims):
-            diff = x[n, d] - yt[d, m]
-            d2 += diff * diff
-        best = min(best, d2)
+    while m < n_moving and (key[m] - xa) ** 2 < best:
+        best = min(best, _squared_distance(x, n, yt, m))
         m += 1
         seen += 1
         if seen > limit:
             return np.inf
     m = start - 1
-    while m >= 0:
-        gap = xa - key[m]
-        if gap * gap >= best:
-            break
-        d2 = 0.0
-        for d in range(n_dims):
-            diff = x[n, d] - yt[d, m]
-            d2 += diff * diff
-        best = min(best, d2)
+    while m >= 0 and (xa - key[m]) ** 2 < best:
+        best = min(best, _squared_distance(x, n, yt, m))
         m -= 1
         seen += 1
         if seen > limit:

@@ -188,13 +188,8 @@ def _low_rank_step(qt, values, inner, p1, px, pt1, moving, fixed, ls2, n_p):
             rhs[d, m] = px[m, d] - p1[m] * moving[m, d]
     b = np.empty((n_rank, n_dims))
     for k in range(n_rank):
-        q = qt[k]
         for d in range(n_dims):
-            r = rhs[d]
-            total = 0.0
-            for m in range(n_points):
-                total += q[m] * r[m]
-            b[k, d] = total
+            b[k, d] = _dot(qt[k], rhs[d], 0.0)
         inner[k, k] += ls2 / values[k]
     z = np.linalg.solve(inner, b)
     w = rhs.copy()  # W^T, built as R^T - d(P1) (Q z)^T, then / ls2
@@ -244,10 +239,7 @@ def _field_t(qt, values, wt):
         fd = field[d]
         for k in range(n_rank):
             q = qt[k]
-            total = 0.0
-            for m in range(n_points):
-                total += q[m] * wd[m]
-            c = values[k] * total
+            c = values[k] * _dot(q, wd, 0.0)
             for m in range(n_points):
                 fd[m] += c * q[m]
     return field
