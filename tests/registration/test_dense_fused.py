@@ -394,3 +394,48 @@ def test_moving_order_from_the_memo_equals_a_fresh_sort():
         points[:50] = points[50:100]  # exact ties
         got = _moving_order(points, 0, memo)
         np.testing.assert_array_equal(got, np.argsort(points, kind="stable"))
+
+
+def _structured_set(kind, n, n_dims, rng):
+    if kind == "uniform":
+        return rng.random((n, n_dims)) * np.r_[3.0, np.ones(n_dims - 1)]
+    if kind == "clumps":  # a few tight clusters: many points share a band
+        centres = rng.random((5, n_dims)) * 3.0
+        return centres[rng.integers(0, 5, n)] + 1e-3 * rng.normal(size=(n, n_dims))
+    if kind == "line":  # every point on one line across the band's axis
+        t = rng.random(n)
+        return np.column_stack([3.0 * t, *(0.5 * t for _ in range(n_dims - 1))])
+    base = rng.random((n // 4, n_dims)) * 3.0  # duplicates: each point four times
+    return np.repeat(base, 4, axis=0)[rng.permutation(4 * (n // 4))]
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    kind=st.sampled_from(["uniform", "clumps", "line", "duplicates"]),
+    n_dims=st.sampled_from([2, 3]),
+    log_sigma2=st.integers(-10, -1),
+    w=st.sampled_from([0.0, 0.3]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_band_matches_every_pair_on_structured_sets(kind, n_dims, log_sigma2, w, seed):
+    """The band (exponentials, and from ~1,200 moving points the scores too) against every
+    pair on clustered, collinear and duplicated sets: within the stated bound, same ``best``."""
+    from centrality_vision.registration._estep import _default_tau
+
+    rng = np.random.default_rng(seed)
+    moving_t = _structured_set(kind, 1600, n_dims, rng)
+    fixed = moving_t[rng.permutation(moving_t.shape[0])[:300]] + 1e-3 * rng.normal(size=(300, n_dims))
+    fixed[:3] += 7.0  # far rows: their nearest-point scan gives up
+    sigma2 = 10.0**log_sigma2
+    tau = _default_tau(moving_t.shape[0])
+    inv2s2 = 1.0 / (2.0 * sigma2)
+    log_c = log_outlier_constant(sigma2, w, n_dims, moving_t.shape[0], fixed.shape[0])
+    p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, None, False, tau)
+    r_p1, r_px, r_pt1, r_log_den, r_best = _dense(moving_t, fixed, inv2s2, log_c, None, False)
+    left_out = math.exp(-tau)
+    assert np.all(np.abs(p1 - r_p1) <= fixed.shape[0] * left_out + 1e-13 * r_p1)
+    assert np.all(np.abs(pt1 - r_pt1) <= moving_t.shape[0] * left_out + 1e-13 * r_pt1)
+    assert np.all(np.abs(log_den - r_log_den) <= moving_t.shape[0] * left_out + 1e-15 * (1.0 + np.abs(r_log_den)))
+    bound = (fixed.shape[0] * left_out + 1e-13 * r_p1) * np.max(np.abs(fixed))
+    assert np.all(np.abs(px - r_px) <= bound[:, None] + 1e-300)
+    np.testing.assert_array_equal(best, r_best)
