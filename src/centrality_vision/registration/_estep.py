@@ -258,22 +258,29 @@ def _score_band(extent, n_moving, inv2s2, tau) -> bool:
     return (1.0 - narrowest) * n_moving >= _SCORE_BAND_SAVED
 
 
-def _dense_cost(moving_t, n_fixed, sigma2, tau, prior, d2_nearest) -> float:
-    """The dense path's modelled cost (ns): every pair's score and exponential, or, with
-    the band (see :func:`_dense`), each row's exponentials (and, when restricted, scores)
-    over the share of the moving points within ``sqrt(2 sigma2 tau + d^2)`` along the band's
-    axis (``d`` the median distance to the nearest moving point), plus a row's search."""
+def _dense_cost(moving_t, n_fixed, tau, prior, d2_nearest):
+    """The dense path's modelled cost (ns) as a function of sigma2: every pair's score and
+    exponential, or, with the band (see :func:`_dense`), each row's exponentials (and, when
+    restricted, scores) over the share of the moving points within ``sqrt(2 sigma2 tau + d^2)``
+    along the band's axis (``d`` the median distance to the nearest moving point), plus a
+    row's search. (A function, so that a planner can follow it to another sigma2.)"""
     n_moving = moving_t.shape[0]
     pairs = float(n_moving) * n_fixed
-    inv2s2 = 1.0 / (2.0 * sigma2)
     extent = np.ptp(moving_t, axis=0)
     has_prior = prior is not None and prior.scale != 0
-    axis = None if has_prior else _band_axis(extent, n_moving, inv2s2, tau)
-    if axis is None:
-        return _COST_DENSE * pairs
-    share = min(1.0, 2.0 * math.sqrt(tau / inv2s2 + float(np.median(d2_nearest))) / max(extent[axis], 1e-300))
-    scored = share if _score_band(extent[axis], n_moving, inv2s2, tau) else 1.0
-    return pairs * (_COST_DENSE_SCORE * scored + (_COST_DENSE - _COST_DENSE_SCORE) * share) + _COST_DENSE_ROW * n_fixed
+    d2 = float(np.median(d2_nearest))
+
+    def cost(sigma2):
+        inv2s2 = 1.0 / (2.0 * sigma2)
+        axis = None if has_prior else _band_axis(extent, n_moving, inv2s2, tau)
+        if axis is None:
+            return _COST_DENSE * pairs
+        share = min(1.0, 2.0 * math.sqrt(tau / inv2s2 + d2) / max(extent[axis], 1e-300))
+        scored = share if _score_band(extent[axis], n_moving, inv2s2, tau) else 1.0
+        exps = (_COST_DENSE - _COST_DENSE_SCORE) * share
+        return pairs * (_COST_DENSE_SCORE * scored + exps) + _COST_DENSE_ROW * n_fixed
+
+    return cost
 
 
 def _dense(moving_t, fixed, inv2s2, log_c, prior, single=False, tau=None, want_best=True, memo=None):
@@ -743,8 +750,10 @@ _COST_DENSE_ROW = 150.0
 # measured 1.5-3 us per row in 2D at 3,000 and 20,000 points, load 5 on 2 cores), paid
 # however few candidates the cells hold.
 _COST_TRUNCATED_ROW = 50.0
-# How each path's work scales with sigma2, as a power of sigma2^(D/2): the dense path not at
-# all, the truncated path's neighbourhoods with their volume, the FGT's boxes inversely.
+# How each path's work scales with sigma2, as a power of sigma2^(D/2), where no better model
+# is at hand: the dense path not at all (its band's cost model, _dense_cost, takes over when
+# the probe made one), the truncated path's neighbourhoods with their volume, the FGT's
+# boxes inversely.
 _SIGMA2_POWER = {"dense": 0.0, "truncated": 1.0, "fgt": -1.0}
 # Below this many pairs the dense path takes under a millisecond: nothing else is considered
 # by the planner (its probe would cost more than it could save over a whole fit).
@@ -797,7 +806,8 @@ def _model_costs(moving_t, fixed, sigma2, prior, tau, eps):
     start = time.perf_counter()
     nearest = _nearest(moving_t, fixed)
     t_nearest = time.perf_counter() - start
-    costs = {"dense": _dense_cost(moving_t, n_fixed, sigma2, tau, prior, nearest[0])}
+    dense_cost = _dense_cost(moving_t, n_fixed, tau, prior, nearest[0])
+    costs = {"dense": dense_cost(sigma2)}
     d2_min = _reach_d2(nearest[0])
     extra = _truncation_extra(sigma2, tau, prior)
     start = time.perf_counter()
@@ -823,7 +833,7 @@ def _model_costs(moving_t, fixed, sigma2, prior, tau, eps):
     setup = {"dense": 0.0, "truncated": t_nearest + t_grid, "fgt": t_nearest}
     # what the truncated path's cost at another sigma2 follows (see EStepPlanner.predicted)
     work = (candidates, float(np.median(d2_min)), extra, row_floor)
-    return costs, {"nearest": nearest, "grid": grid, "setup": setup, "truncated_work": work}
+    return costs, {"nearest": nearest, "grid": grid, "setup": setup, "truncated_work": work, "dense_cost": dense_cost}
 
 
 def _choose(moving_t, fixed, sigma2, prior, tau, eps):
@@ -862,8 +872,9 @@ class EStepPlanner:
     winner and returns the winner's statistics. Later calls run the winner alone and probe
     again as soon as another path is predicted faster at the current sigma2 (each path's probe
     time, measured or predicted, extrapolated by how its work scales with sigma2: the dense
-    path's not at all, the truncated path's neighbourhoods as sigma2^(D/2), the FGT's box count
-    as sigma2^(-D/2); see :meth:`predicted`), or sigma2 has moved more than
+    path's with its band, about as sigma2^(1/2) once narrow, the truncated path's
+    neighbourhoods as sigma2^(D/2), the FGT's box count as sigma2^(-D/2); see
+    :meth:`predicted`), or sigma2 has moved more than
     ``reprobe_factor`` times away from the sigma2 of the last probe, or ``reprobe_calls``
     calls have passed. (Without the prediction, a fit whose sigma2 shrinks 10x between
     probes kept the FGT where dense had become 6x faster, or dense where the truncated path
@@ -923,15 +934,19 @@ class EStepPlanner:
         self._sigma2 = None
         self._calls = 0
         self._at_probe = {}  # path -> seconds at the last probe (measured, or predicted if skipped)
-        self._truncated_work = None  # (candidates per row, median d_min^2, extra, row floor) then
+        # what the truncated and dense paths' costs at another sigma2 follow: (candidates per
+        # row, median d_min^2, extra, row floor) and the dense cost as a function of sigma2
+        self._truncated_work = None
+        self._dense_cost = None
         self._recent = []  # the last probes' states, to take up again when sigma2 swings back
         self._total = 0  # calls so far
         self.reused = 0  # calls that took up an earlier probe's choice instead of probing
 
     def predicted(self, sigma2, n_dims):
         """Each path's time at ``sigma2`` extrapolated from the last probe by how its work
-        scales with sigma2: dense not at all; the FGT's box count as sigma2^(-D/2); the
-        truncated path's candidates per row with the volume of its reach,
+        scales with sigma2: the dense path's by its cost model (the band's share of the moving
+        points, about sigma2^(1/2) once narrow; constant without a band); the FGT's box count
+        as sigma2^(-D/2); the truncated path's candidates per row with the volume of its reach,
         ``(d_min^2 + extra)^(D/2)`` (``extra`` proportional to sigma2, ``d_min^2`` the probe's
         median), at least one, plus its fixed cost per row, so a path whose rows hold only
         their nearest point is not predicted to keep getting faster."""
@@ -943,6 +958,8 @@ class EStepPlanner:
                 reach = ((d2 + extra * ratio) / max(d2 + extra, 1e-300)) ** (n_dims / 2)
                 before = _COST_TRUNCATED * candidates + floor
                 out[path] = t * (_COST_TRUNCATED * max(candidates * reach, 1.0) + floor) / before
+            elif path == "dense" and self._dense_cost is not None:
+                out[path] = t * self._dense_cost(sigma2) / max(self._dense_cost(self._sigma2), 1e-300)
             else:
                 out[path] = t * ratio ** (_SIGMA2_POWER[path] * n_dims / 2)
         return out
@@ -972,7 +989,7 @@ class EStepPlanner:
         return True
 
     def _restore(self, state):
-        self._sigma2, self.winner, self._at_probe, self._truncated_work, _ = state
+        self._sigma2, self.winner, self._at_probe, self._truncated_work, self._dense_cost, _ = state
 
     def __call__(
         self,
@@ -1054,10 +1071,12 @@ class EStepPlanner:
         self.timings.update(measured)
         self._at_probe = {**at_probe, **measured}
         self._truncated_work = cached.get("truncated_work")
+        self._dense_cost = cached.get("dense_cost")
         self.probes += 1
         self._sigma2 = sigma2
         self._calls = 1
-        self._recent = [*self._recent[-7:], (sigma2, self.winner, self._at_probe, self._truncated_work, self._total)]
+        state = (sigma2, self.winner, self._at_probe, self._truncated_work, self._dense_cost, self._total)
+        self._recent = [*self._recent[-7:], state]
         return results[self.winner]
 
 
