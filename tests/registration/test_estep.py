@@ -471,3 +471,25 @@ def test_nearest_points_of_a_set_spanning_more_than_float64s_range():
     d2, index = _nearest(moving, np.array([[1.0, 1.0], [-2.0, 1.0]]))
     np.testing.assert_array_equal(index, [2, 2])
     np.testing.assert_allclose(d2, [1.0, 4.0])
+
+
+def test_planner_predicts_the_dense_band_getting_cheaper_as_sigma2_shrinks():
+    """After a probe, the dense path's predicted time follows its band's cost model: it
+    falls as sigma2 shrinks (about as sigma2^(1/2) once the band is narrow), and stays put
+    where no band applies (a prior)."""
+    from centrality_vision.registration._estep import EStepPlanner
+
+    rng = np.random.default_rng(31)
+    moving = rng.random((1200, 2)) * [4.0, 1.0]
+    fixed = moving + 1e-3 * rng.normal(size=moving.shape)
+    for prior, falls in ((None, True), (_prior(rng, 1200, 1200), False)):
+        planner = EStepPlanner()
+        planner(moving, fixed, 1e-3, 0.0, prior)
+        assert "dense" in planner._at_probe
+        now = planner.predicted(1e-3, 2)["dense"]
+        later = planner.predicted(1e-5, 2)["dense"]
+        if falls:  # (the rows' own searches, 180 us of modelled work here, do not shrink)
+            assert later < 0.8 * now
+            assert later > 0.02 * now  # (not the volume's sigma2^(D/2): a band is one-dimensional)
+        else:
+            assert later == pytest.approx(now)
