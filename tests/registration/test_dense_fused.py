@@ -439,3 +439,17 @@ def test_band_matches_every_pair_on_structured_sets(kind, n_dims, log_sigma2, w,
     bound = (fixed.shape[0] * left_out + 1e-13 * r_p1) * np.max(np.abs(fixed))
     assert np.all(np.abs(px - r_px) <= bound[:, None] + 1e-300)
     np.testing.assert_array_equal(best, r_best)
+
+
+def test_fixed_to_moving_by_nearest_points_on_large_sets():
+    """From 2^20 pairs without a prior the most probable moving point comes from a
+    nearest-point search: the dense E-step's own choice, with outliers at -1."""
+    rng = np.random.default_rng(14)
+    moving_t = rng.random((1100, 2)) * [3.0, 1.0]
+    fixed = np.vstack(
+        [moving_t[rng.permutation(1100)[:1000]] + 1e-3 * rng.normal(size=(1000, 2)), rng.random((20, 2)) + 9]
+    )
+    for sigma2, w in ((1e-2, 0.0), (1e-4, 0.2), (1e-6, 0.5)):
+        got = fixed_to_moving(moving_t, fixed, sigma2, w)
+        np.testing.assert_array_equal(got, _e_step(moving_t, fixed, sigma2, w, method="dense").best)
+    assert np.all(fixed_to_moving(moving_t, fixed, 1e-6, 0.5)[-20:] == -1)
