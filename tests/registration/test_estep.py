@@ -341,7 +341,7 @@ def test_planner_retimes_a_close_calls_runner_up_and_keeps_its_least_time(monkey
 
 def test_planner_keeps_its_winner_within_the_switch_factor_and_while_held(monkeypatch):
     # probe at sigma2 = 1e-3: dense 10 s, truncated 16 s (not a close call)
-    durations = {"dense": [10.0] * 5, "truncated": [16.0, 7.0]}
+    durations = {"dense": [10.0] * 5, "truncated": [16.0, 3.0, 3.0]}
     planner, _, fake = _scripted_planner(monkeypatch, durations, {"dense": 0.0, "truncated": 0.0})
     assert planner.winner == "dense" and planner.probes == 1
     big = np.zeros((1100, 2))
@@ -349,10 +349,14 @@ def test_planner_keeps_its_winner_within_the_switch_factor_and_while_held(monkey
     assert planner.predicted(0.6e-3, 2)["truncated"] == pytest.approx(9.6)
     planner(big, big, 0.6e-3, 0.0)
     assert planner.probes == 1 and fake.calls[-1] == "dense"
-    # at 0.2e-3 it is predicted 3.2 s, 3x faster: but a held (speculative) call does not probe
+    # a held (speculative) call does not probe: it keeps the winner where another path is
+    # predicted less than 2x faster (0.45e-3: truncated 7.2 s) and runs the predicted one
+    # where it is 2x faster or more (0.2e-3: truncated 3.2 s, 3x)
     planner.hold = True
-    planner(big, big, 0.2e-3, 0.0)
+    planner(big, big, 0.45e-3, 0.0)
     assert planner.probes == 1 and fake.calls[-1] == "dense"
+    planner(big, big, 0.2e-3, 0.0)
+    assert planner.probes == 1 and fake.calls[-1] == "truncated" and planner.winner == "dense"
     planner.hold = False
     planner(big, big, 0.2e-3, 0.0)
     assert planner.probes == 2 and planner.winner == "truncated"
@@ -493,3 +497,33 @@ def test_planner_predicts_the_dense_band_getting_cheaper_as_sigma2_shrinks():
             assert later > 0.02 * now  # (not the volume's sigma2^(D/2): a band is one-dimensional)
         else:
             assert later == pytest.approx(now)
+
+
+def test_planner_probe_starts_from_a_known_dense_time_and_skips_a_path_far_slower(monkeypatch):
+    """A dense time the fit already took near this sigma2 (here by a held call that switched
+    to the dense path) bounds the probe from its start: a path predicted more than
+    ``skip_factor`` times slower is not run, even where the cost model ranks it first."""
+    from centrality_vision.registration import _estep
+    from centrality_vision.registration._estep import EStepPlanner
+
+    fake = _Scripted({"dense": [10.0, 2.0, 2.0], "truncated": [1.0]}, {"dense": 0.0, "truncated": 0.0})
+    fake.model_costs = lambda *args: (
+        {"dense": 1.0, "truncated": 0.5},
+        {"setup": {"dense": 0.0, "truncated": 0.0}, "truncated_work": fake.work},
+    )
+    monkeypatch.setattr(_estep, "time", fake)
+    monkeypatch.setattr(_estep, "_run", fake.run)
+    monkeypatch.setattr(_estep, "_model_costs", fake.model_costs)
+    planner = EStepPlanner(skip_factor=2.0)
+    big = np.zeros((1100, 2))
+    planner(big, big, 1e-3, 0.0)  # truncated (1 s) first, then dense (10 s): truncated wins
+    assert planner.winner == "truncated" and fake.calls == ["truncated", "dense"]
+    planner._at_probe["dense"] = 1e-9  # pretend dense became far faster: a held call switches
+    planner.hold = True
+    planner(big, big, 0.9e-3, 0.0)
+    assert fake.calls[-1] == "dense"
+    planner.hold = False
+    planner._calls = planner.reprobe_calls  # due: a probe
+    planner._scale["truncated"] = 10.0  # truncated predicted at 0.5 x 10 = 5 s: over twice dense's known 2 s
+    planner(big, big, 0.9e-3, 0.0)
+    assert "truncated" not in fake.calls[2:] and planner.winner == "dense"
