@@ -1000,6 +1000,13 @@ class EStepPlanner:
                 return False
         return True
 
+    def _dense_times(self, prior):
+        """The dense path's last (sigma2, seconds) in this fit, with a prior or without (the
+        eight latest: older entries are dropped here, before the caller appends one)."""
+        times = self._dense_time.setdefault(prior is not None and prior.scale != 0, [])
+        del times[:-8]
+        return times
+
     def _restore(self, state):
         self._sigma2, self.winner, self._at_probe, self._truncated_work, self._dense_cost, _ = state
 
@@ -1038,9 +1045,7 @@ class EStepPlanner:
             start = time.perf_counter()
             post = _run(path, moving_t, fixed, sigma2, w, prior, tau, eps, {}, single, want_best, memo)
             if path == "dense":  # a time the next probe can take as the dense path's bound
-                dense_times = self._dense_time.setdefault(prior is not None and prior.scale != 0, [])
-                dense_times.append((sigma2, time.perf_counter() - start))
-                del dense_times[:-8]
+                self._dense_times(prior).append((sigma2, time.perf_counter() - start))
             return post
         if not self._due(sigma2, moving_t.shape[1]):
             self._calls += 1
@@ -1054,8 +1059,7 @@ class EStepPlanner:
         # the dense path's time only falls as sigma2 shrinks (its band narrows): a time
         # measured in this fit (per kind of prior) at a sigma2 up to reprobe_factor above
         # this one bounds it, stands for it in the probe, and it runs again only to win
-        dense_key = prior is not None and prior.scale != 0
-        dense_times = self._dense_time.setdefault(dense_key, [])
+        dense_times = self._dense_times(prior)
         bounds = [t for s2, t in dense_times if sigma2 <= s2 <= self.reprobe_factor * sigma2]
         dense_bound = min(bounds) if bounds else None
         if dense_bound is not None:  # known already: first, so that it bounds the others' skips
@@ -1069,7 +1073,6 @@ class EStepPlanner:
             seconds = time.perf_counter() - start + setup[path]
             if path == "dense":
                 dense_times.append((sigma2, seconds))
-                del dense_times[:-8]
                 seconds = min(seconds, dense_bound if dense_bound is not None else math.inf)
             return seconds
 
