@@ -3,8 +3,9 @@
 The dense path (:func:`dense_rows`) takes each row of fixed points ``n`` in a few
 vectorised loops over row buffers that stay in L1:
 
-1. scores ``s_mn = -|x_n - T(y_m)|^2 / (2 sigma2) + prior_mn``, their maximum and its first
-   position, and ``ref_n = max(max_m s_mn, log c)``;
+1. scores ``s_mn = -|x_n - T(y_m)|^2 / (2 sigma2) + prior_mn``, their maximum (and its first
+   position, when asked: a fit asks only for its last state, :func:`dense_best`), and
+   ``ref_n = max(max_m s_mn, log c)``;
 2. ``e_mn = exp(s_mn - ref_n)`` by :func:`fast_exp` (a vectorisable exponential, relative
    error below 4e-16; numba's scalar ``exp`` is a libm call that does not vectorise), or in
    float32 by :func:`fast_exp_single`, and the row sum, so every term is <= 1 and the
@@ -14,7 +15,8 @@ vectorised loops over row buffers that stay in L1:
 
 With the moving points sorted along one axis, step 2 runs only over each row's band of
 points that can hold a term above ``exp(-tau)`` (see :func:`dense_rows`), and step 3 over
-the union of the four rows' bands.
+the union of the four rows' bands; where the band is narrow enough, step 1 too runs only
+over the run that the row's nearest moving point bounds the same way.
 
 The truncated path visits, for each fixed point, only the moving points within
 ``sqrt(d_min^2 + 2 sigma2 tau')`` of it (a uniform grid of cells, searched by sorted cell
