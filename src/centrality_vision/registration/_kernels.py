@@ -240,24 +240,32 @@ def _scores_rows(x, n, y0, y1, y2, n_dims, inv2s2, row):
 
 
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
-def _scores(x, n, yt, inv2s2, row):
-    """``row[m] = -|x_n - y_m|^2 inv2s2`` in one pass for D = 2 and 3."""
-    n_dims, n_moving = yt.shape
+def _scores_run(x, n, yt, c, e, inv2s2, part):
+    """``part[m - c] = -|x_n - y_m|^2 inv2s2`` for the moving points ``c <= m < e``: one loop
+    for D = 2 and 3, one per axis otherwise."""
+    n_dims = yt.shape[0]
     if n_dims == 2:
-        _scores_rows(x, n, yt[0], yt[1], yt[1], 2, inv2s2, row[:n_moving])
+        _scores_rows(x, n, yt[0, c:e], yt[1, c:e], yt[1, c:e], 2, inv2s2, part)
     elif n_dims == 3:
-        _scores_rows(x, n, yt[0], yt[1], yt[2], 3, inv2s2, row[:n_moving])
+        _scores_rows(x, n, yt[0, c:e], yt[1, c:e], yt[2, c:e], 3, inv2s2, part)
     else:
-        for m in range(n_moving):
-            row[m] = 0.0
+        for m in range(e - c):
+            part[m] = 0.0
         for d in range(n_dims):
             xd = x[n, d]
-            yd = yt[d]
-            for m in range(n_moving):
+            yd = yt[d, c:e]
+            for m in range(e - c):
                 diff = xd - yd[m]
-                row[m] += diff * diff
-        for m in range(n_moving):
-            row[m] *= -inv2s2
+                part[m] += diff * diff
+        for m in range(e - c):
+            part[m] *= -inv2s2
+
+
+@njit(nogil=True, cache=True, fastmath=_CONTRACT)
+def _scores(x, n, yt, inv2s2, row):
+    """``row[m] = -|x_n - y_m|^2 inv2s2`` for every moving point."""
+    n_moving = yt.shape[1]
+    _scores_run(x, n, yt, 0, n_moving, inv2s2, row[:n_moving])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -514,24 +522,9 @@ def _nearest_sorted(x, n, yt, key, axis, limit):
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
 def _part_scores(x, n, yt, c, e, inv2s2, scores):
     """Row ``n``'s scores for the moving points ``c <= m < e`` (no prior) into
-    ``scores[c:e]``, by :func:`_scores` on that run; returns their maximum."""
+    ``scores[c:e]``, by the loops :func:`_scores` runs; returns their maximum."""
     part = scores[c:e]
-    n_dims = yt.shape[0]
-    if n_dims == 2:
-        _scores_rows(x, n, yt[0, c:e], yt[1, c:e], yt[1, c:e], 2, inv2s2, part)
-    elif n_dims == 3:
-        _scores_rows(x, n, yt[0, c:e], yt[1, c:e], yt[2, c:e], 3, inv2s2, part)
-    else:
-        for m in range(e - c):
-            part[m] = 0.0
-        for d in range(n_dims):
-            xd = x[n, d]
-            yd = yt[d, c:e]
-            for m in range(e - c):
-                diff = xd - yd[m]
-                part[m] += diff * diff
-        for m in range(e - c):
-            part[m] *= -inv2s2
+    _scores_run(x, n, yt, c, e, inv2s2, part)
     return _max(part, e - c)
 
 
