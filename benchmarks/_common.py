@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
+import math
 import os
 
-__all__ = ["table", "fmt_s", "load_line"]
+__all__ = ["table", "fmt_s", "load_line", "probreg_beta"]
 
 
 def table(headers, rows, align=None):
@@ -42,3 +43,23 @@ def load_line(busy_note="timings are unreliable"):
     if load[0] > 0.5 * (os.cpu_count() or 1):
         line += "  ! the machine is busy: " + busy_note
     return line
+
+
+def probreg_beta(beta):
+    """probreg's ``beta`` for CPD's kernel width ``beta``, read from probreg's own kernel.
+
+    probreg 0.3.8's ``rbf_kernel(a, b, beta)`` is ``exp(-|d|^2 / (2 beta))`` (measured:
+    ``-log G / |d|^2`` is ``1 / (2 beta)`` at beta 0.5, 1 and 2), so CPD's width ``beta`` is
+    probreg's ``beta**2``. The two agree only at 1, where an earlier check of this suite was
+    made; until it was corrected (2026-11-23), probreg ran with width ``sqrt(2)`` where the
+    others had 2.
+    """
+    import numpy as np
+    from probreg import math_utils
+
+    g = float(np.asarray(math_utils.rbf_kernel(np.zeros((1, 2)), np.array([[1.0, 0.0]]), 2.0))[0, 0])
+    if abs(g - math.exp(-1 / 4)) < 1e-6:
+        return beta**2
+    if abs(g - math.exp(-1 / 8)) < 1e-6:
+        return beta
+    raise RuntimeError(f"probreg's rbf_kernel at distance 1 and beta 2 is {g}: an unknown convention")

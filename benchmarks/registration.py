@@ -107,7 +107,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from _common import fmt_s, load_line, table
+from _common import fmt_s, load_line, probreg_beta, table
 
 OURS_LIBS = ("ours", "ours32", "ours-acc", "ours32-acc")
 LIBRARIES = (*OURS_LIBS, "rustcpd", "biocpd", "probreg", "pycpd", "cycpd")
@@ -578,9 +578,9 @@ def make_runner(lib, case, n, args, method="auto"):
 
     if lib == "probreg":
         kind = "rigid" if case == "rigid" else "nonrigid"
-        # its kernel is CPD's exp(-|d|^2 / (2 beta^2)) (rbf_kernel at distance 1, beta 1:
-        # exp(-1/2)) and its M-step CPD's lambda sigma2, so it gets beta and lam themselves
-        extra = {} if case == "rigid" else {"beta": args.beta, "lmd": args.lam}
+        # its kernel's beta is a variance (CPD's width squared, see probreg_beta) and its M-step
+        # CPD's lambda sigma2, so it gets beta^2 and lam itself
+        extra = {} if case == "rigid" else {"beta": probreg_beta(args.beta), "lmd": args.lam}
 
         def run(y, x):
             n_dims = y.shape[1]

@@ -46,7 +46,8 @@ family), rigid ``ICP``, and on the rotation family each of those started from
 to Y here and followed by the plain fit, so that ICP and GPD get the same start).
 Peers: pycpd 2.0 (its rigid registration always estimates a scale), cycpd 0.28 (deformable:
 low-rank with ``num_eig`` = M - 1), probreg 0.3.8 (``registration_cpd``; its kernel is
-CPD's ``exp(-|d|^2 / (2 beta^2))``, so it gets ``beta`` itself), rustcpd 4.0
+``exp(-|d|^2 / (2 b))``, a variance where CPD has a width, so it gets ``b = beta^2``; the
+convention is measured on probreg's own kernel at each run), rustcpd 4.0
 (``low_rank=None``: exact) and biocpd 1.3 (``low_rank=False``). Each library's tolerance
 means something else (see ``registration.py``); they get the same number. A library that
 fails on a case is reported with its error instead of a number.
@@ -73,7 +74,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import load_line, table  # noqa: E402
+from _common import load_line, probreg_beta, table  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 BUNNY = ROOT.parent / "shared" / "data" / "bunny" / "bunny.txt"
@@ -99,7 +100,14 @@ PEERS = ("pycpd", "cycpd", "probreg", "rustcpd", "biocpd")
 # same w ("cpd-knn", n_neighbors=KNN, biocpd's k) and with w="auto" ("cpd-knn-auto")
 KNN = 10
 OURS_CPD = ("cpd", "cpd-acc", "cpd-knn", "cpd-knn-auto")
-NONRIGID_METHODS = OURS_CPD + tuple(f"gpd-{c}" for c in CENTRALITIES) + ("icp",) + PEERS
+# GPD: "gpd-<centrality>" over the dense "cpd" (the thesis' constant prior); a "-knn-auto"
+# suffix puts it over "cpd-knn-auto", and "-anneal" fades the prior with sigma2
+# (prior_schedule="anneal")
+GPD_METHODS = tuple(f"gpd-{c}" for c in CENTRALITIES) + (
+    "gpd-closeness-knn-auto",
+    "gpd-closeness-knn-auto-anneal",
+)
+NONRIGID_METHODS = OURS_CPD + GPD_METHODS + ("icp",) + PEERS
 ROTATION_METHODS = (
     "cpd",
     "cpd+global",
@@ -112,7 +120,14 @@ ROTATION_METHODS = (
 SHAPES_2D = ("fish", "dog1")
 # A method whose code changed since its units were stored gets a revision in its unit key,
 # so that a re-run computes it anew instead of reusing the stored result.
-REVISION = {"cpd-knn": "moving-frame", "cpd-knn-auto": "moving-frame", "cpd-acc": "log-sigma2"}
+# ("probreg_beta": "beta" stays in every unit's settings so that the other methods' stored
+# results are still found; probreg's own units carry "beta-variance": they pass beta^2)
+REVISION = {
+    "cpd-knn": "moving-frame",
+    "cpd-knn-auto": "moving-frame",
+    "cpd-acc": "log-sigma2",
+    "probreg": "beta-variance",
+}
 
 
 def _method_key(method):
@@ -230,16 +245,23 @@ def run_method(method, y, x, *, rigid, w, seed):
             start = pose(y)
         if base == "icp":
             return ICP(max_iter=max_iter, tol=tol).fit(start, x).moving_transformed_, info
-        model = {"n_neighbors": KNN} if base.startswith("cpd-knn") else {}
-        if base == "cpd-acc":
+        centrality, schedule, over = None, None, base
+        if base.startswith("gpd-"):
+            spec = base[4:]
+            if spec.endswith("-anneal"):
+                spec, schedule = spec[: -len("-anneal")], "anneal"
+            over = "cpd-knn-auto" if spec.endswith("-knn-auto") else "cpd"
+            centrality = spec[: -len("-knn-auto")] if over == "cpd-knn-auto" else spec
+        model = {"n_neighbors": KNN} if over.startswith("cpd-knn") else {}
+        if over == "cpd-acc":
             model = {"accelerate": True}
-        if base == "cpd-knn-auto":
+        if over == "cpd-knn-auto":
             w = "auto"
         if rigid:
             cpd = RigidCPD(scale=False, w=w, tol=tol, max_iter=max_iter, **model)
         else:
             cpd = NonRigidCPD(beta=beta, lam=lam, w=w, tol=tol, max_iter=max_iter, **model)
-        est = cpd if base in OURS_CPD else GPD(cpd, centrality=base[4:], graph="delaunay")
+        est = cpd if centrality is None else GPD(cpd, centrality=centrality, graph="delaunay", prior_schedule=schedule)
         return est.fit(start, x).moving_transformed_, info
     if base == "pycpd":
         import pycpd
@@ -286,9 +308,7 @@ def run_method(method, y, x, *, rigid, w, seed):
         _preload_libusb()
         from probreg import cpd as probreg_cpd
 
-        # probreg's kernel is CPD's exp(-|d|^2 / (2 beta^2)) (checked: its rbf_kernel at distance 1,
-        # beta 1 is exp(-1/2)); the last session's runs passed beta * sqrt(2), a wider kernel
-        kw = {"update_scale": False} if rigid else {"beta": beta, "lmd": lam}
+        kw = {"update_scale": False} if rigid else {"beta": probreg_beta(beta), "lmd": lam}
         res = probreg_cpd.registration_cpd(
             y, x, tf_type_name="rigid" if rigid else "nonrigid", w=w, maxiter=max_iter, tol=tol, **kw
         )
@@ -476,7 +496,8 @@ def report(args, units, results):
         f"cpd-knn-auto = n_neighbors={KNN}, w='auto'; "
         "gpd-* = GPD(cpd, centrality, graph='delaunay'); pycpd DeformableRegistration(alpha=lam, beta, w, "
         "tolerance, max_iterations); cycpd deformable_registration(alpha=lam, beta, low_rank, num_eig=M-1, w); "
-        "probreg registration_cpd('nonrigid', beta, lmd=lam, w, maxiter, tol); rustcpd register_deformable("
+        "probreg registration_cpd('nonrigid', beta=beta^2 (its kernel's variance), lmd=lam, w, maxiter, tol); "
+        "rustcpd register_deformable("
         "alpha=lam, beta, low_rank=None, outlier_weight=w); biocpd DeformableRegistration(alpha=lam, beta, "
         "low_rank=False, w) [its defaults: k=10 nearest-neighbour E-step, float32]"
     )
@@ -511,7 +532,7 @@ def report(args, units, results):
                     if p in cells and cells[p]["mean"] is not None and cells[p]["failed"] == 0
                 ]
                 best_peer = min(peers) if peers else None
-                for config in OURS_CPD:
+                for config in OURS_CPD + GPD_METHODS:
                     mine = cells.get(config, {}).get("mean")
                     if best_peer not in (None, 0) and mine is not None:
                         all_checks.setdefault(config, []).append((family, shape, level, mine / best_peer))
@@ -585,8 +606,7 @@ def report(args, units, results):
                         row.append(
                             f"{100 * np.mean([c[config]['success'] or 0 for c in cells_by_level.values()]):.1f}%"
                         )
-                for c in CENTRALITIES:
-                    m = f"gpd-{c}"
+                for m in GPD_METHODS:
                     if m in args.methods_nonrigid:
                         row.append(f"{100 * np.mean([cl[m]['success'] or 0 for cl in cells_by_level.values()]):.1f}%")
                 gpd_rows.append(row)
@@ -596,7 +616,7 @@ def report(args, units, results):
             table(
                 ["family/shape"]
                 + [c for c in OURS_CPD if c in args.methods_nonrigid]
-                + [f"gpd-{c}" for c in CENTRALITIES if f"gpd-{c}" in args.methods_nonrigid],
+                + [m for m in GPD_METHODS if m in args.methods_nonrigid],
                 gpd_rows,
             )
         )
@@ -728,6 +748,141 @@ EXPLAIN_CASES = [
 ]
 
 
+# the levels where probreg is the best peer, and the level where its narrower kernel of the
+# earlier runs had made it so (deformation/dog1/0.08)
+EXPLAIN_PROBREG_CASES = [
+    ("occlusion", "dog1", 0.0),
+    ("outliers", "dog1", 1.0),
+    ("noise", "dog1", 0.02),
+    ("deformation", "dog1", 0.08),
+]
+
+
+def _explain_probreg(pairs):
+    """probreg 0.3.8 with each of its departures from CPD switched off in turn, beside our dense CPD.
+
+    Its departures: ``CoherentPointDrift._N_DIM = 3`` also for 2D data (sigma2 is the residual
+    divided by 3 N_P instead of 2 N_P, and the outlier constant takes ``(2 pi sigma2)^(3/2)``),
+    its kernel matrix in float32, and (in this suite's earlier runs only) a kernel of width
+    ``sqrt(2)`` where CPD's is ``beta`` = 2. Each variant patches probreg's class attribute or
+    kernel function for its runs and restores them.
+    """
+    from probreg import cpd as probreg_cpd
+    from probreg import math_utils
+
+    from centrality_vision.registration import NonRigidCPD
+
+    beta, lam, tol, max_iter = SETTINGS["beta"], SETTINGS["lam"], SETTINGS["tol"], SETTINGS["max_iter"]
+    kernel32, n_dim = math_utils.rbf_kernel, probreg_cpd.CoherentPointDrift._N_DIM
+
+    def kernel64(a, b, variance):
+        d2 = np.sum((np.asarray(a)[:, None, :] - np.asarray(b)[None, :, :]) ** 2, axis=2)
+        return np.exp(-d2 / (2.0 * variance))
+
+    def probreg(y, x, w, *, dims=n_dim, kernel=kernel32, width=beta):
+        probreg_cpd.CoherentPointDrift._N_DIM, math_utils.rbf_kernel = dims, kernel
+        try:
+            res = probreg_cpd.registration_cpd(
+                y, x, tf_type_name="nonrigid", w=w, maxiter=max_iter, tol=tol, beta=probreg_beta(width), lmd=lam
+            )
+            return np.asarray(res.transformation.transform(y))
+        finally:
+            probreg_cpd.CoherentPointDrift._N_DIM, math_utils.rbf_kernel = n_dim, kernel32
+
+    variants = {
+        "cpd (dense)": lambda y, x, w: (
+            NonRigidCPD(beta=beta, lam=lam, w=w, tol=tol, max_iter=max_iter).fit(y, x).moving_transformed_
+        ),
+        "probreg": lambda y, x, w: probreg(y, x, w),
+        "probreg, 2 dims": lambda y, x, w: probreg(y, x, w, dims=2),
+        "probreg, float64 kernel": lambda y, x, w: probreg(y, x, w, kernel=kernel64),
+        "probreg, 2 dims, float64": lambda y, x, w: probreg(y, x, w, dims=2, kernel=kernel64),
+        "probreg, width sqrt(2)": lambda y, x, w: probreg(y, x, w, width=math.sqrt(beta)),
+    }
+    rows = []
+    for family, shape, level in EXPLAIN_PROBREG_CASES:
+        errs = {name: [] for name in variants}
+        for pair in range(pairs):
+            y, x, true = synthetic_pair(family, shape, level, pair)
+            for name, fn in variants.items():
+                moved = np.asarray(fn(y, x, FAMILY_W[family]), dtype=float)
+                errs[name].append(float(np.mean(np.linalg.norm(moved - true, axis=1))))
+        cpd = np.array(errs["cpd (dense)"])
+        better = int(np.sum(np.array(errs["probreg"]) < cpd))
+        rows.append(
+            [f"{family}/{shape}/{level}"] + [f"{np.mean(e):.4f}" for e in errs.values()] + [f"{better}/{pairs}"]
+        )
+    head = (
+        f"probreg with its departures from CPD switched off in turn (mean error over {pairs} suite pairs; "
+        "'2 dims': its sigma2 and outlier constant in the data's 2 dimensions instead of 3; "
+        "'width sqrt(2)': the kernel the suite's earlier runs gave it)"
+    )
+    return head + "\n" + table(["case"] + list(variants) + ["probreg better"], rows)
+
+
+# where GPD over the k-NN model with w="auto" differs most from that CPD (suite tables)
+EXPLAIN_GPD_CASES = [
+    ("occlusion", "fish", 0.3),
+    ("occlusion", "fish", 0.4),
+    ("occlusion", "dog1", 0.3),
+    ("occlusion", "dog1", 0.4),
+    ("noise", "fish", 0.05),
+]
+
+
+def _explain_gpd(pairs):
+    """GPD's constant closeness prior over ``cpd-knn-auto`` with each of its parts removed.
+
+    The prior has two parts (thesis eq. 5.10): the histogram weight ``h(m)`` of each moving
+    point and the Gaussian on the centrality difference of a pair. ``bins=1`` removes the
+    first (one bin: ``h`` is constant), ``phi=1e6`` the second (the Gaussian is flat); the
+    last variant keeps both but gives GPD each set's centralities randomly permuted (seeded
+    by the pair), so the prior's values are those of the real one but carry no topology.
+    """
+    from centrality_vision.registration import GPD, NonRigidCPD
+
+    beta, lam, tol, max_iter = SETTINGS["beta"], SETTINGS["lam"], SETTINGS["tol"], SETTINGS["max_iter"]
+
+    def cpd():
+        return NonRigidCPD(beta=beta, lam=lam, w="auto", tol=tol, max_iter=max_iter, n_neighbors=KNN)
+
+    def gpd(**kw):
+        return GPD(cpd(), centrality="closeness", graph="delaunay", **kw)
+
+    names = ["cpd-knn-auto", "gpd-closeness-knn-auto", "no histogram (bins=1)", "no difference term (phi=1e6)"]
+    names.append("centralities permuted")
+    rows = []
+    for family, shape, level in EXPLAIN_GPD_CASES:
+        errs = {name: [] for name in names}
+        for pair in range(pairs):
+            y, x, true = synthetic_pair(family, shape, level, pair)
+            full = gpd().fit(y, x)
+            rng = np.random.default_rng([11, pair])
+            fits = {
+                "cpd-knn-auto": cpd().fit(y, x),
+                "gpd-closeness-knn-auto": full,
+                "no histogram (bins=1)": gpd(bins=1).fit(y, x),
+                "no difference term (phi=1e6)": gpd(phi=1e6).fit(y, x),
+                "centralities permuted": gpd().fit(
+                    y,
+                    x,
+                    moving_centrality=rng.permutation(full.moving_centrality_),
+                    fixed_centrality=rng.permutation(full.fixed_centrality_),
+                ),
+            }
+            for name, est in fits.items():
+                errs[name].append(float(np.mean(np.linalg.norm(est.moving_transformed_ - true, axis=1))))
+        rows.append(
+            [f"{family}/{shape}/{level}"]
+            + [f"{np.mean(e):.4f}/{100 * np.mean(np.array(e) < SUCCESS_ERROR):.0f}%" for e in errs.values()]
+        )
+    head = (
+        f"GPD's constant closeness prior over cpd-knn-auto, each part removed (mean error / success over {pairs} "
+        "suite pairs)"
+    )
+    return head + "\n" + table(["case"] + names, rows)
+
+
 def explain(pairs):
     """Controlled runs, one process, the suite's pairs: what makes biocpd and probreg differ from CPD.
 
@@ -775,12 +930,15 @@ def explain(pairs):
         rows.append([f"{family}/{shape}/{level}"] + [f"{np.mean(e):.4f}" for e in errs.values()])
     lines.append(table(["case"] + list(variants), rows))
 
-    # probreg: sigma2 and error per iteration on one pair, beside CPD (same data, same beta)
     _preload_libusb()
     from probreg import cpd as probreg_cpd
 
+    lines += ["", _explain_probreg(pairs), "", _explain_gpd(pairs)]
+
+    # probreg: sigma2 and error per iteration on one pair, beside CPD (same data, same beta)
+
     y, x, true = synthetic_pair("deformation", "dog1", 0.02, 0)
-    reg = probreg_cpd.NonRigidCPD(y, beta=beta, lmd=lam)
+    reg = probreg_cpd.NonRigidCPD(y, beta=probreg_beta(beta), lmd=lam)
     trace = []
     step = reg.maximization_step
 
