@@ -198,6 +198,20 @@ class GPD(BaseEstimator):
     prior_ : CentralityPrior
         The prior at full weight.
 
+    Notes
+    -----
+    Measured on the Chui-Rangarajan families (``benchmarks/registration_suite.py``, 100
+    pairs per level, fish and Kimia ``dog1`` outlines). Over
+    ``NonRigidCPD(n_neighbors=10, w="auto")`` the closeness prior with
+    ``prior_schedule="anneal"`` succeeds at least as often as that CPD in every family and
+    more often with occlusion (66% against 60-63% averaged over levels); the constant prior
+    gains more with occlusion (70-76%) but loses with noise (fish, noise 0.05: error 0.035
+    against 0.029). The occlusion gain comes from the histogram weights ``h(m)``, not from
+    the topology: ``bins=1`` removes it, ``phi=1e6`` (no centrality term) keeps it, and so
+    do centralities randomly permuted within each set (``--explain``). Over the dense CPD
+    the constant prior succeeds more often than CPD with clutter (fish, outliers: 79%
+    against 40%) and less often with noise.
+
     Examples
     --------
     >>> import numpy as np
