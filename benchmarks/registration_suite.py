@@ -784,6 +784,20 @@ EXPLAIN_CASES = [
 ]
 
 
+def _variant_errors(cases, variants, pairs):
+    """``{case: {variant: [mean error of each pair]}}``: each ``variants[name](Y, X, w)`` (the
+    moving set after registration) on the suite's pairs of each (family, shape, level)."""
+    out = {}
+    for family, shape, level in cases:
+        errs = out[(family, shape, level)] = {name: [] for name in variants}
+        for pair in range(pairs):
+            y, x, true = synthetic_pair(family, shape, level, pair)
+            for name, fn in variants.items():
+                moved = np.asarray(fn(y, x, FAMILY_W[family]), dtype=float)
+                errs[name].append(float(np.mean(np.linalg.norm(moved - true, axis=1))))
+    return out
+
+
 # the levels where probreg is the best peer, and the level where its narrower kernel of the
 # earlier runs had made it so (deformation/dog1/0.08)
 EXPLAIN_PROBREG_CASES = [
@@ -836,13 +850,7 @@ def _explain_probreg(pairs):
         "probreg, width sqrt(2)": lambda y, x, w: probreg(y, x, w, width=math.sqrt(beta)),
     }
     rows = []
-    for family, shape, level in EXPLAIN_PROBREG_CASES:
-        errs = {name: [] for name in variants}
-        for pair in range(pairs):
-            y, x, true = synthetic_pair(family, shape, level, pair)
-            for name, fn in variants.items():
-                moved = np.asarray(fn(y, x, FAMILY_W[family]), dtype=float)
-                errs[name].append(float(np.mean(np.linalg.norm(moved - true, axis=1))))
+    for (family, shape, level), errs in _variant_errors(EXPLAIN_PROBREG_CASES, variants, pairs).items():
         cpd = np.array(errs["cpd (dense)"])
         better = int(np.sum(np.array(errs["probreg"]) < cpd))
         rows.append(
@@ -955,15 +963,10 @@ def explain(pairs):
         "cpd knn10 auto": lambda y, x, w: ours(y, x, "auto", n_neighbors=KNN),
     }
     lines = [load_line("compare within a row"), f"mean error over {pairs} suite pairs per case"]
-    rows = []
-    for family, shape, level in EXPLAIN_CASES:
-        errs = {name: [] for name in variants}
-        for pair in range(pairs):
-            y, x, true = synthetic_pair(family, shape, level, pair)
-            for name, fn in variants.items():
-                moved = np.asarray(fn(y, x, FAMILY_W[family]), dtype=float)
-                errs[name].append(float(np.mean(np.linalg.norm(moved - true, axis=1))))
-        rows.append([f"{family}/{shape}/{level}"] + [f"{np.mean(e):.4f}" for e in errs.values()])
+    rows = [
+        [f"{family}/{shape}/{level}"] + [f"{np.mean(e):.4f}" for e in errs.values()]
+        for (family, shape, level), errs in _variant_errors(EXPLAIN_CASES, variants, pairs).items()
+    ]
     lines.append(table(["case"] + list(variants), rows))
 
     _preload_libusb()
