@@ -474,6 +474,26 @@ def test_nearest_points_of_a_set_spanning_more_than_float64s_range():
     np.testing.assert_allclose(d2, [1.0, 4.0])
 
 
+def test_nearest_points_whose_squared_distances_overflow_return_promptly():
+    # every squared distance is inf: the ring search used to wait forever for a finite one
+    # once its box held the whole grid (found by fuzzing MultiscaleCPD); it now stops there
+    import threading
+
+    from centrality_vision.registration._estep import _nearest
+
+    rng = np.random.default_rng(3)
+    moving = 1e300 + rng.random((17, 2)) * 1e294
+    fixed = 1e8 + rng.random((26, 2))
+    out = {}
+    worker = threading.Thread(target=lambda: out.update(result=_nearest(moving, fixed)), daemon=True)
+    worker.start()
+    worker.join(timeout=60)
+    assert not worker.is_alive(), "the nearest-point search did not return"
+    d2, index = out["result"]
+    assert np.all(np.isinf(d2))
+    assert np.all((index >= 0) & (index < moving.shape[0]))
+
+
 def test_planner_predicts_the_dense_band_getting_cheaper_as_sigma2_shrinks():
     """After a probe, the dense path's predicted time follows its band's cost model: it
     falls as sigma2 shrinks (about as sigma2^(1/2) once the band is narrow), and stays put

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from centrality_vision.exceptions import CollapseWarning, ConvergenceWarning
-from centrality_vision.registration import GPD, AffineCPD, NonRigidCPD, RigidCPD, RigidTransform
+from centrality_vision.registration import GPD, AffineCPD, MultiscaleCPD, NonRigidCPD, RigidCPD, RigidTransform
 
 
 def _on_grid(points):
@@ -141,6 +141,23 @@ def test_nonrigid_at_extreme_scales_is_finite_and_equivariant(fish_pair, factor)
 def test_out_of_range_spread_is_refused(fish):
     with pytest.raises(ValueError, match="RMS radius"):
         RigidCPD().fit(fish * 1e200, fish * 1e200)
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: RigidCPD(normalize=False),
+        lambda: NonRigidCPD(max_iter=5, tol=0, normalize=False),
+        lambda: MultiscaleCPD(NonRigidCPD(max_iter=5, tol=0, normalize=False), sizes=(10, 40), refine_iter=2),
+    ],
+    ids=["rigid", "nonrigid", "multiscale"],
+)
+def test_unnormalised_coordinates_whose_squares_overflow_are_refused(fish, make):
+    # without normalize, sigma2 is a variance in the caller's units: past a span of 1e150 it
+    # would be inf (a plain fit returned sigma2_ = inf; MultiscaleCPD's next level never started)
+    with pytest.raises(ValueError, match="`normalize=False`.*span"):
+        make().fit(fish * 1e-6 + 1e300, fish)
+    assert np.isfinite(make().fit(fish * 1e6, fish * 1e6 + 1.0).sigma2_)
 
 
 def test_gpd_is_equivariant(fish_pair):

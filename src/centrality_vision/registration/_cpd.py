@@ -180,6 +180,20 @@ class _Frame:
         """
         dim = moving.shape[1]
         if not normalize:
+            with np.errstate(over="ignore", invalid="ignore"):
+                span = float(
+                    np.max(
+                        np.maximum(moving.max(axis=0), fixed.max(axis=0))
+                        - np.minimum(moving.min(axis=0), fixed.min(axis=0))
+                    )
+                )
+            if not span <= _SCALE_RANGE[1]:
+                # (squared distances, and so sigma2, would overflow to inf)
+                raise InputError(
+                    f"With `normalize=False` the points of `moving` and `fixed` must span at most "
+                    f"{_SCALE_RANGE[1]:g} on every axis (squared distances must fit in float64); got {span:.3g}. "
+                    "Use normalize=True."
+                )
             return _Frame(np.zeros(dim), np.zeros(dim), 1.0), moving, fixed
         mu_x, xc = centred(fixed)
         if same_centre:

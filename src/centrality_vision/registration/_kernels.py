@@ -790,17 +790,21 @@ def grid_nearest(queries, points, order, starts, origin, cell, dims, lo, hi, d2_
                 if not _advance(cur, lo_c, hi_c, last - 1):
                     break
             bound = np.inf
+            beyond = False
             for d in range(n_dims):
                 rest = outside2 - out[d] * out[d]
                 if lo_c[d] > 0:
+                    beyond = True
                     gap = max(q[d] - (origin[d] + lo_c[d] * cell), 0.0)
                     bound = min(bound, gap * gap + rest)
                 if hi_c[d] < dims[d] - 1:
+                    beyond = True
                     gap = max(origin[d] + (hi_c[d] + 1) * cell - q[d], 0.0)
                     bound = min(bound, gap * gap + rest)
-            # (bound is inf when the box holds the whole grid; the margin covers the rounding
-            # of a point's cell against the face, and keeps exact ties for the ring that decides them)
-            if best[0] < bound * (1.0 - 1e-12):
+            # (the margin covers the rounding of a point's cell against the face, and keeps
+            # exact ties for the ring that decides them; once the box holds the whole grid
+            # every point has been seen, also when the squared distances overflow to inf)
+            if not beyond or best[0] < bound * (1.0 - 1e-12):
                 break
             k += 1
         d2_out[n] = best[0]
