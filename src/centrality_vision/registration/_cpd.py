@@ -74,6 +74,8 @@ _COLLAPSE_MATCHED = 0.25
 _SIGMA_JUMP = 0.25
 # w="auto": start and bounds of the estimated outlier fraction.
 _AUTO_W_START, _AUTO_W_MAX = 0.1, 0.9
+# ... and the most the E-step's w may take from it (odds of 1e12 to 1)
+_AUTO_W_E_MAX = 1.0 - 1e-12
 
 
 @dataclass(frozen=True)
@@ -174,8 +176,9 @@ class _Frame:
         The common scale is the RMS radius of all M + N points about their centres, or
         with ``moving_scale`` the moving set's alone (the model's: clutter or missing parts
         of the fixed set then do not change what ``beta`` means), except where the moving
-        set is one point repeated or the fixed set's radius exceeds ``_FRAME_RATIO`` times
-        the moving set's (so that no coordinate can overflow).
+        set is one point repeated, or the fixed set's radius or the moving set's distance from
+        the centre exceeds ``_FRAME_RATIO`` times the moving set's radius (so that no
+        coordinate can overflow).
         ``same_centre`` centres both sets on the fixed set's mean (a start pose unchanged).
         """
         dim = moving.shape[1]
@@ -205,7 +208,14 @@ class _Frame:
         r_moving = r_fixed = 0.0
         if moving_scale:  # the moving set's radius about its own mean
             r_moving, r_fixed = _safe_rms(centred(moving)[1] if same_centre else yc), _safe_rms(xc)
-        if moving_scale and r_moving > 0.0 and r_fixed <= _FRAME_RATIO * r_moving:
+        if (
+            moving_scale
+            and r_moving > 0.0
+            and r_fixed <= _FRAME_RATIO * r_moving
+            # (with same_centre the moving set sits where it was: far from the fixed set's
+            # centre, its coordinates in units of its own radius could overflow when squared)
+            and float(np.max(np.abs(yc))) <= _FRAME_RATIO * r_moving
+        ):
             scale = r_moving
         else:
             unit = max(power_of_two_scale(yc), power_of_two_scale(xc))
@@ -534,7 +544,9 @@ class _CPD(BaseEstimator):
                 w_e = w_fraction
                 if auto_w and w_fraction > 0:
                     odds = w_fraction / (1.0 - w_fraction) * n_fixed / box
-                    w_e = odds / (1.0 + odds)
+                    # (a nearly flat fixed set has a box of almost no volume: the odds can pass
+                    # 1e16, where w_e would round to 1 and CPD's outlier constant divide by 0)
+                    w_e = min(odds / (1.0 + odds), _AUTO_W_E_MAX)
                 planner.hold = pending is not None  # a jump's E-step: no probing
                 post = e_step(moving_t, sigma2, w_e, current_prior)
                 objective = post.neg_log_likelihood + self._penalty(state)

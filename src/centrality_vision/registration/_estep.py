@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -613,6 +614,10 @@ def _fgt_order(eps: float) -> int:
     return p
 
 
+class FGTGridTooLarge(MemoryError):
+    """The fast Gauss transform's box grid cannot be indexed (h far below the sets' extent)."""
+
+
 def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
     """``out[t, r] = sum_j weights[j, r] exp(-|targets_t - sources_j|^2 / h^2)`` by a fast Gauss transform.
 
@@ -638,7 +643,7 @@ def gauss_transform(sources, weights, targets, h, *, eps=1e-10, translate=None):
     extent = np.maximum(sources.max(axis=0), targets.max(axis=0)) - origin
     dims_f = np.floor(extent / side) + 1
     if float(np.prod(dims_f)) > 2.0**62:
-        raise MemoryError(
+        raise FGTGridTooLarge(
             f"The fast Gauss transform's grid of boxes of side h = {h:.3g} would have {float(np.prod(dims_f)):.3g} "
             "cells, too many to index; use method='truncated' or 'dense'."
         )
@@ -705,7 +710,7 @@ def _fgt(moving_t, fixed, sigma2, log_c, eps, nearest=None):
     h = math.sqrt(2.0 * sigma2)
     d2_nearest, index = nearest if nearest is not None else _nearest(moving_t, fixed)
     raw = gauss_transform(moving_t, np.ones((n_moving, 1)), fixed, h, eps=eps)[:, 0]
-    c = math.exp(log_c) if log_c > -math.inf else 0.0
+    c = math.exp(min(log_c, 709.0)) if log_c > -math.inf else 0.0  # (709: exp's float64 limit)
     # the transform's absolute error is ~eps * M: rows whose sum is not far above it are redone exactly
     exact = raw < 1e4 * eps * n_moving
     raw = np.maximum(raw, 0.0)
@@ -867,8 +872,19 @@ def _run(method, moving_t, fixed, sigma2, w, prior, tau, eps, cached, single=Fal
     if method == "dense":
         p1, px, pt1, log_den, best = _dense(moving_t, fixed, inv2s2, log_c, prior, single, tau, want_best, memo)
     elif method == "fgt":
-        p1, px, pt1, log_den, best = _fgt(moving_t, fixed, sigma2, log_c, eps, cached.get("nearest"))
-    else:
+        try:
+            p1, px, pt1, log_den, best = _fgt(moving_t, fixed, sigma2, log_c, eps, cached.get("nearest"))
+        except FGTGridTooLarge:
+            # method='fgt' asked for at a sigma2 far below the sets' extent: the exact truncated
+            # path instead (its grid is sized by the points, not by h)
+            warnings.warn(
+                "method='fgt': the fast Gauss transform's grid is too fine at this sigma2; "
+                "this E-step took the exact truncated path instead.",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            method = "truncated"
+    if method == "truncated":
         p1, px, pt1, log_den, best = _truncated(
             moving_t, fixed, sigma2, inv2s2, log_c, prior, tau, cached.get("grid"), cached.get("nearest")
         )
@@ -1173,7 +1189,7 @@ def _e_step(
     else:
         cached = {}
     if method == "fgt" and log_prior is not None and log_prior.scale != 0:
-        raise InputError("`method='fgt'` computes CPD's posterior only; GPD's prior needs 'dense' or 'truncated'.")
+        raise InputError("`method` 'fgt' computes CPD's posterior only; GPD's prior needs 'dense' or 'truncated'.")
     return _run(method, moving_t, fixed, sigma2, w, log_prior, tau, eps, cached, _single(precision), want_best, memo)
 
 

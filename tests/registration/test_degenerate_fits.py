@@ -1,0 +1,80 @@
+"""Fits that used to crash on degenerate or extreme inputs (found by fuzzing option combinations).
+
+Each case now ends with finite results (or a named error where the input is out of range).
+"""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from centrality_vision.registration import AffineCPD, NonRigidCPD, RigidCPD
+from centrality_vision.registration._estep import Posteriors
+from centrality_vision.registration._mstep import gaussian_kernel, nonrigid_m_step
+
+
+def test_auto_w_on_a_fixed_set_with_almost_no_bounding_box_volume():
+    # fixed points on a line in 3D: the box floors two axes at 1e-12, the odds of an outlier
+    # pass 1e16 and w rounded to 1 (CPD's outlier constant then divided by zero)
+    rng = np.random.default_rng(0)
+    t = rng.random(20)
+    fixed = np.column_stack([t, np.zeros(20), np.zeros(20)])
+    moving = np.column_stack([rng.random(5), rng.random(5), rng.random(5)])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        reg = AffineCPD(max_iter=9, w="auto").fit(moving, fixed)
+    assert np.all(np.isfinite(reg.moving_transformed_)) and np.isfinite(reg.sigma2_)
+    assert 0.0 <= reg.w_ < 1.0
+
+
+def test_singular_nonrigid_system_takes_the_least_squares_solution():
+    # lam sigma2 = 0, a moving point without posterior mass and a repeated moving point: the
+    # system d(P1) G + lam sigma2 I is singular (LinAlgError before)
+    moving = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    fixed = np.array([[0.1, 0.0], [1.1, 0.1], [0.0, 1.2]])
+    p1 = np.array([0.0, 0.5, 0.5, 1.0])
+    px = np.array([[0.0, 0.0], [0.55, 0.05], [0.55, 0.05], [0.0, 1.2]])
+    post = Posteriors(p1=p1, pt1=np.ones(3), px=px, n_p=2.0, neg_log_likelihood=0.0, best=None)
+    kernel = gaussian_kernel(moving, moving, 2.0)
+    w, moved, sigma2, g_term = nonrigid_m_step(post, moving, fixed, kernel, 3.0, 0.0)
+    assert np.all(np.isfinite(w)) and np.all(np.isfinite(moved)) and np.isfinite(sigma2)
+    # it solves the system in the least-squares sense: the residual is orthogonal to its range
+    system = p1[:, None] * kernel
+    residual = system @ w - (px - p1[:, None] * moving)
+    np.testing.assert_allclose(system.T @ residual, 0.0, atol=1e-9)
+
+
+def test_forced_fgt_at_a_sigma2_too_fine_for_its_grid_falls_back_to_the_truncated_path():
+    rng = np.random.default_rng(1)
+    moving = rng.random((40, 3))
+    a = 0.3
+    rotation = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    fixed = moving @ rotation.T
+    with pytest.warns(RuntimeWarning, match="truncated path"):
+        reg = RigidCPD(method="fgt", tol=0.0, max_iter=80).fit(moving, fixed)
+    np.testing.assert_allclose(reg.moving_transformed_, fixed, atol=1e-6)
+
+
+def test_fgt_outlier_constant_beyond_exp_range_is_finite():
+    # normalize=False at a scale of 1e140: (2 pi sigma2)^(3/2) w/(1-w) M/N passes 1e308
+    rng = np.random.default_rng(2)
+    moving = rng.random((30, 3)) * 1e140
+    fixed = moving + 1e138
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        reg = RigidCPD(method="fgt", normalize=False, w=0.5, max_iter=5, tol=0.0).fit(moving, fixed)
+    assert np.all(np.isfinite(reg.moving_transformed_))
+
+
+def test_knn_frame_of_sets_far_apart_relative_to_the_moving_radius():
+    # n_neighbors centres both sets on the fixed mean: a moving set of radius 1 at 1e300 from
+    # it had coordinates of 1e300 in its own units, squared to inf (IndexError from the k-NN
+    # query before); the frame now falls back to the joint radius, out of range here
+    rng = np.random.default_rng(3)
+    moving = rng.random((20, 3)) + 1e8
+    fixed = np.repeat(rng.random((1, 3)) * 1e300, 15, axis=0)
+    with pytest.raises(ValueError, match="RMS radius"):
+        RigidCPD(n_neighbors=5).fit(moving, fixed)
+    # and a far but representable offset still registers
+    reg = NonRigidCPD(n_neighbors=5, max_iter=5, tol=0.0).fit(moving, moving + 1e12)
+    assert np.all(np.isfinite(reg.moving_transformed_))
