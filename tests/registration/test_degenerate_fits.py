@@ -78,3 +78,28 @@ def test_knn_frame_of_sets_far_apart_relative_to_the_moving_radius():
     # and a far but representable offset still registers
     reg = NonRigidCPD(n_neighbors=5, max_iter=5, tol=0.0).fit(moving, moving + 1e12)
     assert np.all(np.isfinite(reg.moving_transformed_))
+
+
+def test_sigma2_in_the_callers_units_stays_finite_at_the_edge_of_the_scale_range():
+    # a fixed set spanning 1e149 passed the old limit (1e150) and ended with sigma2_ = inf
+    rng = np.random.default_rng(4)
+    moving = rng.random((35, 2)) + 1e8
+    fixed = rng.random((8, 2)) * 1e149
+    with pytest.raises(ValueError, match="RMS radius"):
+        RigidCPD(n_neighbors=3, w="auto", max_iter=2).fit(moving, fixed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        reg = RigidCPD(n_neighbors=3, w="auto", max_iter=5).fit(moving * 1e136, fixed * 1e-9)
+    assert np.isfinite(reg.sigma2_) and np.all(np.isfinite(reg.moving_transformed_))
+
+
+def test_knn_posterior_skips_neighbours_the_tree_cannot_place():
+    # a moving point whose every distance overflows gets no neighbour from the k-d tree
+    # (index N, distance inf); it now claims nothing instead of indexing past the end
+    from centrality_vision.registration._estep import knn_posterior
+
+    moving = np.array([[0.0, 0.0], [1e200, 1e200]])
+    fixed = np.array([[0.0, 1.0], [1.0, 0.0], [1.0, 1.0]])
+    post = knn_posterior(moving, fixed, 1.0, 0.0, k=2)
+    assert post.p1[1] == 0.0 and np.isclose(post.p1[0], 2.0)  # its two nearest fixed points
+    assert np.all(np.isfinite(post.px)) and np.isfinite(post.neg_log_likelihood)

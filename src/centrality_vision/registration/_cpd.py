@@ -60,8 +60,10 @@ __all__ = ["RigidCPD", "AffineCPD", "NonRigidCPD", "IterationInfo", "Snapshots",
 
 # sigma2 below this fraction of the data's spread means the sets coincide: stop, converged.
 _SIGMA2_FLOOR = 1e-14
-# The common scale factor must keep sigma2 = scale^2 sigma2_normalised representable.
-_SCALE_RANGE = (1e-150, 1e150)
+# The common scale factor must keep sigma2 = scale^2 sigma2_normalised representable; the
+# normalised sigma2 can reach about 1e12 (a fixed set up to _FRAME_RATIO times the moving set's
+# radius), hence 1e145 rather than 1e154.
+_SCALE_RANGE = (1e-145, 1e145)
 # With ``moving_scale`` the frame's scale is the moving set's RMS radius unless the fixed
 # set's is this many times larger (then both sets' radius: the coordinates stay moderate).
 _FRAME_RATIO = 1e6

@@ -1213,11 +1213,13 @@ def _knn_scores(moving_t, fixed, sigma2, prior, k, tree):
     n_moving = moving_t.shape[0]
     k = min(int(k), fixed.shape[0])
     dist, cols = tree.query(moving_t, k=k)
-    dist = np.asarray(dist, dtype=float).reshape(n_moving, k)
-    cols = np.asarray(cols, dtype=np.int64).reshape(n_moving, k)
+    dist = np.asarray(dist, dtype=float).ravel()
+    cols = np.asarray(cols, dtype=np.int64).ravel()
     rows = np.repeat(np.arange(n_moving), k)
-    cols = cols.ravel()
-    s = -(dist.ravel() ** 2) / (2.0 * sigma2)
+    found = cols < fixed.shape[0]  # the tree marks a neighbour it could not place (inf distance) by N
+    if not found.all():
+        rows, cols, dist = rows[found], cols[found], dist[found]
+    s = -(dist**2) / (2.0 * sigma2)
     if prior is not None and prior.scale != 0:
         dv = prior.v_fixed[cols] - prior.v_moving[rows]
         s = s + prior.scale * (prior.log_weight[rows] - dv * dv * prior.inv2phi2)
