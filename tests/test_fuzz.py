@@ -25,7 +25,7 @@ from scipy import sparse
 from centrality_vision import centrality as cen
 from centrality_vision import graphs
 from centrality_vision.exceptions import InputError
-from centrality_vision.registration import ICP, AffineCPD, NonRigidCPD, RigidCPD
+from centrality_vision.registration import GPD, ICP, AffineCPD, MultiscaleCPD, NonRigidCPD, RigidCPD
 from centrality_vision.transforms import fit_similarity
 
 FUZZ = settings(
@@ -203,6 +203,47 @@ def test_registration(make, moving, data):
     if estimator is not None:
         _finite(estimator.moving_transformed_, "moving_transformed_")
         assert estimator.moving_transformed_.shape == moving.shape
+
+
+@st.composite
+def estimators(draw):
+    """A CPD estimator with a random combination of its options, bare or under GPD or MultiscaleCPD."""
+    kind = draw(st.sampled_from(["rigid", "similarity", "affine", "nonrigid"]))
+    kw = {"max_iter": draw(st.integers(1, 12))}
+    kw["w"] = draw(st.sampled_from([0.0, 0.1, 0.9, "auto"]))
+    if draw(st.booleans()):
+        kw["n_neighbors"] = draw(st.integers(1, 8))
+    else:
+        kw["method"] = draw(st.sampled_from(["auto", "dense", "truncated", "fgt"]))
+    kw["accelerate"] = draw(st.booleans())
+    kw["precision"] = draw(st.sampled_from(["float64", "float32"]))
+    kw["normalize"] = draw(st.booleans())
+    kw["tol"] = draw(st.sampled_from([0.0, 1e-12, 1e-3]))
+    if kind == "nonrigid":
+        kw["low_rank"] = draw(st.sampled_from([None, 3, "auto"]))
+        estimator = NonRigidCPD(**kw)
+    elif kind == "affine":
+        estimator = AffineCPD(**kw)
+    else:
+        estimator = RigidCPD(scale=kind == "similarity", init=draw(st.sampled_from([None, "global"])), **kw)
+    wrap = draw(st.sampled_from(["none", "none", "gpd", "multiscale"]))
+    if wrap == "gpd" and kw.get("method") != "fgt":
+        return GPD(estimator, centrality=draw(st.sampled_from(["closeness", "degree"])), prior_schedule="anneal")
+    if wrap == "multiscale":
+        return MultiscaleCPD(estimator, sizes=(draw(st.integers(2, 8)), 12), refine_iter=2)
+    return estimator
+
+
+@settings(FUZZ, max_examples=100, deadline=60_000)  # (numba compiles some paths on first use)
+@given(estimator=estimators(), moving=point_sets(max_points=15), data=st.data())
+def test_registration_option_combinations(estimator, moving, data):
+    # the option combinations a fuzz run over 400,000 fits checked (a hang and six crashes
+    # were found there and fixed): the same contract as the defaults above
+    fixed = data.draw(point_sets(dims=(moving.shape[1],), max_points=15))
+    fitted = honest(lambda m, f: estimator.fit(m, f), moving, fixed)
+    if fitted is not None:
+        _finite(fitted.moving_transformed_, "moving_transformed_")
+        _finite(float(fitted.sigma2_), "sigma2_")
 
 
 @FUZZ
