@@ -5,6 +5,7 @@ import pytest
 from scipy import sparse
 
 from centrality_vision.centrality import CENTRALITIES
+from centrality_vision.exceptions import InputError
 from centrality_vision.graphs import delaunay_graph
 from centrality_vision.registration import GPD, GRAPHS, AffineCPD, NonRigidCPD, RigidCPD, centrality_prior
 from centrality_vision.registration._estep import dense_posterior
@@ -176,3 +177,25 @@ def test_bad_prior_schedule(fish_pair):
     for bad in ("cosine", 0.0, 1.0):
         with pytest.raises(ValueError, match="prior_schedule"):
             GPD(prior_schedule=bad).fit(fish_pair.moving, fish_pair.fixed)
+
+
+def test_histogram_rule_names_are_checked():
+    # a string that is no numpy rule ('50', not 50) raised numpy's own ValueError before
+    from centrality_vision.registration._gpd import centrality_prior
+
+    v = np.linspace(0.0, 1.0, 30)
+    with pytest.raises(InputError, match="`bins`"):
+        centrality_prior(v, v, bins="50")
+    assert centrality_prior(v, v, bins="sturges").log_weight.shape == (30,)
+
+
+@pytest.mark.parametrize("rule", ["fd", "auto"])
+def test_spread_rules_on_centralities_bunched_within_1e_11_are_refused(rule):
+    # 'fd' takes bins of 2 IQR / n^(1/3): an IQR of 1e-11 asked numpy for 1e11 bins (a
+    # MemoryError of terabytes, found by fuzzing GPD's options); now a named error
+    from centrality_vision.registration._gpd import centrality_prior
+
+    v = np.r_[0.0, 0.5 + 1e-12 * np.arange(38), 1.0]
+    with pytest.raises(InputError, match="`bins` rule"):
+        centrality_prior(v, v, bins=rule)
+    assert np.all(np.isfinite(centrality_prior(v, v, bins=10).log_weight))

@@ -82,6 +82,27 @@ def normalize_centrality(values, *, name: str = "values") -> np.ndarray:
     return (v - lo) / (hi - lo)
 
 
+# numpy's histogram rules; those that follow the spread of the values ("fd", "scott" and
+# "auto" through "fd") make 1 / width bins, unbounded as the spread shrinks
+_BIN_RULES = ("auto", "fd", "doane", "scott", "stone", "rice", "sturges", "sqrt")
+_MAX_RULE_BINS = 100_000
+
+
+def _rule_width(values, rule):
+    """The bin width of numpy's spread-based rules (0 where the rule does not follow the spread
+    or the spread is 0, which numpy turns into one bin)."""
+    n = values.size
+    if rule in ("fd", "auto"):
+        iqr = float(np.subtract(*np.percentile(values, [75, 25])))
+        fd = 2.0 * iqr * n ** (-1.0 / 3.0)
+        if rule == "fd" or fd == 0.0:
+            return fd
+        return min(fd, (float(np.ptp(values)) / (np.log2(n) + 1.0)) if n > 0 else 0.0)
+    if rule == "scott":
+        return (24.0 * np.pi**0.5 / n) ** (1.0 / 3.0) * float(np.std(values))
+    return 0.0
+
+
 def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> CentralityPrior:
     """GPD's prior from normalised centralities of the moving and fixed sets (thesis eq. 5.10).
 
@@ -111,6 +132,14 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> Cen
         if v.min() < -1e-12 or v.max() > 1 + 1e-12:
             raise InputError(f"`{name}` must be normalised to [0, 1]; got range [{v.min():.6g}, {v.max():.6g}].")
     if isinstance(bins, str):
+        check_choice(bins, _BIN_RULES, name="bins")
+        width = _rule_width(vy, bins)
+        if 0.0 < width < 1.0 / _MAX_RULE_BINS:
+            # (a spread of centralities near zero: numpy would allocate 1 / width bins)
+            raise InputError(
+                f"`bins` rule {bins!r} gives bins of width {width:.3g} for these centralities, "
+                f"more than {_MAX_RULE_BINS:,} on [0, 1]; pass a number of bins instead."
+            )
         edges = np.histogram_bin_edges(vy, bins=bins, range=(0.0, 1.0))
     else:
         edges = np.linspace(0.0, 1.0, check_int(bins, name="bins", low=1) + 1)
