@@ -150,3 +150,43 @@ def test_rigid_cpd_init_global_and_gpd_over_it(fish, rot2, degrees):
     np.testing.assert_allclose(cpd.moving_transformed_, x, atol=1e-4)
     gpd = GPD(RigidCPD(scale=True, tol=1e-8, init="global", random_state=0), centrality="closeness").fit(fish, x)
     assert angle_degrees(gpd.transform_.rotation, r) < 1e-3
+
+
+@pytest.mark.parametrize("n_dims", [2, 3])
+def test_batched_e_step_equals_the_library_e_step_per_pose(n_dims):
+    """The search's compiled E-step over K poses gives, pose by pose, the library's dense E-step."""
+    from centrality_vision.registration._estep import _e_step
+    from centrality_vision.registration._pose import _batch_e_step
+
+    rng = np.random.default_rng(3)
+    fixed = rng.normal(size=(37, n_dims))
+    moving = rng.normal(size=(5, 29, n_dims)) * [[[1.0] * (n_dims - 1) + [0.3]]]
+    sigma2 = np.array([1e-4, 0.01, 0.1, 1.0, 50.0])
+    p1, pt1, px, nll = _batch_e_step(moving, fixed, sigma2, 0.2)
+    for k in range(5):
+        post = _e_step(moving[k], fixed, sigma2[k], 0.2, method="dense")
+        np.testing.assert_allclose(p1[k], post.p1, rtol=1e-12, atol=1e-300)
+        np.testing.assert_allclose(pt1[k], post.pt1, rtol=1e-12, atol=1e-300)
+        np.testing.assert_allclose(px[k], post.px, rtol=1e-11, atol=1e-13)
+        assert nll[k] == pytest.approx(post.neg_log_likelihood, rel=1e-12, abs=1e-9)
+
+
+def test_global_search_does_not_depend_on_the_thread_count(blob3d):
+    from centrality_vision._parallel import get_num_threads, set_num_threads
+
+    rng = np.random.default_rng(11)
+    moving = np.vstack([blob3d, rng.normal(size=(95, 3)) * 0.3])  # 200 points: the poses run in parallel
+    r = rotation_lattice(3, 40)[17]
+    fixed = moving @ r.T + [1.0, -2.0, 0.5]
+    before = get_num_threads()
+    poses = []
+    try:
+        for threads in (1, 2, 3):
+            set_num_threads(threads)
+            poses.append(global_pose_search(moving, fixed, scale=True, w=0.1, random_state=4))
+    finally:
+        set_num_threads(before)
+    for pose in poses[1:]:
+        assert np.array_equal(pose.rotation, poses[0].rotation)
+        assert np.array_equal(pose.translation, poses[0].translation) and pose.scale == poses[0].scale
+    assert angle_degrees(poses[0].rotation, r) < 1.0

@@ -1180,3 +1180,63 @@ def fgt_translate_evaluate(
                 for k in range(n_terms):
                     total += local[r, k] * prod[k]
                 out[t, r] = total
+
+
+@njit(nogil=True, cache=True, fastmath=_REDUCE)
+def _row_max(row, n, start):
+    """``max(start, max(row[:n]))``."""
+    top = start
+    for m in range(n):
+        top = max(top, row[m])
+    return top
+
+
+@njit(nogil=True, cache=True, fastmath=_CONTRACT)
+def batch_posteriors(moving_t, fixed, sigma2, log_c, lo, hi, p1, pt1, pxt, nll):
+    """CPD's E-step statistics for poses ``lo:hi`` of K poses of one moving set (the global pose search).
+
+    ``moving_t`` (K, D, M) holds the K transformed moving sets, transposed; ``sigma2`` and
+    ``log_c`` (K,) each pose's variance and log outlier constant. Fills, for those poses,
+    ``p1`` (K, M), ``pt1`` (K, N), ``pxt`` (K, D, M) (``(P X)^T``) and ``nll`` (K,):
+    ``-sum_n log(sum_m exp(s_mn) + c) + N D / 2 log sigma2`` with
+    ``s_mn = -|x_n - y_m|^2 / (2 sigma2)``. Each row is shifted by ``max(max_m s_mn, log c)``
+    before the exponentials (log space, as :func:`dense_rows`), and the squared distances
+    are summed from coordinate differences (no ``|x|^2 + |y|^2 - 2 x.y`` cancellation). Each
+    pose is computed alone, serially in a fixed order.
+    """
+    n_dims, n_moving = moving_t.shape[1], moving_t.shape[2]
+    n_fixed = fixed.shape[0]
+    row = np.empty(n_moving)
+    for k in range(lo, hi):
+        yt = moving_t[k]
+        inv2s2 = 0.5 / sigma2[k]
+        lc = log_c[k]
+        p1[k, :] = 0.0
+        pxt[k, :, :] = 0.0
+        total = 0.0
+        for n in range(n_fixed):
+            for m in range(n_moving):
+                row[m] = 0.0
+            for d in range(n_dims):
+                xd = fixed[n, d]
+                for m in range(n_moving):
+                    t = yt[d, m] - xd
+                    row[m] += t * t
+            for m in range(n_moving):
+                row[m] *= -inv2s2
+            top = _row_max(row, n_moving, lc)
+            for m in range(n_moving):
+                row[m] = fast_exp(max(row[m] - top, _FLOOR))
+            den = _sum(row, 0, n_moving) + fast_exp(max(lc - top, _FLOOR))
+            inv_den = 1.0 / den
+            for m in range(n_moving):
+                row[m] *= inv_den
+            pt1[k, n] = _sum(row, 0, n_moving)
+            for m in range(n_moving):
+                p1[k, m] += row[m]
+            for d in range(n_dims):
+                xd = fixed[n, d]
+                for m in range(n_moving):
+                    pxt[k, d, m] += row[m] * xd
+            total += np.log(den) + top
+        nll[k] = -total + 0.5 * n_fixed * n_dims * np.log(sigma2[k])

@@ -14,10 +14,12 @@ import math
 
 import numpy as np
 
+from .._parallel import run_chunks
 from .._seeding import as_generator
 from .._validation import as_points, check_float, check_int
 from ..exceptions import InputError
 from ..transforms import RigidTransform, SimilarityTransform
+from . import _kernels as K
 
 __all__ = ["global_pose_search", "rotation_lattice"]
 
@@ -29,8 +31,7 @@ _REFINE_ITER = 30  # EM steps per refined hypothesis
 _SCORE_SIGMA2 = 0.01  # common variance at which the hypotheses are compared
 _MIN_W = 0.1  # the search always keeps an outlier term: partial overlap must not dominate
 _DISTINCT_DEGREES = 10.0  # refined hypotheses differ by at least this rotation
-
-_BLOCK = 1 << 22  # pairs per batched E-step block (32 MiB of doubles)
+_PARALLEL_PAIRS = 20_000  # pairs per pose from which the poses are spread over threads
 
 # psi of the super-Fibonacci spiral: the real root of psi^4 = psi + 4
 _PSI = 1.533751168755204288118041
@@ -101,31 +102,29 @@ def _subset(points: np.ndarray, size: int, rng: np.random.Generator) -> np.ndarr
 def _batch_e_step(moving_t: np.ndarray, fixed: np.ndarray, sigma2: np.ndarray, w: float):
     """CPD's E-step statistics for K poses at once: ``moving_t`` (K, M, D), one variance each.
 
-    The library's E-step handles one pose per call; here all the lattice's poses share one
-    set of array operations (the search on small sets would otherwise be dominated by the
-    per-call overhead). Log space as in ``_estep``; ``w > 0``. Returns ``P1`` (K, M),
-    ``Pt1`` (K, N), ``PX`` (K, M, D) and the negative log-likelihoods (K,).
+    The library's E-step handles one pose per call; here all the lattice's poses go through
+    one compiled loop (:func:`_kernels.batch_posteriors`; the search on small sets would
+    otherwise be dominated by per-call overhead). Log space as in ``_estep``; ``w > 0``.
+    Returns ``P1`` (K, M), ``Pt1`` (K, N), ``PX`` (K, M, D) and the negative
+    log-likelihoods (K,).
     """
     n_poses, n_moving, n_dims = moving_t.shape
     n_fixed = fixed.shape[0]
+    sigma2 = np.ascontiguousarray(sigma2, dtype=float)
+    log_c = 0.5 * n_dims * np.log(2 * np.pi * sigma2) + math.log(w / (1 - w)) + math.log(n_moving / n_fixed)
     p1, pt1 = np.empty((n_poses, n_moving)), np.empty((n_poses, n_fixed))
-    px, nll = np.empty((n_poses, n_moving, n_dims)), np.empty(n_poses)
-    step = max(1, _BLOCK // (n_moving * n_fixed))
-    x2 = np.einsum("ij,ij->i", fixed, fixed)
-    for lo in range(0, n_poses, step):
-        hi = min(lo + step, n_poses)
-        yt, s2 = moving_t[lo:hi], sigma2[lo:hi]
-        e = np.einsum("kmd,kmd->km", yt, yt)[:, :, None] + x2[None, None, :] - 2.0 * yt @ fixed.T
-        np.maximum(e, 0.0, out=e)
-        e *= (-0.5 / s2)[:, None, None]
-        log_c = 0.5 * n_dims * np.log(2 * np.pi * s2) + math.log(w / (1 - w)) + math.log(n_moving / n_fixed)
-        top = np.maximum(e.max(axis=1), log_c[:, None])
-        np.exp(e - top[:, None, :], out=e)
-        den = e.sum(axis=1) + np.exp(log_c[:, None] - top)
-        e /= den[:, None, :]
-        p1[lo:hi], pt1[lo:hi], px[lo:hi] = e.sum(axis=2), e.sum(axis=1), e @ fixed
-        nll[lo:hi] = -np.sum(np.log(den) + top, axis=1) + 0.5 * n_fixed * n_dims * np.log(s2)
-    return p1, pt1, px, nll
+    pxt, nll = np.empty((n_poses, n_dims, n_moving)), np.empty(n_poses)
+    yt = np.ascontiguousarray(moving_t.transpose(0, 2, 1))
+    fixed = np.ascontiguousarray(fixed, dtype=float)
+
+    def task(lo, hi):
+        K.batch_posteriors(yt, fixed, sigma2, log_c, lo, hi, p1, pt1, pxt, nll)
+
+    if n_poses > 1 and n_moving * n_fixed >= _PARALLEL_PAIRS:
+        run_chunks(task, n_poses)  # each pose alone: the same numbers for any thread count
+    else:
+        task(0, n_poses)
+    return p1, pt1, pxt.transpose(0, 2, 1), nll
 
 
 def _em(moving, fixed, rotation, translation, scale, sigma2, w, n_iter, estimate_scale):
@@ -191,8 +190,10 @@ def global_pose_search(
     dominating the score). The ``n_hypotheses`` best that differ by at least 10 degrees
     are refined by 30 more steps on subsets of at most ``2 * max_points`` points and
     re-scored there; the best is returned. Measured on the bunny (1,000 points) and the CPD
-    fish with noise, 20% missing and 20% outliers, it costs one to five plain CPD runs
-    (``benchmarks/registration_suite.py``).
+    fish with noise, 20% missing and 20% outliers (100 trials at each of 0, 30, ..., 180
+    degrees), search and fit succeeded in every trial and took 0.75x one plain CPD run on the
+    bunny and 3.1x on the 91-point fish (``benchmarks/registration_suite.py``,
+    ``results/benchmarks/registration-suite-pose100.txt``).
 
     Parameters
     ----------
