@@ -231,6 +231,57 @@ def _preload_libusb():
         pass
 
 
+def peer_nonrigid(name, y, x, w):
+    """A peer's non-rigid CPD of ``y`` onto ``x`` at the suite's settings: ``(T(Y), C)``.
+
+    ``C`` (M x D) are its kernel coefficients, ``T(Y) = Y + G C`` with ``G`` the Gaussian
+    kernel of width ``beta`` on ``Y`` (probreg's ``beta`` is that kernel's variance: it gets
+    ``beta**2``; cycpd runs low-rank with M - 1 eigenpairs, biocpd with its own defaults).
+    """
+    beta, lam, tol, max_iter = SETTINGS["beta"], SETTINGS["lam"], SETTINGS["tol"], SETTINGS["max_iter"]
+    if name in ("pycpd", "biocpd"):
+        import biocpd
+        import pycpd
+
+        kw = {"low_rank": False} if name == "biocpd" else {}
+        cls = (biocpd if name == "biocpd" else pycpd).DeformableRegistration
+        reg = cls(X=x, Y=y, alpha=lam, beta=beta, w=w, tolerance=tol, max_iterations=max_iter, **kw)
+        return np.asarray(reg.register()[0]), np.asarray(reg.W)
+    if name == "cycpd":
+        import cycpd
+
+        reg = cycpd.deformable_registration(
+            X=x,
+            Y=y,
+            alpha=lam,
+            beta=beta,
+            low_rank=True,
+            num_eig=y.shape[0] - 1,
+            w=w,
+            tolerance=tol,
+            max_iterations=max_iter,
+            verbose=False,
+            print_reg_params=False,
+        )
+        return np.asarray(reg.register()[0]), np.asarray(reg.W)
+    if name == "probreg":
+        _preload_libusb()
+        from probreg import cpd as probreg_cpd
+
+        res = probreg_cpd.registration_cpd(
+            y, x, tf_type_name="nonrigid", w=w, maxiter=max_iter, tol=tol, beta=probreg_beta(beta), lmd=lam
+        )
+        return np.asarray(res.transformation.transform(y)), np.asarray(res.transformation.w)
+    if name == "rustcpd":
+        import rustcpd
+
+        res = rustcpd.register_deformable(
+            x, y, alpha=lam, beta=beta, low_rank=None, max_iterations=max_iter, tolerance=tol, outlier_weight=w
+        )
+        return np.asarray(res.points), np.asarray(res.weights)
+    raise ValueError(f"unknown peer {name!r}")
+
+
 def run_method(method, y, x, *, rigid, w, seed):
     """The moving set after registration by ``method`` (M x D), and extra info."""
     beta, lam, tol, max_iter = SETTINGS["beta"], SETTINGS["lam"], SETTINGS["tol"], SETTINGS["max_iter"]
@@ -267,75 +318,48 @@ def run_method(method, y, x, *, rigid, w, seed):
             cpd = NonRigidCPD(beta=beta, lam=lam, w=w, tol=tol, max_iter=max_iter, **model)
         est = cpd if centrality is None else GPD(cpd, centrality=centrality, graph="delaunay", prior_schedule=schedule)
         return est.fit(start, x).moving_transformed_, info
+    if base in PEERS and not rigid:
+        return peer_nonrigid(base, y, x, w)[0], info
     if base == "pycpd":
         import pycpd
 
-        cls = pycpd.RigidRegistration if rigid else pycpd.DeformableRegistration
-        kw = {} if rigid else {"alpha": lam, "beta": beta}
-        return cls(X=x, Y=y, w=w, tolerance=tol, max_iterations=max_iter, **kw).register()[0], info
+        return pycpd.RigidRegistration(X=x, Y=y, w=w, tolerance=tol, max_iterations=max_iter).register()[0], info
     if base == "cycpd":
         import cycpd
 
-        if rigid:
+        class Rigid(cycpd.rigid_registration):  # cycpd 0.28 keeps sigma2 a 1x1 array under NumPy 2
+            def update_variance(self):
+                super().update_variance()
+                self.sigma2 = float(np.asarray(self.sigma2).reshape(-1)[0])
 
-            class Rigid(cycpd.rigid_registration):  # cycpd 0.28 keeps sigma2 a 1x1 array under NumPy 2
-                def update_variance(self):
-                    super().update_variance()
-                    self.sigma2 = float(np.asarray(self.sigma2).reshape(-1)[0])
-
-            reg = Rigid(
-                X=x,
-                Y=y,
-                scale=False,
-                w=w,
-                tolerance=tol,
-                max_iterations=max_iter,
-                verbose=False,
-                print_reg_params=False,
-            )
-        else:
-            reg = cycpd.deformable_registration(
-                X=x,
-                Y=y,
-                alpha=lam,
-                beta=beta,
-                low_rank=True,
-                num_eig=y.shape[0] - 1,
-                w=w,
-                tolerance=tol,
-                max_iterations=max_iter,
-                verbose=False,
-                print_reg_params=False,
-            )
+        reg = Rigid(
+            X=x,
+            Y=y,
+            scale=False,
+            w=w,
+            tolerance=tol,
+            max_iterations=max_iter,
+            verbose=False,
+            print_reg_params=False,
+        )
         return np.asarray(reg.register()[0]), info
     if base == "probreg":
         _preload_libusb()
         from probreg import cpd as probreg_cpd
 
-        kw = {"update_scale": False} if rigid else {"beta": probreg_beta(beta), "lmd": lam}
         res = probreg_cpd.registration_cpd(
-            y, x, tf_type_name="rigid" if rigid else "nonrigid", w=w, maxiter=max_iter, tol=tol, **kw
+            y, x, tf_type_name="rigid", w=w, maxiter=max_iter, tol=tol, update_scale=False
         )
         return np.asarray(res.transformation.transform(y)), info
     if base == "rustcpd":
         import rustcpd
 
-        if rigid:
-            res = rustcpd.register_rigid(x, y, scale=False, max_iterations=max_iter, tolerance=tol, outlier_weight=w)
-        else:
-            res = rustcpd.register_deformable(
-                x, y, alpha=lam, beta=beta, low_rank=None, max_iterations=max_iter, tolerance=tol, outlier_weight=w
-            )
+        res = rustcpd.register_rigid(x, y, scale=False, max_iterations=max_iter, tolerance=tol, outlier_weight=w)
         return np.asarray(res.points), info
     if base == "biocpd":
         import biocpd
 
-        if rigid:
-            reg = biocpd.RigidRegistration(X=x, Y=y, scale=False, w=w, tolerance=tol, max_iterations=max_iter)
-        else:
-            reg = biocpd.DeformableRegistration(
-                X=x, Y=y, alpha=lam, beta=beta, low_rank=False, w=w, tolerance=tol, max_iterations=max_iter
-            )
+        reg = biocpd.RigidRegistration(X=x, Y=y, scale=False, w=w, tolerance=tol, max_iterations=max_iter)
         return np.asarray(reg.register()[0]), info
     raise ValueError(f"unknown method {method!r}")
 
@@ -980,12 +1004,6 @@ def _explain_objective(pairs):
     ``cpd-knn-auto`` keeps its defaults and its solution is scored with the family's ``w``
     like every other.
     """
-    import biocpd
-    import cycpd
-    import pycpd
-    import rustcpd
-    from probreg import cpd as probreg_cpd
-
     from centrality_vision.registration import NonRigidCPD
 
     beta, lam, tol, max_iter = SETTINGS["beta"], SETTINGS["lam"], SETTINGS["tol"], SETTINGS["max_iter"]
@@ -995,58 +1013,17 @@ def _explain_objective(pairs):
         # T(y) = L y + t + G C: the solution's own kernel width, control points and coefficients
         return tf(y), tf.control_points, tf.coefficients, tf.beta
 
-    def pycpd_like(module):
+    def peer(name):
         def run(y, x, w):
-            reg = module.DeformableRegistration(
-                X=x,
-                Y=y,
-                alpha=lam,
-                beta=beta,
-                w=w,
-                tolerance=tol,
-                max_iterations=max_iter,
-                **({"low_rank": False} if module is biocpd else {}),
-            )
-            return reg.register()[0], y, reg.W, beta
+            moved, coefficients = peer_nonrigid(name, y, x, w)
+            return moved, y, coefficients, beta
 
         return run
-
-    def cy(y, x, w):
-        reg = cycpd.deformable_registration(
-            X=x,
-            Y=y,
-            alpha=lam,
-            beta=beta,
-            low_rank=True,
-            num_eig=y.shape[0] - 1,
-            w=w,
-            tolerance=tol,
-            max_iterations=max_iter,
-            verbose=False,
-            print_reg_params=False,
-        )
-        return np.asarray(reg.register()[0]), y, reg.W, beta
-
-    def probreg(y, x, w):
-        res = probreg_cpd.registration_cpd(
-            y, x, tf_type_name="nonrigid", w=w, maxiter=max_iter, tol=tol, beta=probreg_beta(beta), lmd=lam
-        )
-        return np.asarray(res.transformation.transform(y)), y, np.asarray(res.transformation.w), beta
-
-    def rust(y, x, w):
-        res = rustcpd.register_deformable(
-            x, y, alpha=lam, beta=beta, low_rank=None, max_iterations=max_iter, tolerance=tol, outlier_weight=w
-        )
-        return np.asarray(res.points), y, np.asarray(res.weights), beta
 
     methods = {
         "cpd (normalize=False)": lambda y, x, w: ours(y, x, w, normalize=False),
         "cpd-knn-auto": lambda y, x, w: ours(y, x, "auto", n_neighbors=KNN),
-        "pycpd": pycpd_like(pycpd),
-        "cycpd": cy,
-        "probreg": probreg,
-        "rustcpd": rust,
-        "biocpd": pycpd_like(biocpd),
+        **{name: peer(name) for name in PEERS},
     }
     rows = []
     for family, shape, level in EXPLAIN_OBJECTIVE_CASES:
