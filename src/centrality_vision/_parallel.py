@@ -71,6 +71,10 @@ def _pool(size: int) -> ThreadPoolExecutor:
         return _state["pool"]
 
 
+# chunks of the work: at least 8 (4 per thread on 2 cores), one per 256 units beyond, at most 64
+_MIN_CHUNKS, _MAX_CHUNKS, _UNITS_PER_CHUNK = 8, 64, 256
+
+
 def _bounds(n_items: int, n_chunks: int) -> list[tuple[int, int]]:
     edges = [round(i * n_items / n_chunks) for i in range(n_chunks + 1)]
     return [(lo, hi) for lo, hi in zip(edges[:-1], edges[1:]) if hi > lo]
@@ -83,10 +87,13 @@ def run_chunks(
 
     Results come back in chunk order as a list of ``(lo, hi, result)``. ``weight`` is the
     number of progress units per item (``total`` caps the bar), e.g. 64 sources per group.
+    The chunks depend on ``n_items`` and ``weight`` only, never on the thread count (at
+    least 8, one per 256 units beyond, at most 64), so that a caller adding the chunks' partial
+    sums in chunk order gets the same bits with any number of threads.
     """
     threads = get_num_threads()
     units = n_items * weight
-    n_chunks = min(n_items, max(4 * threads, min(64, units // 256))) if n_items else 0
+    n_chunks = min(n_items, max(_MIN_CHUNKS, min(_MAX_CHUNKS, units // _UNITS_PER_CHUNK))) if n_items else 0
     bounds = _bounds(n_items, n_chunks)
     total = units if total is None else total
     bar = None
