@@ -124,3 +124,23 @@ def test_3d_pixel_graph_with_spacing(connectivity):
     within = (steps.max(axis=2) == 1) & (steps.sum(axis=2) <= {6: 1, 18: 2, 26: 3}[connectivity])
     expected = int(within.sum())
     assert graph.nnz == expected
+
+
+@pytest.mark.parametrize("spacing", [(1e300, 1e300), (1e-300, 1.0), (1.0, 1e-200), (3e-170, 4e-170)])
+def test_extreme_spacing_gives_the_true_lengths(spacing):
+    """skimage squares the spacing (overflow above 1e154, underflow below 1e-162); ours must not."""
+    graph, nodes = pixel_graph(np.ones((3, 4), dtype=bool), spacing=spacing)
+    reference, _ = pixel_graph(np.ones((3, 4), dtype=bool))  # same structure, unit spacing
+    np.testing.assert_array_equal(graph.indices, reference.indices)
+    coords = pixel_coordinates(nodes, (3, 4))
+    rows = np.repeat(np.arange(graph.shape[0]), np.diff(graph.indptr))
+    steps = np.abs(coords[rows] - coords[graph.indices]) * np.asarray(spacing)
+    top = steps.max(axis=1)
+    expected = top * np.hypot(*(steps / top[:, None]).T)
+    np.testing.assert_allclose(graph.data, expected, rtol=1e-14)
+    assert graph.data.min() > 0
+
+
+def test_spacing_whose_lengths_overflow_is_refused():
+    with pytest.raises(ValueError, match="`spacing` must give edge lengths"):
+        pixel_graph(np.ones((2, 2), dtype=bool), spacing=(1.5e308, 1.5e308))

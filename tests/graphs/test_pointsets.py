@@ -165,3 +165,20 @@ def test_builders_are_scale_invariant_at_extreme_coordinates(scale):
         scaled = build(points * scale)
         assert (scaled != 0).nnz == (reference != 0).nnz
         np.testing.assert_allclose(scaled.toarray() / scale, reference.toarray(), rtol=1e-12)
+
+
+@pytest.mark.parametrize("build", [complete_graph, lambda p: knn_graph(p, k=1)])
+def test_a_pair_closer_than_squares_can_hold_keeps_its_true_length(build):
+    """1e-170 apart: the squared difference underflows to 0; the edge must still be there."""
+    points = np.array([[0.0, 0.0], [1e-170, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    graph = build(points)
+    assert graph[0, 1] == graph[1, 0] == pytest.approx(1e-170, rel=1e-12)
+    assert graph.data.min() > 0  # no explicit zero: every stored edge is an edge
+    assert (abs(graph - graph.T)).nnz == 0
+
+
+@pytest.mark.parametrize("build", BUILDERS)
+def test_distances_beyond_float64_are_refused(build):
+    points = np.array([[1.7e308, 0.0], [-1.7e308, 0.0], [0.0, 1.7e308], [0.0, -1.7e308]])
+    with pytest.raises(ValueError, match="`points` must have every distance"):
+        build(points)

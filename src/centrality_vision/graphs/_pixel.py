@@ -11,6 +11,7 @@ from scipy import sparse
 from .._seeding import as_generator
 from .._validation import as_binary_image, check_float
 from ..exceptions import InputError
+from ._pointsets import _robust_norms
 
 __all__ = ["PixelGraph", "pixel_graph", "pixel_coordinates", "salt_noise"]
 
@@ -210,9 +211,11 @@ def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, thre
         spacing = np.asarray(spacing, dtype=np.float64).reshape(-1)
         if spacing.shape != (mask.ndim,) or not np.all(np.isfinite(spacing)) or np.any(spacing <= 0):
             raise InputError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing.tolist()!r}.")
-    graph, nodes = _skimage_pixel_graph(mask, mask=mask, connectivity=allowed[connectivity], spacing=spacing)
+    graph, nodes = _skimage_pixel_graph(mask, mask=mask, connectivity=allowed[connectivity])
     graph = PixelGraph(graph)
     graph.sort_indices()
+    if spacing is not None:
+        graph.data = _spaced_lengths(graph, np.asarray(nodes, dtype=np.int64), mask.shape, spacing)
     graph.indices = graph.indices.astype(np.int32, copy=False)
     graph.indptr = graph.indptr.astype(np.int32, copy=False)
     remembered = mask.copy()
@@ -221,6 +224,30 @@ def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, thre
     graph.connectivity = int(connectivity)
     graph.spacing = None if spacing is None else spacing.copy()
     return graph, np.asarray(nodes, dtype=np.int64)
+
+
+def _spaced_lengths(graph, nodes: np.ndarray, shape: tuple, spacing: np.ndarray) -> np.ndarray:
+    """The edge lengths of ``graph`` (CSR order) with pixel ``spacing``, without overflow or underflow.
+
+    Each edge joins pixels that differ by 0 or 1 along each axis; its length is the norm of
+    those steps times ``spacing``, taken with the steps divided by the largest one before
+    squaring (skimage squares the spacing itself: its lengths overflow above about 1e154
+    and underflow to 0 below about 1e-162). Lengths beyond float64 are refused.
+    """
+    rows = np.repeat(np.arange(graph.shape[0]), np.diff(graph.indptr))
+    steps = np.abs(
+        np.stack(np.unravel_index(nodes[rows], shape), axis=1)
+        - np.stack(np.unravel_index(nodes[graph.indices], shape), axis=1)
+    )
+    top = float(spacing.max())
+    unit = steps * (spacing / top)
+    with np.errstate(over="ignore"):
+        lengths = _robust_norms(unit) * top
+    if lengths.size and not (np.all(np.isfinite(lengths)) and lengths.min() > 0):
+        raise InputError(
+            f"`spacing` must give edge lengths that fit in float64 (about 5e-324 to 1.8e308); got {spacing.tolist()!r}."
+        )
+    return lengths
 
 
 def pixel_coordinates(nodes, shape) -> np.ndarray:

@@ -53,10 +53,37 @@ def _unit_scale(points: np.ndarray) -> tuple[np.ndarray, float]:
     return points / scale, scale
 
 
+def _robust_norms(diff: np.ndarray) -> np.ndarray:
+    """Row norms of ``diff`` without underflow: each row divided by its largest entry first."""
+    top = np.max(np.abs(diff), axis=1)
+    safe = np.where(top > 0, top, 1.0)
+    return top * np.linalg.norm(diff / safe[:, None], axis=1)
+
+
+def _scaled_lengths(unit_lengths: np.ndarray, scale: float) -> np.ndarray:
+    """Lengths in the caller's units; refuses a pair of distinct points whose distance is 0 or inf there."""
+    with np.errstate(over="ignore"):
+        lengths = unit_lengths * scale
+    bad = ~(np.isfinite(lengths) & (lengths > 0))
+    if bad.any():
+        raise InputError(
+            "`points` must have every distance between two of them representable in float64 "
+            f"(from about 5e-324 to 1.8e308); got {int(bad.sum())} edge(s) of length "
+            f"{'0 (distinct points closer than that)' if np.any(lengths[bad] == 0) else 'inf'}. "
+            "Rescale or merge near-duplicate points."
+        )
+    return lengths
+
+
 def _lengths(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Euclidean lengths of the edges ``lo[e] -- hi[e]`` without overflow or underflow."""
+    """Euclidean lengths of the edges ``lo[e] -- hi[e]`` without overflow or underflow.
+
+    The points are divided by their largest coordinate and each difference by its largest
+    entry before squaring, so no squared distance leaves the float64 range; a length that
+    does not fit in float64 in the caller's units is refused (:func:`_scaled_lengths`).
+    """
     unit, scale = _unit_scale(points)
-    return np.linalg.norm(unit[lo] - unit[hi], axis=1) * scale
+    return _scaled_lengths(_robust_norms(unit[lo] - unit[hi]), scale)
 
 
 def _triangulable_points(points) -> np.ndarray:
@@ -260,7 +287,12 @@ def complete_graph(points, /) -> sparse.csr_array:
     """
     points = as_points(points, name="points", n_dims=ANY_DIMS, min_points=2, allow_duplicates=False)
     unit, scale = _unit_scale(points)
-    graph = sparse.csr_array(squareform(pdist(unit) * scale))
+    unit_lengths = pdist(unit)
+    close = np.flatnonzero(unit_lengths < 1e-140)  # squared differences may have underflowed
+    if close.size:
+        lo, hi = np.triu_indices(points.shape[0], k=1)
+        unit_lengths[close] = _robust_norms(unit[lo[close]] - unit[hi[close]])
+    graph = sparse.csr_array(squareform(_scaled_lengths(unit_lengths, scale)))
     graph.sort_indices()
     graph.indices = graph.indices.astype(np.int32, copy=False)
     graph.indptr = graph.indptr.astype(np.int32, copy=False)
