@@ -303,10 +303,10 @@ def as_binary_image(
         raise InputError(f"`{name}` must not be empty; got shape {arr.shape}.")
     if arr.dtype != bool and not np.all(np.isfinite(arr)):
         raise InputError(f"`{name}` must be finite; got NaN or inf values.")
-    if threshold is not None and (
-        isinstance(threshold, bool) or not isinstance(threshold, numbers.Real) or not np.isfinite(threshold)
-    ):
+    if threshold is not None and (isinstance(threshold, bool) or not isinstance(threshold, numbers.Real)):
         raise TypeError(f"`threshold` must be a finite real number or None; got {threshold!r}.")
+    if threshold is not None and not np.isfinite(threshold):
+        raise InputError(f"`threshold` must be a finite real number or None; got {threshold!r}.")
     is_mask = arr.dtype == bool or (threshold is None and bool(np.all((arr == 0) | (arr == 1))))
     if is_mask:
         light = arr.astype(bool)  # a new array: the input is never returned

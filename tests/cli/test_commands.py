@@ -473,6 +473,11 @@ def test_other_input_errors_are_one_line(tmp_path, capsys):
     assert "same size" in _one_line_error(capsys)
     assert main(["classify", str(tmp_path / "nowhere"), "--out", str(tmp_path / "c.json")]) == 2
     assert "no such folder" in _one_line_error(capsys)
+    import imageio.v3 as iio
+
+    iio.imwrite(tmp_path / "s.png", (np.arange(64).reshape(8, 8) * 4).astype(np.uint8))
+    assert main(["centrality", str(tmp_path / "s.png"), "--threshold", "nan", "--out", str(tmp_path / "c.csv")]) == 2
+    assert "`threshold` must be a finite real number" in _one_line_error(capsys)
 
 
 @pytest.mark.parametrize(

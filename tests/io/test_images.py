@@ -76,8 +76,10 @@ def test_uniform_image_and_bad_options(tmp_path):
         read_shape(tmp_path / "a.png", threshold=0, foreground="dark")
     with pytest.raises(InputError, match="`foreground` must be"):
         read_shape(tmp_path / "a.png", foreground="black")
-    with pytest.raises(TypeError, match="`threshold` must be a finite real number"):
+    with pytest.raises(ValueError, match="`threshold` must be a finite real number"):  # a value, not a type
         read_shape(tmp_path / "a.png", threshold=float("nan"))
+    with pytest.raises(TypeError, match="`threshold` must be a finite real number"):
+        read_shape(tmp_path / "a.png", threshold="half")
 
 
 def test_an_inverted_looking_shape_warns(tmp_path):

@@ -201,3 +201,16 @@ def test_rigid_matching_of_sets_of_incomparable_extent_is_refused():
     result = match(points * 1e40, points * 1e-40)  # a similarity brings one onto the other
     assert result.correspondence.tolist() == list(range(6))
     assert result.transform.scale == pytest.approx(1e-80, rel=1e-9)
+
+
+def test_shape_context_with_no_matched_pair_reports_no_mean_cost():
+    """Every point to a dummy (a blob against a line): no pair, so no mean cost (never NaN)."""
+    from centrality_vision.matching._shape_context import shape_context_assignment
+
+    line = np.c_[np.linspace(0.0, 1.0, 12), np.zeros(12)]
+    blob = np.random.default_rng(1).random((12, 2))
+    correspondence, info = shape_context_assignment(blob, line)
+    assert np.all(correspondence == -1)
+    assert info["mean_cost"] is None
+    correspondence, info = shape_context_assignment(blob, blob[::-1])
+    assert np.all(correspondence >= 0) and np.isfinite(info["mean_cost"])

@@ -82,7 +82,7 @@ def test_input_not_modified_and_not_returned():
         (np.zeros((4, 4), bool), {}, ValueError, "at least one foreground"),
         (np.ones((4, 4)), {"foreground": "bright"}, ValueError, "`foreground` must be one of"),
         (np.ones((4, 4)), {"threshold": "half"}, TypeError, "`threshold` must be a finite real"),
-        (np.ones((4, 4)), {"threshold": np.nan}, TypeError, "`threshold` must be a finite real"),
+        (np.ones((4, 4)), {"threshold": np.nan}, ValueError, "`threshold` must be a finite real"),
         (np.ones((2, 2, 3)), {}, ValueError, "2D array"),
         (np.array([[1 + 1j, 0]]), {}, TypeError, "real numbers"),
         (np.array([["a"]]), {}, TypeError, "numeric or boolean"),

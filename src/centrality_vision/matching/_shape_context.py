@@ -66,7 +66,9 @@ def _chi2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def shape_context_assignment(moving: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, dict]:
     """One-to-one assignment of least chi-squared cost, dummies at ``DUMMY_COST``.
 
-    Returns ``correspondence`` (moving -> fixed, -1 for a dummy) and diagnostics.
+    Returns ``correspondence`` (moving -> fixed, -1 for a dummy) and diagnostics:
+    ``mean_cost``, the mean chi-squared cost of the matched pairs (None when every point
+    went to a dummy).
     """
     cost = _chi2(shape_context(moving), shape_context(fixed))
     m, f = cost.shape
@@ -77,4 +79,5 @@ def shape_context_assignment(moving: np.ndarray, fixed: np.ndarray) -> tuple[np.
     correspondence = np.full(m, -1, dtype=np.int64)
     real = (rows < m) & (cols < f)
     correspondence[rows[real]] = cols[real]
-    return correspondence, {"mean_cost": float(cost[rows[real], cols[real]].mean()) if real.any() else float("nan")}
+    mean_cost = float(cost[rows[real], cols[real]].mean()) if real.any() else None
+    return correspondence, {"mean_cost": mean_cost}
