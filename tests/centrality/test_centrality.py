@@ -368,3 +368,8 @@ def test_set_num_threads_validates():
 
     with pytest.raises(ValueError, match=r"`n` must be an int in \[1, inf\]"):
         cv.set_num_threads(0)
+
+
+def test_compute_names_the_unknown_option():
+    with pytest.raises(TypeError, match=r"unknown option `bogus`; it accepts: .*normalized"):
+        cen.compute(np.eye(3), "degree", bogus=1)

@@ -355,3 +355,11 @@ def test_mstme_default_changes_a_quarter_of_the_fish():
     assert mstme_graph(fish, lam=0.5, normalize="edge").mst_share == 0.0
     assert tree.scale == pytest.approx(emst_graph(fish).sum() / 2)  # weights / total MST length
     assert mstme_graph(fish, normalize=True).mst_share == tree.mst_share  # True means "tree"
+
+
+def test_mwme_degrees_of_sets_of_different_sizes_is_a_named_error():
+    from centrality_vision.graphs import mwme_degrees
+
+    rng = np.random.default_rng(0)
+    with pytest.raises(ValueError, match="`point_sets` must be one array"):
+        mwme_degrees([rng.random((5, 2)), rng.random((4, 2))])

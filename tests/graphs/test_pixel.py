@@ -144,3 +144,16 @@ def test_extreme_spacing_gives_the_true_lengths(spacing):
 def test_spacing_whose_lengths_overflow_is_refused():
     with pytest.raises(ValueError, match="`spacing` must give edge lengths"):
         pixel_graph(np.ones((2, 2), dtype=bool), spacing=(1.5e308, 1.5e308))
+
+
+@pytest.mark.parametrize(
+    ("call", "error", "message"),
+    [
+        (lambda: pixel_graph(np.ones((3, 3), dtype=bool), spacing="ab"), TypeError, "`spacing` must be 2 positive"),
+        (lambda: pixel_coordinates(np.arange(3), None), TypeError, "`shape` must be"),
+        (lambda: pixel_coordinates(np.arange(3), (2.5, 2)), TypeError, "`shape` must hold ints"),
+    ],
+)
+def test_bad_spacing_and_shape_are_named(call, error, message):
+    with pytest.raises(error, match=message):
+        call()

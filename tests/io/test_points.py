@@ -303,3 +303,30 @@ def test_nan_rows_round_trip_in_text_and_are_refused_by_3d_formats(tmp_path):
 def test_round_trip_property(tmp_path_factory, points, suffix):
     path = write_points(tmp_path_factory.mktemp("rt") / f"p{suffix}", points)
     assert np.array_equal(read_points(path), points)
+
+
+@pytest.mark.parametrize(
+    ("n_dims", "error", "message"),
+    [
+        (None, TypeError, "`n_dims` must be a sequence of ints"),
+        ("2", TypeError, "`n_dims` must be a sequence of ints"),
+        ([2.0], TypeError, "`n_dims` must be a sequence of ints"),
+        ([True], TypeError, "`n_dims` must be a sequence of ints"),
+        ([], ValueError, "`n_dims` must hold at least one"),
+        ([0], ValueError, "`n_dims` must hold at least one"),
+    ],
+)
+def test_read_points_checks_n_dims(tmp_path, n_dims, error, message):
+    np.savetxt(tmp_path / "p.csv", np.arange(10.0).reshape(5, 2), delimiter=",")
+    with pytest.raises(error, match=message):
+        read_points(tmp_path / "p.csv", n_dims=n_dims)
+    assert read_points(tmp_path / "p.csv", n_dims=2).shape == (5, 2)  # one int is one allowed count
+    with pytest.raises(TypeError, match="`nan_rows` must be a bool"):
+        read_points(tmp_path / "p.csv", nan_rows="yes")
+
+
+@pytest.mark.parametrize("suffix", WRITE_SUFFIXES)
+def test_write_points_refuses_an_empty_set_it_could_not_read_back(tmp_path, suffix):
+    with pytest.raises(ValueError, match="`points` must hold at least one point"):
+        write_points(tmp_path / f"e{suffix}", np.zeros((0, 3)))
+    assert not list(tmp_path.iterdir())

@@ -190,3 +190,36 @@ def test_rerank_of_huge_finite_distances_stays_finite():
 def test_bad_inputs(call, error, match):
     with pytest.raises(error, match=match):
         call()
+
+
+@pytest.mark.parametrize(
+    ("mask", "kwargs", "error", "message"),
+    [
+        (np.ones((4, 6), bool), {"resolution": 0}, ValueError, "`resolution`"),
+        (np.ones((4, 6), bool), {"resolution": -5}, ValueError, "`resolution`"),
+        (np.ones((4, 6), bool), {"resolution": 2.5}, TypeError, "`resolution`"),
+        (np.zeros((4, 4), bool), {}, ValueError, "`mask`"),
+        (np.zeros((5, 5, 3), np.uint8), {}, ValueError, "`mask` must be a 2D array"),
+    ],
+)
+def test_normalize_shape_names_bad_input(mask, kwargs, error, message):
+    from centrality_vision.shapes import normalize_shape
+
+    with pytest.raises(error, match=message):
+        normalize_shape(mask, **kwargs)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "message"),
+    [
+        ({"directory": 3}, TypeError, "`directory` must be a path"),
+        ({"max_images": None}, TypeError, "`max_images`"),
+        ({"max_images": 2.5}, TypeError, "`max_images`"),
+        ({"max_images": -1}, ValueError, "`max_images`"),
+    ],
+)
+def test_centrality_cache_checks_its_arguments(kwargs, error, message):
+    from centrality_vision.shapes import CentralityCache
+
+    with pytest.raises(error, match=message):
+        CentralityCache(**kwargs)

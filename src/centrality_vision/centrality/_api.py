@@ -856,7 +856,11 @@ def compute(graph, /, name: str, **options):
         return function(graph, **options)
     except TypeError as exc:
         if "unexpected keyword" in str(exc):
-            raise TypeError(f"{name}() got an unknown option; it accepts: {_options(function)}. ({exc})") from None
+            import inspect
+
+            known = set(inspect.signature(function).parameters)
+            unknown = ", ".join(f"`{key}`" for key in options if key not in known) or "an option"
+            raise TypeError(f"{name}() got an unknown option {unknown}; it accepts: {_options(function)}.") from None
         raise
 
 

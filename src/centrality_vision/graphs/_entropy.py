@@ -320,7 +320,13 @@ def mwme_degrees(point_sets, /) -> np.ndarray:
     >>> bool(np.all(degrees[1] == mwme_graph(sets[1], method="exact").degrees))
     True
     """
-    arr = np.asarray(point_sets)
+    try:
+        arr = np.asarray(point_sets)
+    except ValueError:  # ragged: sets of different sizes
+        raise InputError(
+            "`point_sets` must be one array of shape (n_sets, n_points, n_dims): sets of one size; "
+            "got sets of different sizes."
+        ) from None
     if arr.ndim != 3 or not 3 <= arr.shape[1] <= MAX_EXACT:
         raise InputError(
             f"`point_sets` must have shape (n_sets, n_points, n_dims) with 3 <= n_points <= {MAX_EXACT}; "

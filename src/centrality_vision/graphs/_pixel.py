@@ -208,7 +208,10 @@ def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, thre
         choices = " or ".join(str(c) for c in sorted(allowed, reverse=True))
         raise InputError(f"`connectivity` must be {choices} for a {mask.ndim}D image; got {connectivity!r}.")
     if spacing is not None:
-        spacing = np.asarray(spacing, dtype=np.float64).reshape(-1)
+        try:
+            spacing = np.asarray(spacing, dtype=np.float64).reshape(-1)
+        except (TypeError, ValueError):
+            raise TypeError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing!r}.") from None
         if spacing.shape != (mask.ndim,) or not np.all(np.isfinite(spacing)) or np.any(spacing <= 0):
             raise InputError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing.tolist()!r}.")
     graph, nodes = _skimage_pixel_graph(mask, mask=mask, connectivity=allowed[connectivity])
@@ -264,6 +267,10 @@ def pixel_coordinates(nodes, shape) -> np.ndarray:
     nodes = np.asarray(nodes)
     if nodes.ndim != 1 or not np.issubdtype(nodes.dtype, np.integer):
         raise InputError(f"`nodes` must be a 1D integer array; got shape {nodes.shape} and dtype {nodes.dtype}.")
+    if isinstance(shape, (str, bytes)) or not hasattr(shape, "__iter__"):
+        raise TypeError(f"`shape` must be (n_rows, n_cols) or (n_planes, n_rows, n_cols); got {shape!r}.")
+    if any(isinstance(s, (bool, np.bool_)) or not isinstance(s, (int, np.integer)) for s in shape):
+        raise TypeError(f"`shape` must hold ints; got {tuple(shape)!r}.")
     shape = tuple(int(s) for s in shape)
     if len(shape) not in (2, 3) or min(shape) < 1:
         raise InputError(f"`shape` must be (n_rows, n_cols) or (n_planes, n_rows, n_cols); got {shape!r}.")

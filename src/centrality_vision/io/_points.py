@@ -107,8 +107,8 @@ def read_points(
         e.g. ``["x", "y", "z"]``, ``[1, 2]`` or the string ``"x,y,z"``.
     variable : str, optional
         ``.mat`` only: the name of the array to read.
-    n_dims : sequence of int, default=(2, 3)
-        Allowed numbers of coordinates.
+    n_dims : int or sequence of int, default=(2, 3)
+        Allowed numbers of coordinates (each >= 1).
     nan_rows : bool, default=False
         Allow rows that are entirely NaN (e.g. to mark outliers that have no true
         position); a row with some but not all values NaN is still an error.
@@ -136,6 +136,9 @@ def read_points(
     columns = _check_columns(columns)
     if variable is not None and not isinstance(variable, str):
         raise TypeError(f"`variable` must be a str or None; got {_describe(variable)}.")
+    n_dims = _check_n_dims(n_dims)
+    if not isinstance(nan_rows, (bool, np.bool_)):
+        raise TypeError(f"`nan_rows` must be a bool; got {_describe(nan_rows)}.")
     path = _existing_file(path)
     suffix = path.suffix.lower()
     if suffix not in POINT_SUFFIXES:
@@ -159,6 +162,22 @@ def read_points(
             f"{path}: {int(bad.sum())} point(s) with NaN or inf, the first at {table.where(row)}{allowed}."
         )
     return points
+
+
+def _check_n_dims(n_dims) -> tuple[int, ...]:
+    """``n_dims`` as a tuple of positive ints (an int alone is one allowed count)."""
+    if isinstance(n_dims, (int, np.integer)) and not isinstance(n_dims, (bool, np.bool_)):
+        n_dims = (n_dims,)
+    if isinstance(n_dims, (str, bytes)) or not hasattr(n_dims, "__iter__"):
+        raise TypeError(
+            f"`n_dims` must be a sequence of ints (the allowed numbers of coordinates); got {_describe(n_dims)}."
+        )
+    values = tuple(n_dims)
+    if any(isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, np.integer)) for v in values):
+        raise TypeError(f"`n_dims` must be a sequence of ints; got {values!r}.")
+    if not values or min(values) < 1:
+        raise InputError(f"`n_dims` must hold at least one number of coordinates, each >= 1; got {values!r}.")
+    return tuple(int(v) for v in values)
 
 
 def _check_columns(columns):
@@ -668,6 +687,8 @@ def write_points(path, points, /) -> Path:
         raise TypeError(f"`points` must be a real numeric array; got {_describe(arr)}.")
     if arr.ndim != 2 or arr.shape[1] < 1:
         raise InputError(f"`points` must have shape (n_points, n_dims); got shape {arr.shape}.")
+    if arr.shape[0] == 0:  # read_points refuses a file without points: none is written
+        raise InputError(f"`points` must hold at least one point; got shape {arr.shape}.")
     arr = arr.astype(np.float64)
     partial = ~np.isfinite(arr).all(axis=1) & ~np.isnan(arr).all(axis=1)
     if partial.any():

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import as_binary_image, check_choice
+from .._validation import as_binary_image, check_choice, check_int
 from ..centrality import compute
 from ..exceptions import InputError
 from ..graphs import pixel_graph
@@ -110,9 +110,9 @@ class CentralityCache:
 
     Parameters
     ----------
-    max_images : int, default=4096
+    max_images : int >= 0, default=4096
         How many images to keep in memory (each holds one float64 value per pixel and
-        centrality).
+        centrality); 0 keeps none (with ``directory``, the disk alone).
     directory : path, optional
         Also keep every computed centrality on disk, one ``.npy`` file per image and
         centrality, named by a hash of the pixels and written atomically. Another
@@ -139,7 +139,9 @@ class CentralityCache:
     """
 
     def __init__(self, max_images: int = 4096, directory=None):
-        self.max_images = int(max_images)
+        self.max_images = check_int(max_images, name="max_images", low=0)
+        if directory is not None and not isinstance(directory, (str, os.PathLike)):
+            raise TypeError(f"`directory` must be a path (str or os.PathLike) or None; got {type(directory).__name__}.")
         self.directory = None if directory is None else Path(directory)
         self._store: OrderedDict[tuple, dict] = OrderedDict()
         self._lock = threading.Lock()

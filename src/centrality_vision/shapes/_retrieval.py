@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .._validation import check_choice, check_int
+from .._validation import as_binary_image, check_choice, check_int
 from ..exceptions import InputError
 from ._cache import as_shape_images
 
@@ -81,6 +81,15 @@ def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
     margin of background is added. This makes every descriptor independent of the
     image size and bounds its cost.
 
+    Parameters
+    ----------
+    mask : array_like of shape (rows, cols)
+        A boolean or 0/1 mask (True/1: the shape), with at least one foreground pixel; a
+        grey image is split as in :func:`centrality_vision.shapes.as_shape_images`. Not
+        modified.
+    resolution : int >= 1, default=48
+        The square root of the result's foreground area, in pixels.
+
     Examples
     --------
     >>> import numpy as np
@@ -92,7 +101,9 @@ def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
     from skimage.measure import block_reduce
     from skimage.transform import resize
 
-    mask = _largest_component(np.asarray(mask, dtype=bool))
+    resolution = check_int(resolution, name="resolution", low=1)
+    mask = as_binary_image(mask, name="mask")  # (refuses an empty mask, by name)
+    mask = _largest_component(mask)
     rows, cols = np.nonzero(mask)
     mask = mask[rows.min() : rows.max() + 1, cols.min() : cols.max() + 1]
     scale = resolution / np.sqrt(mask.sum())
