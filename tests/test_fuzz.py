@@ -150,6 +150,15 @@ def test_point_graphs(builder, points):
     if graph is not None:
         assert graph.shape == (points.shape[0], points.shape[0])
         assert (graph != graph.T).nnz == 0
+        assert np.all(graph.data > 0) and np.all(np.isfinite(graph.data))  # a stored edge is an edge
+    if points.shape[0] >= 4 and np.all(np.isfinite(points)):
+        # two points far closer than their coordinates' size: squares of their differences underflow
+        near = points.copy()
+        near[:2] = 0.0
+        near[1, 0] = 1e-170 * float(np.abs(points).max())
+        graph = honest(builder, near)
+        if graph is not None:
+            assert np.all(graph.data > 0) and (graph != graph.T).nnz == 0
 
 
 @FUZZ
