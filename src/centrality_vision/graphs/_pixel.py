@@ -214,11 +214,25 @@ def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, thre
             raise TypeError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing!r}.") from None
         if spacing.shape != (mask.ndim,) or not np.all(np.isfinite(spacing)) or np.any(spacing <= 0):
             raise InputError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing.tolist()!r}.")
-    graph, nodes = _skimage_pixel_graph(mask, mask=mask, connectivity=allowed[connectivity])
+    # skimage squares the spacing: it gets the spacing over its largest entry (squares no
+    # smaller than 1e-300 while the entries are within 1e150 of each other) and the lengths
+    # are scaled back; beyond that ratio they are computed step by step (slower, exact)
+    top = None if spacing is None else float(spacing.max())
+    unit = None if spacing is None or spacing.min() / top < 1e-150 else spacing / top
+    graph, nodes = _skimage_pixel_graph(mask, mask=mask, connectivity=allowed[connectivity], spacing=unit)
     graph = PixelGraph(graph)
     graph.sort_indices()
     if spacing is not None:
-        graph.data = _spaced_lengths(graph, np.asarray(nodes, dtype=np.int64), mask.shape, spacing)
+        if unit is None:
+            graph.data = _spaced_lengths(graph, np.asarray(nodes, dtype=np.int64), mask.shape, spacing)
+        else:
+            with np.errstate(over="ignore"):
+                graph.data *= top
+            if graph.data.size and not np.all(np.isfinite(graph.data)):
+                raise InputError(
+                    f"`spacing` must give edge lengths that fit in float64 (about 5e-324 to 1.8e308); "
+                    f"got {spacing.tolist()!r}."
+                )
     graph.indices = graph.indices.astype(np.int32, copy=False)
     graph.indptr = graph.indptr.astype(np.int32, copy=False)
     remembered = mask.copy()
