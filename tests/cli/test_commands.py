@@ -538,6 +538,33 @@ def test_reproduce_scheduler_only_where_it_applies(tmp_path, capsys):
 def test_reproduce_seeds_reach_the_claims_and_are_checked(tmp_path, capsys):
     assert main(["reproduce", "fig-5.3", "--quick", "--seeds", "2", "--out", str(tmp_path)]) == 0
     assert "of 2 seeds" in capsys.readouterr().out
-    assert main(["reproduce", "fig-5.3", "--quick", "--seeds", "0", "--out", str(tmp_path)]) == 2
+    with pytest.raises(SystemExit) as info:  # argparse's usage error
+        main(["reproduce", "fig-5.3", "--quick", "--seeds", "0", "--out", str(tmp_path)])
+    assert info.value.code == 2
     err = capsys.readouterr().err.strip()
-    assert "`--seeds`" in err and len(err.splitlines()) == 1
+    assert "argument --seeds: expected an int in [1, 100000]; got 0" in err
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (["--workers", "0"], "argument --workers: expected an int >= 1"),
+        (["--workers", "-1"], "argument --workers: expected an int >= 1"),
+        (["--seed", "-1"], "argument --seed: expected an int in [0,"),
+        (["--seeds", "99999999999999999999999"], "argument --seeds: expected an int in [1, 100000]"),
+        (["--seeds", "abc"], "argument --seeds: expected an int"),
+    ],
+)
+@pytest.mark.parametrize("experiment", ["fig-5.3", "all"])
+def test_reproduce_checks_its_numbers_before_running_anything(tmp_path, capsys, experiment, options, message):
+    with pytest.raises(SystemExit) as info:
+        main(["reproduce", experiment, "--quick", *options, "--out", str(tmp_path)])
+    assert info.value.code == 2
+    assert message in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())  # nothing ran
+
+
+@pytest.mark.parametrize("scheduler", ["tcp://", "tcp://localhost:notaport", "tcp://[::1", "tcp://host:70000"])
+def test_reproduce_refuses_a_malformed_scheduler_address(tmp_path, capsys, scheduler):
+    assert main(["reproduce", "fig-5.3", "--quick", "--scheduler", scheduler, "--out", str(tmp_path)]) == 2
+    assert "`scheduler` must be one of" in _one_line_error(capsys, only=True)

@@ -154,3 +154,19 @@ def test_a_killed_run_leaves_no_orphan_workers(tmp_path, scheduler):
     while time.monotonic() < deadline and any(_alive(w) for w in workers):
         time.sleep(0.1)
     assert not any(_alive(w) for w in workers)
+
+
+@pytest.mark.parametrize(("workers", "error"), [(0, ValueError), (-2, ValueError), (1.5, TypeError)])
+def test_run_units_checks_workers_first(tmp_path, workers, error):
+    with pytest.raises(error, match="`workers`"):
+        run_units([], tmp_path / "r.jsonl", workers=workers, progress=False)
+
+
+def test_seed_list_checks_seed_and_seeds():
+    from centrality_vision.experiments._common import seed_list
+
+    with pytest.raises(ValueError, match="`seed`"):
+        seed_list(-1, 3, False)
+    with pytest.raises(ValueError, match="`seeds`"):
+        seed_list(0, 10**9, False)
+    assert seed_list(2**63 - 3, 3, False)[-1] == 2**63 - 1

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ..experiments._common import MAX_SEED, MAX_SEEDS, int_in
 from ._common import add_progress
 
 NAME = "reproduce"
@@ -22,10 +23,12 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "experiment", choices=[*EXPERIMENTS, "all"], help="which table or figure, or all of them with a report"
     )
     parser.add_argument("--quick", action="store_true", help="a small version, for a first look or a test")
-    parser.add_argument("--seed", type=int, default=0, help="seed of every random choice (default: %(default)s)")
+    parser.add_argument(
+        "--seed", type=int_in(0, MAX_SEED), default=0, help="seed of every random choice (default: %(default)s)"
+    )
     parser.add_argument(
         "--seeds",
-        type=int,
+        type=int_in(1, MAX_SEEDS),
         default=None,
         help="how many seeds each thesis claim is checked over (default: 20, or 3 with --quick)",
     )
@@ -38,7 +41,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "skipped on a re-run",
     )
     parser.add_argument(
-        "--workers", type=int, default=None, help="processes or Dask workers to start (default: the usable cores)"
+        "--workers", type=int_in(1), default=None, help="processes or Dask workers to start (default: the usable cores)"
     )
     add_progress(parser)
     parser.set_defaults(run=run, _parser=parser)

@@ -37,6 +37,29 @@ DEFAULT_SEEDS = 20
 QUICK_SEEDS = 3
 
 
+#: the most seeds one run checks a claim over (each seed is a unit of work; more is a typo)
+MAX_SEEDS = 100_000
+#: seeds are numpy's: non-negative and below 2**63
+MAX_SEED = 2**63 - 1
+
+
+def int_in(low: int, high: int | None = None):
+    """An argparse ``type``: an int in ``[low, high]``, or argparse's one-line usage error."""
+
+    def convert(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an int; got {text!r}") from None
+        if value < low or (high is not None and value > high):
+            bound = f">= {low}" if high is None else f"in [{low}, {high}]"
+            raise argparse.ArgumentTypeError(f"expected an int {bound}; got {value}")
+        return value
+
+    convert.__name__ = "int"
+    return convert
+
+
 def experiment_parser(module: str, doc: str, name: str, *, quick_help=None, seed_help=None, runner=False, seeds=True):
     """The options of ``python -m centrality_vision.experiments.<module>``: --quick, --seed, --out
     (default ``results/<name>``), --seeds (how many seeds the claims are checked over, from
@@ -46,20 +69,23 @@ def experiment_parser(module: str, doc: str, name: str, *, quick_help=None, seed
     )
     parser.add_argument("--quick", action="store_true", help=quick_help)
     parser.add_argument(
-        "--seed", type=int, default=0, help=seed_help or "seed of the run drawn in the figures (default: %(default)s)"
+        "--seed",
+        type=int_in(0, MAX_SEED),
+        default=0,
+        help=seed_help or "seed of the run drawn in the figures (default: %(default)s)",
     )
     parser.add_argument("--out", default=f"results/{name}")
     if seeds:
         parser.add_argument(
             "--seeds",
-            type=int,
+            type=int_in(1, MAX_SEEDS),
             default=None,
             help=f"check the claims over this many seeds, --seed, --seed+1, ... (default: {DEFAULT_SEEDS}, --quick: "
             f"{QUICK_SEEDS})",
         )
     if runner or seeds:
         parser.add_argument("--scheduler", default="processes", help=SCHEDULER_HELP)
-        parser.add_argument("--workers", type=int, default=None)
+        parser.add_argument("--workers", type=int_in(1), default=None)
     return parser
 
 
@@ -74,12 +100,19 @@ def seed_list(seed: int, seeds: int | None, quick: bool) -> list[int]:
     >>> len(seed_list(0, None, False)), len(seed_list(0, None, True))
     (20, 3)
     """
-    n = (QUICK_SEEDS if quick else DEFAULT_SEEDS) if seeds is None else int(seeds)
-    if n < 1:
+    from .._validation import check_int
+
+    seed = check_int(seed, name="seed", low=0, high=MAX_SEED)
+    n = (
+        (QUICK_SEEDS if quick else DEFAULT_SEEDS)
+        if seeds is None
+        else check_int(seeds, name="seeds", low=1, high=MAX_SEEDS)
+    )
+    if seed + n - 1 > MAX_SEED:
         from ..exceptions import InputError
 
-        raise InputError(f"`seeds` must be a positive int; got {seeds!r}.")
-    return list(range(int(seed), int(seed) + n))
+        raise InputError(f"`seed` + `seeds` must stay below 2**63 (numpy's seeds); got {seed} and {n}.")
+    return list(range(seed, seed + n))
 
 
 def prepare_out(args) -> Path:

@@ -165,10 +165,19 @@ class _Appender:
 
 
 def _check_scheduler(scheduler: str) -> str:
+    expected = f"`scheduler` must be one of {', '.join(map(repr, SCHEDULERS))} or 'tcp://host:port'"
     if not isinstance(scheduler, str) or not (scheduler in SCHEDULERS or scheduler.startswith("tcp://")):
-        raise InputError(
-            f"`scheduler` must be one of {', '.join(map(repr, SCHEDULERS))} or 'tcp://host:port'; got {scheduler!r}."
-        )
+        raise InputError(f"{expected}; got {scheduler!r}.")
+    if scheduler.startswith("tcp://"):
+        from urllib.parse import urlsplit
+
+        try:
+            parts = urlsplit(scheduler)
+            port = parts.port
+        except ValueError:
+            port = None
+        if port is None or not parts.hostname or not 0 < port < 65536:
+            raise InputError(f"{expected} with a host and a port in 1..65535; got {scheduler!r}.")
     return scheduler
 
 
@@ -194,6 +203,10 @@ def run_units(
         A progress bar on stderr.
     """
     scheduler = _check_scheduler(scheduler)
+    if workers is not None:
+        from .._validation import check_int
+
+        workers = check_int(workers, name="workers", low=1)
     units = list(units)
     keys = [u.key for u in units]
     if len(set(keys)) != len(keys):
@@ -287,7 +300,10 @@ def _run_dask(todo, scheduler, workers, finished):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
         client = Client(cluster)
     else:
-        client = Client(scheduler)
+        try:
+            client = Client(scheduler)
+        except (OSError, TimeoutError) as exc:
+            raise InputError(f"`scheduler` {scheduler!r} could not be reached: {exc}") from None
     try:
         if cluster is not None:  # its nannies and workers end with this process, even on SIGKILL
             client.run(_watch_pid, os.getpid(), nanny=True)
