@@ -300,11 +300,40 @@ def test_save_figure_bad_inputs(tmp_path):
     _, ax = plt.subplots()
     with pytest.raises(TypeError, match=r"`fig` must be a matplotlib Figure"):
         save_figure(ax, tmp_path / "x.png")
-    with pytest.raises(ValueError, match=r"`dpi` must be a finite number in \(0, inf\]; got 0\.0"):
+    with pytest.raises(ValueError, match=r"`dpi` must be a finite number in \(0, 10000\.0\]; got 0\.0"):
         save_figure(ax.figure, tmp_path / "x.png", dpi=0)
+    with pytest.raises(ValueError, match=r"`dpi` must be a finite number in \(0, 10000\.0\]"):
+        save_figure(ax.figure, tmp_path / "x.png", dpi=1e5)  # (was a MemoryError from the renderer)
     with pytest.raises(TypeError, match=r"`path` must be a str or os.PathLike"):
         save_figure(ax.figure, 3)
-    assert not (tmp_path / "x.png").exists()
+    # matplotlib would append '.png' to these, writing a file the returned path does not name
+    with pytest.raises(ValueError, match=r"`path` must be a file, not a folder"):
+        save_figure(ax.figure, tmp_path)
+    with pytest.raises(ValueError, match=r"`path` must end in a format suffix"):
+        save_figure(ax.figure, tmp_path / "out")
+    with pytest.raises(ValueError, match=r"`path` must end in a format suffix"):
+        save_figure(ax.figure, tmp_path / "out.xyz")
+    assert not list(tmp_path.iterdir()) and not (tmp_path.parent / f"{tmp_path.name}.png").exists()
+
+
+def test_plotting_numbers_are_checked_by_name():
+    from centrality_vision.plotting import plot_alignment_errors, plot_matching, plot_registration_snapshots
+
+    x = np.random.default_rng(0).random((5, 2))
+    with pytest.raises(ValueError, match="`node_size`"):
+        plot_graph(x, sparse.csr_array((5, 5)), node_size=1e40)  # (drawing it stalled the renderer)
+    with pytest.raises(TypeError, match="`max_lines`"):
+        plot_matching(x, x, np.arange(5), max_lines=np.nan)
+    with pytest.raises(TypeError, match=r"`snapshots\['A'\] key`"):
+        plot_registration_snapshots(x, {"A": {"x": x}})
+    with pytest.raises(TypeError, match="`iterations`"):
+        plot_registration_snapshots(x, {"A": {0: x, 1: x}}, iterations=["a"])
+    with pytest.raises(TypeError, match=r"`errors\['a'\]`"):
+        plot_alignment_errors({"a": 3.0})
+    with pytest.raises(ValueError, match=r"`errors\['a'\]` must be >= 0"):
+        plot_alignment_errors({"a": [-1.0, -2.0]})
+    with pytest.raises(ValueError, match="`n_points`"):
+        plot_alignment_errors({"a": [1.0]}, n_points=10**400)
 
 
 # --------------------------------------------------------------------------- lazy import

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import sparse
 
-from ._validation import _describe, as_graph, as_points, check_float
+from ._validation import _describe, as_graph, as_points, check_float, check_int
 from .exceptions import InputError
 
 __all__ = [
@@ -211,7 +211,9 @@ def plot_graph(
     if values is not None:
         values = _as_values(values, n=n, other="points")
     three_d = n_dims == 3
-    node_size = check_float((6 if three_d else 30) if node_size is None else node_size, name="node_size", low=0)
+    node_size = check_float(
+        (6 if three_d else 30) if node_size is None else node_size, name="node_size", low=0, high=_MAX_MARKER_AREA
+    )
     edge_width = check_float(edge_width, name="edge_width", low=0)
     color_norm = None if values is None else _norm(norm, values)
     if ax is not None:
@@ -409,6 +411,10 @@ def plot_centrality_image(
     return ax
 
 
+_MAX_MARKER_AREA = 1e6  # points^2: a marker of ~14 inches across; larger ones stall the renderer
+_MAX_DPI = 10_000.0  # (a figure of a few inches at more dpi is beyond what renderers allocate)
+
+
 def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
     """Save ``fig`` to ``path``, creating missing parent folders, then close it.
 
@@ -417,9 +423,10 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
     fig : matplotlib.figure.Figure
         The figure (e.g. ``ax.figure``).
     path : str or os.PathLike
-        Output file; its suffix (``.png``, ``.pdf``, ``.svg``, ...) picks the format.
+        Output file; its suffix (``.png``, ``.pdf``, ``.svg``, ...) picks the format and must
+        be one the figure's canvas can write.
     dpi : float, default=150
-        Resolution in dots per inch, > 0.
+        Resolution in dots per inch, in (0, 10000].
 
     Returns
     -------
@@ -443,10 +450,17 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
         raise TypeError(f"`fig` must be a matplotlib Figure (e.g. `ax.figure`); got {_describe(fig)}.")
     if not isinstance(path, (str, os.PathLike)):
         raise TypeError(f"`path` must be a str or os.PathLike; got {_describe(path)}.")
-    dpi = check_float(dpi, name="dpi", low=0, low_open=True)
+    dpi = check_float(dpi, name="dpi", low=0, low_open=True, high=_MAX_DPI)
     import matplotlib.pyplot as plt
 
     path = Path(path)
+    formats = fig.canvas.get_supported_filetypes()
+    if path.is_dir():
+        raise InputError(f"`path` must be a file, not a folder; got {str(path)!r} (add a name, e.g. 'figure.png').")
+    if path.suffix.lower().lstrip(".") not in formats:
+        raise InputError(
+            f"`path` must end in a format suffix ({', '.join('.' + f for f in sorted(formats))}); got {str(path)!r}."
+        )
     path.parent.mkdir(parents=True, exist_ok=True)
     from matplotlib.layout_engine import ConstrainedLayoutEngine
 
@@ -528,8 +542,8 @@ def plot_matching(
             f"`correspondence` must index into `fixed` (0 .. {fixed.shape[0] - 1}) or be -1 (unmatched); "
             f"got values from {correspondence.min()} to {correspondence.max()}."
         )
-    max_lines = int(max_lines)
-    max_edges = 3 * n if max_edges is None else int(max_edges)
+    max_lines = check_int(max_lines, name="max_lines", low=0)
+    max_edges = 3 * n if max_edges is None else check_int(max_edges, name="max_edges", low=0)
     if ax is None:
         _, ax = plt.subplots(figsize=(10, 5), layout="constrained")
     span = np.ptp(np.vstack([moving, fixed]), axis=0)
@@ -713,13 +727,18 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
                 f"`snapshots[{label!r}]` must be a non-empty dict {{iteration: points}}; got {_describe(record)}."
             )
         frames[label] = {
-            int(k): as_points(v, name=f"snapshots[{label!r}][{k}]", n_dims=(dim,)) for k, v in record.items()
+            check_int(k, name=f"snapshots[{label!r}] key", low=0): as_points(
+                v, name=f"snapshots[{label!r}][{k}]", n_dims=(dim,)
+            )
+            for k, v in record.items()
         }
     if iterations is None:
         inner = [set(record) - {max(record)} for record in frames.values()]
         rows = sorted(set.intersection(*inner)) or sorted(set.union(*inner))
     else:
-        rows = [int(i) for i in iterations]
+        if isinstance(iterations, (str, bytes)) or not hasattr(iterations, "__iter__"):
+            raise TypeError(f"`iterations` must be a sequence of ints; got {_describe(iterations)}.")
+        rows = [check_int(i, name="iterations", low=0) for i in iterations]
     if not rows and not final:
         raise InputError("`iterations` must name at least one iteration.")
     cols = list(frames)
@@ -835,7 +854,7 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
         raise TypeError(f"`errors` must be a non-empty dict {{label: errors per iteration}}; got {_describe(errors)}.")
     scale = 1.0
     if n_points is not None:
-        n_points = int(check_float(n_points, name="n_points", low=1))
+        n_points = check_int(n_points, name="n_points", low=1, high=2**53)
         scale = 1.0 / np.sqrt(n_points)
     if ax is None:
         _, ax = plt.subplots(figsize=(5.5, 3.8), layout="constrained")
@@ -845,7 +864,11 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
     for k, (label, values) in enumerate(errors.items()):
         if values is None:
             raise InputError(f"`errors[{label!r}]` is None: fit with `true_moving=` to record alignment errors.")
+        if not hasattr(values, "__len__"):
+            raise TypeError(f"`errors[{label!r}]` must be a sequence of errors per iteration; got {_describe(values)}.")
         v = _as_values(values, n=len(values), other=f"errors[{label!r}]") * scale
+        if np.any(v < 0):
+            raise InputError(f"`errors[{label!r}]` must be >= 0 (errors); got a minimum of {float(v.min()):.3g}.")
         top = max(top, float(v.max(initial=0.0)))
         low = min(low, float(v[v > 0].min(initial=np.inf)))
         every = max(1, v.size // 8)
