@@ -62,3 +62,67 @@ def test_nonrigid_field_by_hand():
     z = np.array([[0.5, 0.0]])
     k = np.exp(-0.25 / 2)
     np.testing.assert_allclose(t(z), [[0.5 + k, 2 * k]])
+
+
+_I2 = np.eye(2)
+
+
+@pytest.mark.parametrize(
+    ("make", "error", "message"),
+    [
+        (lambda: RigidTransform(None, [0, 0]), TypeError, "`rotation` must be a real numeric array"),
+        (lambda: RigidTransform("ab", [0, 0]), TypeError, "`rotation` must be a real numeric array"),
+        (lambda: RigidTransform(_I2 + 0j, [0, 0]), TypeError, "`rotation` must hold real numbers"),
+        (lambda: RigidTransform(_I2, "ab"), TypeError, "`translation` must be a real numeric array"),
+        (lambda: SimilarityTransform(_I2, [0, 0], None), TypeError, "`scale`"),
+        (lambda: SimilarityTransform(_I2, [0, 0], "2"), TypeError, "`scale`"),
+        (lambda: SimilarityTransform(_I2, [0, 0], 0.0), ValueError, "`scale`"),
+        (lambda: RigidTransform(np.zeros((0, 0)), []), ValueError, "D >= 1"),
+        (lambda: AffineTransform(np.zeros((0, 0)), []), ValueError, "D >= 1"),
+        (lambda: AffineTransform(None, [0, 0]), TypeError, "`linear`"),
+        (lambda: NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=None), TypeError, "`beta`"),
+        (lambda: RigidTransform(np.array([[1, 1e-7], [0, 1.0]]), [0, 0]), ValueError, r"max \|R R\^T - I\| 1e-07"),
+        (lambda: random_rotation(True), TypeError, "`n_dims`"),
+        (lambda: random_rotation(0), ValueError, "`n_dims`"),
+        (lambda: random_rotation(10**6), ValueError, "`n_dims`"),
+    ],
+)
+def test_transform_constructors_name_bad_input(make, error, message):
+    with pytest.raises(error, match=message):
+        make()
+
+
+@pytest.mark.parametrize(
+    "transform",
+    [
+        SimilarityTransform(_I2, [0, 0], 2.0),
+        RigidTransform(_I2, [1e308, 0]),
+        AffineTransform(2 * _I2, [0, 0]),
+        NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0, linear=2 * _I2),
+    ],
+)
+def test_a_result_beyond_float64_is_an_error_not_inf(transform):
+    with pytest.raises(ValueError, match="leave the float64 range"):
+        transform(np.array([[1e308, 0.0]]))
+
+
+def test_inverse_beyond_float64_is_named():
+    with pytest.raises(ValueError, match="inverse leaves the float64 range"):
+        SimilarityTransform(_I2, [1e10, 0], 1e-300).inverse()
+
+
+@pytest.mark.parametrize("beta", [5e-324, 1e-200, 1e200])
+def test_nonrigid_field_at_extreme_widths_is_finite(beta):
+    """beta**2 underflows (0/0 gave NaN) or overflows (OverflowError): the field must not care."""
+    t = NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=beta)
+    out = t(np.array([[0.0, 0.0], [1.0, 0.0]]))
+    np.testing.assert_array_equal(out[0], [1.0, 1.0])  # at the centre the kernel is 1
+    np.testing.assert_allclose(out[1], [2.0, 1.0] if beta > 1 else [1.0, 0.0])
+
+
+def test_transforms_compare_and_hash_by_value():
+    a, b = RigidTransform(_I2, [0, 0]), RigidTransform(_I2.copy(), [0.0, 0.0])
+    assert a == b and hash(a) == hash(b) and len({a, b}) == 1
+    assert a != RigidTransform(_I2, [1, 0]) and a != AffineTransform(_I2, [0, 0])
+    n = NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0)
+    assert n == NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0) and hash(n) == hash(n)

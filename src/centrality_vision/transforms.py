@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import as_points
+from ._validation import _describe, as_points, check_float, check_int
 from .exceptions import InputError
 
 __all__ = [
@@ -28,14 +28,56 @@ __all__ = [
 ]
 
 
-def _frozen(array) -> np.ndarray:
-    array = np.array(array, dtype=float)
+def _real_array(value, name: str) -> np.ndarray:
+    """``value`` as a new float64 array, or a TypeError naming ``name`` (None, text, complex)."""
+    arr = np.asarray(value) if value is not None else None
+    if arr is None or arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+        raise TypeError(f"`{name}` must be a real numeric array; got {_describe(value)}.")
+    if np.iscomplexobj(arr):
+        raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
+    return np.array(arr, dtype=float)
+
+
+def _frozen(array, name: str = "array") -> np.ndarray:
+    array = _real_array(array, name)
     array.setflags(write=False)
     return array
 
 
-@dataclass(frozen=True)
-class SimilarityTransform:
+def _finite_result(points: np.ndarray, what: str) -> np.ndarray:
+    """``points`` if finite; else a named error (the transform took them beyond float64)."""
+    if not np.all(np.isfinite(points)):
+        raise InputError(
+            f"`points` mapped by this {what} leave the float64 range (inf or NaN in the result); "
+            "rescale the points or the transform."
+        )
+    return points
+
+
+class _ArrayEquality:
+    """Equality and hash by value for the frozen transforms (their fields hold arrays)."""
+
+    def _fields(self) -> tuple:
+        return tuple(getattr(self, f) for f in self.__dataclass_fields__)
+
+    def __eq__(self, other):
+        if type(other) is not type(self):
+            return NotImplemented
+        return all(
+            (a is None and b is None)
+            or (a is not None and b is not None and np.array_equal(np.asarray(a), np.asarray(b)))
+            for a, b in zip(self._fields(), other._fields())
+        )
+
+    def __hash__(self):
+        parts = [type(self).__name__]
+        for value in self._fields():
+            parts.append(None if value is None else (np.asarray(value).shape, np.asarray(value).tobytes()))
+        return hash(tuple(parts))
+
+
+@dataclass(frozen=True, eq=False)
+class SimilarityTransform(_ArrayEquality):
     """``x -> scale * rotation @ x + translation``.
 
     Attributes
@@ -61,26 +103,28 @@ class SimilarityTransform:
     scale: float = 1.0
 
     def __post_init__(self):
-        rotation = np.array(self.rotation, dtype=float)
-        translation = np.array(self.translation, dtype=float).ravel()
-        dim = rotation.shape[0]
-        if rotation.shape != (dim, dim) or translation.shape != (dim,):
+        rotation = _real_array(self.rotation, "rotation")
+        translation = _real_array(self.translation, "translation").ravel()
+        dim = rotation.shape[0] if rotation.ndim == 2 else -1
+        if dim < 1 or rotation.shape != (dim, dim) or translation.shape != (dim,):
             raise InputError(
-                f"`rotation` must be (D, D) and `translation` (D,); got {rotation.shape} and {translation.shape}."
+                f"`rotation` must be (D, D) and `translation` (D,) with D >= 1; "
+                f"got {rotation.shape} and {translation.shape}."
             )
-        if not np.isfinite(self.scale) or self.scale <= 0:
-            raise InputError(f"`scale` must be a finite number > 0; got {self.scale!r}.")
+        scale = check_float(self.scale, name="scale", low=0.0, low_open=True)
         if not np.all(np.isfinite(rotation)) or not np.all(np.isfinite(translation)):
             raise InputError("`rotation` and `translation` must be finite; got NaN or inf.")
-        if not np.allclose(rotation @ rotation.T, np.eye(dim), atol=1e-8) or np.linalg.det(rotation) < 0:
+        off = float(np.max(np.abs(rotation @ rotation.T - np.eye(dim))))
+        if off > 1e-8 or np.linalg.det(rotation) < 0:
             raise InputError(
-                f"`rotation` must be a proper rotation (orthogonal, det +1); got det {np.linalg.det(rotation):.6g}."
+                "`rotation` must be a proper rotation (orthogonal, det +1); got max |R R^T - I| "
+                f"{off:.3g} and det {np.linalg.det(rotation):.6g}."
             )
         rotation.setflags(write=False)
         translation.setflags(write=False)
         object.__setattr__(self, "rotation", rotation)
         object.__setattr__(self, "translation", translation)
-        object.__setattr__(self, "scale", float(self.scale))
+        object.__setattr__(self, "scale", scale)
 
     @classmethod
     def _trusted(cls, rotation: np.ndarray, translation: np.ndarray, scale: float = 1.0):
@@ -110,14 +154,23 @@ class SimilarityTransform:
         return out
 
     def __call__(self, points) -> np.ndarray:
-        return self._apply(as_points(points, name="points", n_dims=(self.rotation.shape[0],)))
+        with np.errstate(over="ignore", invalid="ignore"):
+            out = self._apply(as_points(points, name="points", n_dims=(self.rotation.shape[0],)))
+        return _finite_result(out, type(self).__name__)
 
     def inverse(self) -> SimilarityTransform:
         rotation = self.rotation.T
-        return SimilarityTransform(rotation, -(rotation @ self.translation) / self.scale, 1.0 / self.scale)
+        with np.errstate(over="ignore", invalid="ignore"):
+            translation, scale = -(rotation @ self.translation) / self.scale, 1.0 / self.scale
+        if not (np.all(np.isfinite(translation)) and np.isfinite(scale)):
+            raise InputError(
+                f"This transform's inverse leaves the float64 range (`scale` {self.scale:.3g}, "
+                f"`translation` up to {np.abs(self.translation).max():.3g})."
+            )
+        return SimilarityTransform(rotation, translation, scale)
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class RigidTransform(SimilarityTransform):
     """``x -> rotation @ x + translation``: a :class:`SimilarityTransform` with scale 1.
 
@@ -134,7 +187,7 @@ class RigidTransform(SimilarityTransform):
     scale: float = 1.0
 
     def __post_init__(self):
-        if self.scale != 1.0:
+        if not (isinstance(self.scale, (int, float, np.integer, np.floating)) and self.scale == 1.0):
             raise InputError(f"`scale` of a RigidTransform must be 1; got {self.scale!r}.")
         super().__post_init__()
 
@@ -143,8 +196,8 @@ class RigidTransform(SimilarityTransform):
         return RigidTransform(rotation, -(rotation @ self.translation))
 
 
-@dataclass(frozen=True)
-class AffineTransform:
+@dataclass(frozen=True, eq=False)
+class AffineTransform(_ArrayEquality):
     """``x -> linear @ x + translation``.
 
     Attributes
@@ -166,12 +219,13 @@ class AffineTransform:
     translation: np.ndarray
 
     def __post_init__(self):
-        linear = _frozen(self.linear)
-        translation = _frozen(np.ravel(self.translation))
+        linear = _frozen(self.linear, "linear")
+        translation = _frozen(np.ravel(_real_array(self.translation, "translation")), "translation")
         dim = linear.shape[0] if linear.ndim == 2 else -1
-        if linear.shape != (dim, dim) or translation.shape != (dim,):
+        if dim < 1 or linear.shape != (dim, dim) or translation.shape != (dim,):
             raise InputError(
-                f"`linear` must be (D, D) and `translation` (D,); got {linear.shape} and {translation.shape}."
+                f"`linear` must be (D, D) and `translation` (D,) with D >= 1; "
+                f"got {linear.shape} and {translation.shape}."
             )
         if not (np.all(np.isfinite(linear)) and np.all(np.isfinite(translation))):
             raise InputError("`linear` and `translation` must be finite; got NaN or inf.")
@@ -189,7 +243,9 @@ class AffineTransform:
 
     def __call__(self, points) -> np.ndarray:
         points = as_points(points, name="points", n_dims=(self.linear.shape[0],))
-        return points @ self.linear.T + self.translation
+        with np.errstate(over="ignore", invalid="ignore"):
+            out = points @ self.linear.T + self.translation
+        return _finite_result(out, "AffineTransform")
 
     def inverse(self) -> AffineTransform:
         """The inverse map; raises ``InputError`` when ``linear`` is singular."""
@@ -199,11 +255,15 @@ class AffineTransform:
                 f"(cond {np.linalg.cond(self.linear):.3g})."
             )
         inv = np.linalg.inv(self.linear)
-        return AffineTransform(inv, -(inv @ self.translation))
+        with np.errstate(over="ignore", invalid="ignore"):
+            translation = -(inv @ self.translation)
+        if not (np.all(np.isfinite(inv)) and np.all(np.isfinite(translation))):
+            raise InputError("This affine transform's inverse leaves the float64 range.")
+        return AffineTransform(inv, translation)
 
 
-@dataclass(frozen=True)
-class NonRigidTransform:
+@dataclass(frozen=True, eq=False)
+class NonRigidTransform(_ArrayEquality):
     """CPD's motion-coherent displacement field after an optional affine pre-map.
 
     ``z -> u + sum_m W[m] exp(-|u - c_m|^2 / (2 beta^2))`` with ``u = linear @ z + translation``
@@ -243,8 +303,8 @@ class NonRigidTransform:
     translation: np.ndarray | None = None
 
     def __post_init__(self):
-        control = _frozen(self.control_points)
-        coefficients = _frozen(self.coefficients)
+        control = _frozen(self.control_points, "control_points")
+        coefficients = _frozen(self.coefficients, "coefficients")
         if control.ndim != 2 or coefficients.shape != control.shape:
             raise InputError(
                 "`control_points` and `coefficients` must both be (M, D); "
@@ -252,19 +312,19 @@ class NonRigidTransform:
             )
         if not (np.all(np.isfinite(control)) and np.all(np.isfinite(coefficients))):
             raise InputError("`control_points` and `coefficients` must be finite; got NaN or inf.")
-        if not np.isfinite(self.beta) or self.beta <= 0:
-            raise InputError(f"`beta` must be a finite number > 0; got {self.beta!r}.")
+        beta = check_float(self.beta, name="beta", low=0.0, low_open=True)
         dim = control.shape[1]
         for name, value, shape in (("linear", self.linear, (dim, dim)), ("translation", self.translation, (dim,))):
             if value is None:
                 continue
-            value = _frozen(np.reshape(value, -1) if name == "translation" else value)
+            value = _real_array(value, name)
+            value = _frozen(np.reshape(value, -1) if name == "translation" else value, name)
             if value.shape != shape or not np.all(np.isfinite(value)):
                 raise InputError(f"`{name}` must be a finite array of shape {shape}; got shape {value.shape}.")
             object.__setattr__(self, name, value)
         object.__setattr__(self, "control_points", control)
         object.__setattr__(self, "coefficients", coefficients)
-        object.__setattr__(self, "beta", float(self.beta))
+        object.__setattr__(self, "beta", beta)
 
     def _pre(self, points: np.ndarray) -> np.ndarray:
         out = points if self.linear is None else points @ self.linear.T
@@ -275,8 +335,9 @@ class NonRigidTransform:
         step = max(1, 2**22 // max(1, self.control_points.shape[0]))
         for lo in range(0, u.shape[0], step):
             block = u[lo : lo + step]
-            d2 = np.sum((block[:, None, :] - self.control_points[None, :, :]) ** 2, axis=2)
-            out[lo : lo + step] = np.exp(-d2 / (2.0 * self.beta**2)) @ self.coefficients
+            # distances in units of beta before squaring: no beta**2 to underflow (0/0) or overflow
+            z = (block[:, None, :] - self.control_points[None, :, :]) / self.beta
+            out[lo : lo + step] = np.exp(-0.5 * np.sum(z * z, axis=2)) @ self.coefficients
         return out
 
     def displacement(self, points) -> np.ndarray:
@@ -286,8 +347,10 @@ class NonRigidTransform:
 
     def __call__(self, points) -> np.ndarray:
         points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
-        u = self._pre(points)
-        return u + self._field(u)
+        with np.errstate(over="ignore", invalid="ignore"):
+            u = self._pre(points)
+            out = u + self._field(u)
+        return _finite_result(out, "NonRigidTransform")
 
 
 def random_rotation(n_dims: int, seed=None) -> np.ndarray:
@@ -302,6 +365,7 @@ def random_rotation(n_dims: int, seed=None) -> np.ndarray:
     """
     from ._seeding import as_generator
 
+    n_dims = check_int(n_dims, name="n_dims", low=1, high=1000)
     rng = as_generator(seed)
     q, r = np.linalg.qr(rng.standard_normal((n_dims, n_dims)))
     q = q * np.sign(np.diag(r))
