@@ -223,3 +223,23 @@ def test_load_mpeg7_reads_gifs_by_class(tmp_path, monkeypatch):
         load_mpeg7(tmp_path)
     with pytest.raises(FileNotFoundError, match="MPEG-7 is not bundled"):
         load_mpeg7(tmp_path / "absent")
+
+
+@pytest.mark.parametrize(("content", "message"), [("1 2 nan\n4 5 6\n", "finite"), ("1 2 a\n4 5 6\n", "3 numbers")])
+def test_load_face_refuses_bad_values_with_the_path(tmp_path, content, message):
+    (tmp_path / "face_source.txt").write_text(content)
+    (tmp_path / "face_target.txt").write_text("1 2 3\n4 5 6\n")
+    with pytest.raises(ValueError, match=message) as info:
+        load_face(tmp_path)
+    assert "face_source.txt" in str(info.value)
+
+
+def test_bad_dataset_arguments_are_named():
+    with pytest.raises(TypeError, match="`images` must be a sequence"):
+        Kimia99(3, [1], [1])
+    try:
+        load_mpeg7()
+    except FileNotFoundError:
+        pytest.skip("MPEG-7 is not installed here")
+    with pytest.raises(TypeError, match="`classes`"):
+        load_mpeg7(classes=123)

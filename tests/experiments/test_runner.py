@@ -170,3 +170,18 @@ def test_seed_list_checks_seed_and_seeds():
     with pytest.raises(ValueError, match="`seeds`"):
         seed_list(0, 10**9, False)
     assert seed_list(2**63 - 3, 3, False)[-1] == 2**63 - 1
+
+
+def test_every_experiment_is_registered_once():
+    import ast
+    import inspect
+
+    import centrality_vision.experiments as experiments
+
+    tree = ast.parse(inspect.getsource(experiments))
+    names = [
+        node.args[0].value
+        for node in ast.walk(tree)
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "Experiment"
+    ]
+    assert len(names) == len(set(names)) == len(experiments.REGISTRY)

@@ -164,11 +164,16 @@ def load_face(path=None) -> PointSetPair:
     )
     pair = []
     for name in ("face_source.txt", "face_target.txt"):
-        points = np.loadtxt(folder / name, dtype=np.float64, ndmin=2)
+        try:
+            points = np.loadtxt(folder / name, dtype=np.float64, ndmin=2)
+        except ValueError as exc:  # text that is not numbers, or ragged lines
+            raise InputError(f"{folder / name}: must hold 3 numbers per line; {exc}") from None
         if points.ndim != 2 or points.shape[1] != 3:
             raise InputError(
                 f"{folder / name}: must hold 3 coordinates per line; got an array of shape {points.shape}."
             )
+        if not np.all(np.isfinite(points)):
+            raise InputError(f"{folder / name}: must hold finite coordinates; got NaN or inf.")
         pair.append(points)
     return PointSetPair(moving=pair[0], fixed=pair[1])
 
@@ -204,6 +209,9 @@ class Kimia99:
     names: np.ndarray
 
     def __post_init__(self) -> None:
+        for name in ("images", "labels", "names"):
+            if not hasattr(getattr(self, name), "__len__"):
+                raise TypeError(f"`{name}` must be a sequence; got {getattr(self, name)!r}.")
         n = len(self.images)
         if len(self.labels) != n or len(self.names) != n:
             raise InputError(
@@ -386,6 +394,8 @@ def load_mpeg7(path=None, *, classes=None) -> MPEG7:
     if classes is not None:
         if isinstance(classes, str):
             classes = [classes]
+        if not hasattr(classes, "__iter__") or not all(isinstance(c, str) for c in classes):
+            raise TypeError(f"`classes` must be a class name or a sequence of them; got {classes!r}.")
         unknown = sorted(set(classes) - set(labels))
         if unknown:
             raise InputError(f"`classes` must be MPEG-7 classes found in {folder}; got unknown {unknown}.")

@@ -95,13 +95,6 @@ REGISTRY = {
             runner=False,
         ),
         Experiment("fig-6.4", "fig_6_4", "MWME matching of Kimia-99 outlines", ("fig. 6.4",)),
-        Experiment(
-            "fig-6.1",
-            "fig_6_1",
-            "the worked examples of the MWME chapter",
-            ("fig. 6.1", "fig. 6.3", "Table 6.1"),
-            runner=False,
-        ),
         Experiment("fig-7.1", "fig_7_1", "MST against MSTME on five points", ("fig. 7.1",), runner=False),
         Experiment(
             "fig-7.4",
