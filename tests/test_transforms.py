@@ -70,10 +70,10 @@ _I2 = np.eye(2)
 @pytest.mark.parametrize(
     ("make", "error", "message"),
     [
-        (lambda: RigidTransform(None, [0, 0]), TypeError, "`rotation` must be a real numeric array"),
-        (lambda: RigidTransform("ab", [0, 0]), TypeError, "`rotation` must be a real numeric array"),
+        (lambda: RigidTransform(None, [0, 0]), TypeError, "`rotation` must hold real numbers"),
+        (lambda: RigidTransform("ab", [0, 0]), TypeError, "`rotation` must hold real numbers"),
         (lambda: RigidTransform(_I2 + 0j, [0, 0]), TypeError, "`rotation` must hold real numbers"),
-        (lambda: RigidTransform(_I2, "ab"), TypeError, "`translation` must be a real numeric array"),
+        (lambda: RigidTransform(_I2, "ab"), TypeError, "`translation` must hold real numbers"),
         (lambda: SimilarityTransform(_I2, [0, 0], None), TypeError, "`scale`"),
         (lambda: SimilarityTransform(_I2, [0, 0], "2"), TypeError, "`scale`"),
         (lambda: SimilarityTransform(_I2, [0, 0], 0.0), ValueError, "`scale`"),

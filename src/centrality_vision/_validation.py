@@ -42,6 +42,23 @@ def _describe(value) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+def as_real_array(value, *, name: str, shape: str = "an array") -> np.ndarray:
+    """``value`` as a numpy array of real numbers (not copied; any shape).
+
+    Raises a :class:`TypeError` naming ``name`` for None, text, objects and complex numbers,
+    and an :class:`InputError` for ragged nested lists (``shape`` describes what was expected).
+    """
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nested lists
+        raise InputError(f"`{name}` must be {shape}; got {_describe(value)} ({exc}).") from None
+    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+        raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
+    if np.iscomplexobj(arr):
+        raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
+    return arr
+
+
 def as_points(
     points,
     *,
@@ -58,16 +75,7 @@ def as_points(
     """
     if sparse.issparse(points):
         raise TypeError(f"`{name}` must be a dense array of shape (n_points, n_dims); got {_describe(points)}.")
-    try:
-        arr = np.asarray(points)
-    except (TypeError, ValueError) as exc:  # ragged nested lists
-        raise InputError(
-            f"`{name}` must be an array of shape (n_points, n_dims); got {_describe(points)} ({exc})."
-        ) from None
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
-        raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
-    if np.iscomplexobj(arr):
-        raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
+    arr = as_real_array(points, name=name, shape="(n_points, n_dims)")
     if arr.ndim != 2 or arr.shape[1] not in n_dims:
         dims = " or ".join(str(d) for d in n_dims)
         raise InputError(f"`{name}` must have shape (n_points, {dims}); got shape {arr.shape}.")

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import _describe, as_points, check_float, check_int
+from ._validation import as_points, as_real_array, check_float, check_int
 from .exceptions import InputError
 
 __all__ = [
@@ -29,13 +29,8 @@ __all__ = [
 
 
 def _real_array(value, name: str) -> np.ndarray:
-    """``value`` as a new float64 array, or a TypeError naming ``name`` (None, text, complex)."""
-    arr = np.asarray(value) if value is not None else None
-    if arr is None or arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
-        raise TypeError(f"`{name}` must be a real numeric array; got {_describe(value)}.")
-    if np.iscomplexobj(arr):
-        raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
-    return np.array(arr, dtype=float)
+    """``value`` as a new float64 array, or an error naming ``name`` (None, text, complex)."""
+    return np.array(as_real_array(value, name=name), dtype=float)
 
 
 def _frozen(array, name: str = "array") -> np.ndarray:
