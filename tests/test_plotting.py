@@ -334,6 +334,8 @@ def test_plotting_numbers_are_checked_by_name():
         plot_alignment_errors({"a": [-1.0, -2.0]})
     with pytest.raises(ValueError, match="`n_points`"):
         plot_alignment_errors({"a": [1.0]}, n_points=10**400)
+    with pytest.raises(ValueError, match="`shape` must have at most"):
+        plot_centrality_image([1.0], [0], (100_000, 100_000))  # (a MemoryError of 80 GB)
 
 
 # --------------------------------------------------------------------------- lazy import

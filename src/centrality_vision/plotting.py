@@ -281,6 +281,11 @@ def _check_shape(shape) -> tuple[int, int]:
         or not all(isinstance(d, (int, np.integer)) and not isinstance(d, bool) and d >= 1 for d in dims)
     ):
         raise InputError(f"`shape` must be a tuple of two positive ints (n_rows, n_cols); got {_describe(shape)}.")
+    if int(dims[0]) * int(dims[1]) > _MAX_PIXELS:
+        raise InputError(
+            f"`shape` must have at most {_MAX_PIXELS:.0e} pixels (the image is drawn from a dense array); "
+            f"got {int(dims[0])} x {int(dims[1])}."
+        )
     return int(dims[0]), int(dims[1])
 
 
@@ -411,6 +416,7 @@ def plot_centrality_image(
     return ax
 
 
+_MAX_PIXELS = 10**9  # a dense float64 image of 8 GB: beyond it, no figure is worth drawing
 _MAX_MARKER_AREA = 1e6  # points^2: a marker of ~14 inches across; larger ones stall the renderer
 _MAX_DPI = 10_000.0  # (a figure of a few inches at more dpi is beyond what renderers allocate)
 

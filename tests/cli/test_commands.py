@@ -568,3 +568,13 @@ def test_reproduce_checks_its_numbers_before_running_anything(tmp_path, capsys, 
 def test_reproduce_refuses_a_malformed_scheduler_address(tmp_path, capsys, scheduler):
     assert main(["reproduce", "fig-5.3", "--quick", "--scheduler", scheduler, "--out", str(tmp_path)]) == 2
     assert "`scheduler` must be one of" in _one_line_error(capsys, only=True)
+
+
+@pytest.mark.parametrize(
+    "argv", [["demo"], ["reproduce", "fig-7.1"], ["reproduce", "all", "--quick"]], ids=["demo", "one", "all"]
+)
+def test_out_that_is_a_file_is_a_named_one_line_error(tmp_path, capsys, argv):
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    assert main([*argv, "--out", str(afile)]) == 2
+    assert "`--out` must be a folder that can be created" in _one_line_error(capsys, only=True)

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import time
-from pathlib import Path
 
 from ._common import add_progress, progress_on, pyplot, say
 from ._output import write_json
@@ -46,13 +45,13 @@ def run(args: argparse.Namespace) -> int:
     from .. import __version__
     from .. import centrality as cen
     from ..datasets import load_fish, load_kimia99
+    from ..experiments._common import make_out_folder
     from ..graphs import delaunay_graph, pixel_graph
     from ..plotting import plot_alignment_errors, plot_centrality_image, plot_graph, plot_registration, save_figure
     from ..registration import GPD, RigidCPD
 
     plt = pyplot()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_out_folder(args.out)
     started = time.perf_counter()
 
     image = load_kimia99().image(args.shape)  # fail on a bad name before any work

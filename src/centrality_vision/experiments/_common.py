@@ -117,8 +117,18 @@ def seed_list(seed: int, seeds: int | None, quick: bool) -> list[int]:
 
 def prepare_out(args) -> Path:
     """The output folder of parsed ``args``, created if missing."""
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    return make_out_folder(args.out)
+
+
+def make_out_folder(path) -> Path:
+    """``path`` as a folder, created if missing; a file or an unwritable place is a named error."""
+    from ..exceptions import InputError
+
+    out = Path(path)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"`--out` must be a folder that can be created; got {str(out)!r} ({exc.strerror}).") from None
     return out
 
 

@@ -20,6 +20,7 @@ from importlib import import_module
 from pathlib import Path
 
 from . import REGISTRY, RUNNER_EXPERIMENTS, experiment_argv
+from ._common import make_out_folder
 
 __all__ = ["run_all", "write_report", "figure_index", "THESIS_FIGURES", "RUNNER_EXPERIMENTS"]
 
@@ -141,7 +142,7 @@ def run_all(
     An experiment that cannot run here (fig-5.5 without the GPL face data) is reported as not
     run, with its reason, and the others go on.
     """
-    out = Path(out)
+    out = make_out_folder(out)
     names = list(REGISTRY) if only is None else list(only)
     timings, skipped = {}, {}
     for name in names:

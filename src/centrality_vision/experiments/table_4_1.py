@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import SCHEDULER_HELP
+from ._common import MAX_SEED, MAX_SEEDS, SCHEDULER_HELP, int_in, make_out_folder
 
 __all__ = [
     "THESIS_TABLE_4_1",
@@ -449,10 +449,10 @@ def main(argv=None) -> int:
         prog="python -m centrality_vision.experiments.table_4_1", description=__doc__.splitlines()[0]
     )
     parser.add_argument("--quick", action="store_true", help="27 images instead of 99")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int_in(0, MAX_SEED), default=0)
     parser.add_argument(
         "--seeds",
-        type=int,
+        type=int_in(1, MAX_SEEDS),
         default=None,
         help="check the claims over this many seeds from --seed on (default: 20, --quick: 3)",
     )
@@ -465,10 +465,9 @@ def main(argv=None) -> int:
     parser.add_argument(
         "--scheduler", default="processes", help=f"where the centralities and the seeds run: {SCHEDULER_HELP}"
     )
-    parser.add_argument("--workers", type=int, default=None)
+    parser.add_argument("--workers", type=int_in(1), default=None)
     args = parser.parse_args(argv)
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = make_out_folder(args.out)
     cache = str(Path(args.cache or out / "cache").resolve())
     print(f"Table 4.1: seed={args.seed}, quick={args.quick}", file=sys.stderr)
     result = run(
