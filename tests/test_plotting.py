@@ -461,3 +461,17 @@ def test_rowcol_points_are_drawn_the_way_the_image_looks():
     assert not plot_graph(rowcol, graph).yaxis_inverted()
     with pytest.raises(ValueError, match="rowcol=True"):
         plot_graph(np.zeros((3, 3)) + np.arange(3)[:, None], sparse.csr_array((3, 3)), rowcol=True)
+
+
+def test_coordinates_beyond_what_matplotlib_can_lay_out_are_named():
+    """Near 1.8e308 matplotlib's limits and ticks overflow (warnings, or errors at draw time)."""
+    from centrality_vision.plotting import plot_registration, plot_registration_snapshots
+
+    x = np.random.default_rng(0).random((5, 2))
+    with pytest.raises(ValueError, match=r"`points` must lie within \+-1e\+307"):
+        plot_graph(x * 1.7e308, sparse.csr_array((5, 5)))
+    with pytest.raises(ValueError, match=r"`moving` must lie within"):
+        plot_registration(x, x * 1.7e308)
+    with pytest.raises(ValueError, match=r"`snapshots\['A'\]\[0\]` must lie within"):
+        plot_registration_snapshots(x, {"A": {0: x * 1.7e308, 1: x}})
+    plot_graph(x * 1e306, sparse.csr_array((5, 5)))  # large but drawable

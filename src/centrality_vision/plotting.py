@@ -56,6 +56,20 @@ def _norm(norm, values: np.ndarray):
     raise InputError(f"`norm` must be one of {', '.join(map(repr, _NORMS))} or a matplotlib Normalize; got {norm!r}.")
 
 
+_MAX_COORDINATE = 1e307  # matplotlib's limits and ticks overflow for coordinates near float64's 1.8e308
+
+
+def _plot_points(points, *, name: str, n_dims: tuple, rowcol: bool = False, min_points: int = 1) -> np.ndarray:
+    """Validated points to draw (see :func:`as_points`), within +-1e307, as (x, y) when ``rowcol``."""
+    points = as_points(points, name=name, n_dims=n_dims, min_points=min_points)
+    if points.size and np.abs(points).max() > _MAX_COORDINATE:
+        raise InputError(
+            f"`{name}` must lie within +-{_MAX_COORDINATE:g} to be drawn (matplotlib's axis limits overflow "
+            f"beyond); got a coordinate of {np.abs(points).max():.3g}. Rescale the points."
+        )
+    return _image_axes(points, rowcol, name)
+
+
 def _image_axes(points: np.ndarray, rowcol: bool, name: str) -> np.ndarray:
     """(row, col) pixel coordinates as (x, y) = (col, row); the caller then points the y axis down."""
     if not rowcol:
@@ -201,7 +215,7 @@ def plot_graph(
     2
     >>> plt.close(ax.figure)
     """
-    points = _image_axes(as_points(points, name="points", n_dims=(2, 3), min_points=1), rowcol, "points")
+    points = _plot_points(points, name="points", n_dims=(2, 3), rowcol=rowcol)
     n, n_dims = points.shape
     graph = as_graph(graph, name="graph")
     if graph.shape != (n, n):
@@ -534,8 +548,8 @@ def plot_matching(
     import matplotlib.pyplot as plt
     from matplotlib.collections import LineCollection
 
-    moving = _image_axes(as_points(moving, name="moving", n_dims=(2,)), rowcol, "moving")
-    fixed = _image_axes(as_points(fixed, name="fixed", n_dims=(2,)), rowcol, "fixed")
+    moving = _plot_points(moving, name="moving", n_dims=(2,), rowcol=rowcol)
+    fixed = _plot_points(fixed, name="fixed", n_dims=(2,), rowcol=rowcol)
     correspondence = np.asarray(correspondence)
     n = moving.shape[0]
     if correspondence.shape != (n,) or not np.issubdtype(correspondence.dtype, np.integer):
@@ -643,8 +657,8 @@ def plot_registration(
     """
     import matplotlib.pyplot as plt
 
-    fixed = _image_axes(as_points(fixed, name="fixed", n_dims=(2, 3)), rowcol, "fixed")
-    moving = _image_axes(as_points(moving, name="moving", n_dims=(fixed.shape[1],)), rowcol, "moving")
+    fixed = _plot_points(fixed, name="fixed", n_dims=(2, 3), rowcol=rowcol)
+    moving = _plot_points(moving, name="moving", n_dims=(fixed.shape[1],), rowcol=rowcol)
     three_d = fixed.shape[1] == 3
     if ax is None:
         fig = plt.figure(figsize=(4.5, 4.2), layout="constrained")
@@ -720,7 +734,7 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
 
-    fixed = as_points(fixed, name="fixed", n_dims=(2, 3))
+    fixed = _plot_points(fixed, name="fixed", n_dims=(2, 3))
     dim = fixed.shape[1]
     if not isinstance(snapshots, dict) or not snapshots:
         raise TypeError(
@@ -733,7 +747,7 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
                 f"`snapshots[{label!r}]` must be a non-empty dict {{iteration: points}}; got {_describe(record)}."
             )
         frames[label] = {
-            check_int(k, name=f"snapshots[{label!r}] key", low=0): as_points(
+            check_int(k, name=f"snapshots[{label!r}] key", low=0): _plot_points(
                 v, name=f"snapshots[{label!r}][{k}]", n_dims=(dim,)
             )
             for k, v in record.items()
