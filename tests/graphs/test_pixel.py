@@ -141,9 +141,11 @@ def test_extreme_spacing_gives_the_true_lengths(spacing):
     assert graph.data.min() > 0
 
 
-def test_spacing_whose_lengths_overflow_is_refused():
+@pytest.mark.parametrize("spacing", [(1.5e308, 1.5e308), (1.5e308, 1.5e308, 1e-200)], ids=["scaled", "stepwise"])
+def test_spacing_whose_lengths_overflow_is_refused(spacing):
+    """Diagonals above 1.8e308, on both paths (entries within 1e150 of each other, and not)."""
     with pytest.raises(ValueError, match="`spacing` must give edge lengths"):
-        pixel_graph(np.ones((2, 2), dtype=bool), spacing=(1.5e308, 1.5e308))
+        pixel_graph(np.ones((2,) * len(spacing), dtype=bool), spacing=spacing)
 
 
 @pytest.mark.parametrize(

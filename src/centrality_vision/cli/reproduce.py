@@ -57,8 +57,6 @@ def run(args: argparse.Namespace) -> int:
     if args.experiment == "all":
         from ..experiments.report import run_all
 
-        if args.seeds is not None and args.seeds < 1:
-            raise InputError(f"`--seeds` must be a positive int; got {args.seeds}.")
         path = run_all(
             args.out, quick=args.quick, seed=args.seed, seeds=args.seeds, scheduler=args.scheduler, workers=args.workers
         )
@@ -68,8 +66,6 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(
             f"`--scheduler` applies to {', '.join(RUNNER_EXPERIMENTS)} (and all); got it for {args.experiment}."
         )
-    if args.seeds is not None and args.seeds < 1:
-        raise InputError(f"`--seeds` must be a positive int; got {args.seeds}.")
     return run_experiment(
         args.experiment,
         Path(args.out) / args.experiment,

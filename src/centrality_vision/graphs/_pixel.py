@@ -223,16 +223,18 @@ def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, thre
     graph = PixelGraph(graph)
     graph.sort_indices()
     if spacing is not None:
-        if unit is None:
-            graph.data = _spaced_lengths(graph, np.asarray(nodes, dtype=np.int64), mask.shape, spacing)
-        else:
-            with np.errstate(over="ignore"):
-                graph.data *= top
-            if graph.data.size and not np.all(np.isfinite(graph.data)):
-                raise InputError(
-                    f"`spacing` must give edge lengths that fit in float64 (about 5e-324 to 1.8e308); "
-                    f"got {spacing.tolist()!r}."
-                )
+        with np.errstate(over="ignore"):
+            lengths = (
+                _spaced_lengths(graph, np.asarray(nodes, dtype=np.int64), mask.shape, spacing)
+                if unit is None
+                else graph.data * top
+            )
+        if lengths.size and not (np.all(np.isfinite(lengths)) and lengths.min() > 0):
+            raise InputError(
+                f"`spacing` must give edge lengths that fit in float64 (about 5e-324 to 1.8e308); "
+                f"got {spacing.tolist()!r}."
+            )
+        graph.data = lengths
     graph.indices = graph.indices.astype(np.int32, copy=False)
     graph.indptr = graph.indptr.astype(np.int32, copy=False)
     remembered = mask.copy()
@@ -249,7 +251,8 @@ def _spaced_lengths(graph, nodes: np.ndarray, shape: tuple, spacing: np.ndarray)
     Each edge joins pixels that differ by 0 or 1 along each axis; its length is the norm of
     those steps times ``spacing``, taken with the steps divided by the largest one before
     squaring (skimage squares the spacing itself: its lengths overflow above about 1e154
-    and underflow to 0 below about 1e-162). Lengths beyond float64 are refused.
+    and underflow to 0 below about 1e-162). Lengths beyond float64 come out 0 or inf (the
+    caller refuses them).
     """
     rows = np.repeat(np.arange(graph.shape[0]), np.diff(graph.indptr))
     steps = np.abs(
@@ -257,14 +260,7 @@ def _spaced_lengths(graph, nodes: np.ndarray, shape: tuple, spacing: np.ndarray)
         - np.stack(np.unravel_index(nodes[graph.indices], shape), axis=1)
     )
     top = float(spacing.max())
-    unit = steps * (spacing / top)
-    with np.errstate(over="ignore"):
-        lengths = _robust_norms(unit) * top
-    if lengths.size and not (np.all(np.isfinite(lengths)) and lengths.min() > 0):
-        raise InputError(
-            f"`spacing` must give edge lengths that fit in float64 (about 5e-324 to 1.8e308); got {spacing.tolist()!r}."
-        )
-    return lengths
+    return _robust_norms(steps * (spacing / top)) * top
 
 
 def pixel_coordinates(nodes, shape) -> np.ndarray:

@@ -1182,15 +1182,6 @@ def fgt_translate_evaluate(
                 out[t, r] = total
 
 
-@njit(nogil=True, cache=True, fastmath=_REDUCE)
-def _row_max(row, n, start):
-    """``max(start, max(row[:n]))``."""
-    top = start
-    for m in range(n):
-        top = max(top, row[m])
-    return top
-
-
 @njit(nogil=True, cache=True, fastmath=_CONTRACT)
 def batch_posteriors(moving_t, fixed, sigma2, log_c, lo, hi, p1, pt1, pxt, nll):
     """CPD's E-step statistics for poses ``lo:hi`` of K poses of one moving set (the global pose search).
@@ -1224,7 +1215,7 @@ def batch_posteriors(moving_t, fixed, sigma2, log_c, lo, hi, p1, pt1, pxt, nll):
                     row[m] += t * t
             for m in range(n_moving):
                 row[m] *= -inv2s2
-            top = _row_max(row, n_moving, lc)
+            top = max(lc, _max(row, n_moving))  # (the search's subsets have >= 3 points)
             for m in range(n_moving):
                 row[m] = fast_exp(max(row[m] - top, _FLOOR))
             den = _sum(row, 0, n_moving) + fast_exp(max(lc - top, _FLOOR))
