@@ -468,7 +468,16 @@ def least_squares_similarity(
 
     Each centred set is divided by a power of two above its largest coordinate before the
     cross-covariance is formed, so coordinates up to the float64 limit give finite products
-    (no inf reaches the SVD)."""
+    (no inf reaches the SVD).
+
+    Examples
+    --------
+    >>> source = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    >>> quarter_turn = np.array([[0.0, -1.0], [1.0, 0.0]])
+    >>> rotation, translation, s = least_squares_similarity(source, 2 * source @ quarter_turn.T + [3, 4], scale=True)
+    >>> np.allclose(rotation, quarter_turn), np.allclose(translation, [3, 4]), round(s, 12)
+    (True, True, 2.0)
+    """
     mu_s, xs = centred(source)
     mu_t, xt = centred(target)
     a, b = power_of_two_scale(xs), power_of_two_scale(xt)

@@ -47,6 +47,13 @@ def nhdd_joining(n: int, *, connected: bool = True) -> np.ndarray:
 
     Position ``k`` (0-based) joins iff ``n - 1 - k`` is even for the connected graph, so
     that the last node joins; the complement (one isolated node) swaps the roles.
+
+    Examples
+    --------
+    >>> nhdd_joining(5).tolist()
+    [False, False, True, False, True]
+    >>> nhdd_joining(5, connected=False).tolist()
+    [False, True, False, True, False]
     """
     n = check_int(n, name="n", low=2)
     k = np.arange(n)

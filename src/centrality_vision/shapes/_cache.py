@@ -55,6 +55,14 @@ def as_shape_images(
     the side that touches less of the image border as the shape. A mask whose shape
     touches most of the border gets a warning (it looks inverted). A shape must have
     background too: an all-foreground image has no outline.
+
+    Examples
+    --------
+    >>> image = np.zeros((5, 5), dtype=np.uint8)
+    >>> image[1:4, 1:4] = 255
+    >>> (mask,) = as_shape_images([image])
+    >>> mask.dtype, int(mask.sum())
+    (dtype('bool'), 9)
     """
     if isinstance(images, np.ndarray) and images.ndim == 2:
         raise InputError(
@@ -317,7 +325,16 @@ _registry_lock = threading.Lock()
 
 def resolve_cache(cache, *, name: str = "cache") -> CentralityCache:
     """``None`` -> :data:`default_cache`; a :class:`CentralityCache` -> itself; a path ->
-    the process's cache on that directory (one per directory, so its memory is reused)."""
+    the process's cache on that directory (one per directory, so its memory is reused).
+
+    Examples
+    --------
+    >>> resolve_cache(None) is default_cache
+    True
+    >>> own = CentralityCache()
+    >>> resolve_cache(own) is own
+    True
+    """
     if cache is None:
         return default_cache
     if isinstance(cache, CentralityCache):
