@@ -59,6 +59,14 @@ def as_real_array(value, *, name: str, shape: str = "an array") -> np.ndarray:
     return arr
 
 
+def _describe_dims(n_dims) -> str:
+    """``"2 or 3"``; a run of more than three dimensions reads ``"1 to 64"``."""
+    dims = sorted(n_dims)
+    if len(dims) > 3 and dims == list(range(dims[0], dims[-1] + 1)):
+        return f"{dims[0]} to {dims[-1]}"
+    return " or ".join(str(d) for d in dims)
+
+
 def as_points(
     points,
     *,
@@ -77,8 +85,7 @@ def as_points(
         raise TypeError(f"`{name}` must be a dense array of shape (n_points, n_dims); got {_describe(points)}.")
     arr = as_real_array(points, name=name, shape="(n_points, n_dims)")
     if arr.ndim != 2 or arr.shape[1] not in n_dims:
-        dims = " or ".join(str(d) for d in n_dims)
-        raise InputError(f"`{name}` must have shape (n_points, {dims}); got shape {arr.shape}.")
+        raise InputError(f"`{name}` must have shape (n_points, {_describe_dims(n_dims)}); got shape {arr.shape}.")
     arr = np.array(arr, dtype=np.float64, order="C", copy=True)
     if not np.all(np.isfinite(arr)):
         bad = int(np.count_nonzero(~np.isfinite(arr).all(axis=1)))

@@ -7,6 +7,7 @@ proper (det R = +1). Used by matching and registration alike.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,6 +26,7 @@ __all__ = [
     "random_rotation",
     "centred",
     "power_of_two_scale",
+    "rms_radius",
 ]
 
 
@@ -438,6 +440,21 @@ def power_of_two_scale(points: np.ndarray) -> float:
     if peak == 0.0:
         return 1.0
     return float(np.ldexp(1.0, int(np.frexp(peak)[1]) - 1))
+
+
+def rms_radius(points: np.ndarray) -> float:
+    """The RMS distance of the rows from their mean, without overflow near 1e308 (0 for no rows).
+
+    Examples
+    --------
+    >>> rms_radius(np.array([[1e300, 0.0], [-1e300, 0.0]]))
+    1e+300
+    """
+    if points.shape[0] == 0:
+        return 0.0
+    rows = centred(points)[1]
+    unit = power_of_two_scale(rows)
+    return unit * math.sqrt(float(np.sum((rows / unit) ** 2)) / rows.shape[0])
 
 
 def centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -488,6 +488,8 @@ def test_other_input_errors_are_one_line(tmp_path, capsys):
         ["graph", "p.txt", "--out", "g.xlsx"],
         ["centrality", "p.txt"],
         ["register", "m.txt", "f.txt", "--tol", "-1", "--out", "r.json"],
+        ["register", "m.txt", "f.txt", "--columns", "", "--out", "r.json"],  # "internal error" before
+        ["graph", "m.txt", "--columns", "x,,y", "--out", "g.json"],
         ["classify", "shapes", "--folds", "1", "--out", "c.json"],
     ],
 )

@@ -147,6 +147,8 @@ def test_columns_by_index_and_case_insensitive_names(tmp_path):
         read_points(path, columns=["x", "w"])
     with pytest.raises(InputError, match="must not repeat"):
         read_points(path, columns=[1, 1])
+    with pytest.raises(InputError, match="must not hold an empty name"):  # a TypeError before
+        read_points(path, columns="x,,y")
 
 
 def test_nan_rows_only_when_asked_and_only_whole_rows(tmp_path):

@@ -41,7 +41,7 @@ def test_icp_bad_input(fish):
 # ------------------------------------------------------------------ robust ICP (issue 10)
 import pathlib  # noqa: E402
 
-from centrality_vision.exceptions import ConvergenceWarning  # noqa: E402
+from centrality_vision.exceptions import ConvergenceWarning, InputError  # noqa: E402
 from centrality_vision.registration import estimate_normals  # noqa: E402
 
 BUNNY = pathlib.Path(__file__).resolve().parents[3] / "shared" / "data" / "bunny" / "bunny.txt"
@@ -80,8 +80,15 @@ def test_max_distance_drops_far_pairs(fish, rot2):
     icp = ICP(tol=1e-12, max_distance=1.0).fit(np.vstack([fish, fish[:20] + [-30.0, 0.0]]), far)
     np.testing.assert_allclose(icp.transform_.rotation, rot2(5), atol=1e-8)
     assert icp.history_["n_pairs"][-1] == len(fish)
-    with pytest.warns(ConvergenceWarning, match="pairs within max_distance"):
+    # no pair within reach at the start: nothing can be registered, so a named error (it was a
+    # warning with the identity as result and NaN in history_["objective"])
+    with pytest.raises(InputError, match="max_distance.*at the start"):
         ICP(max_distance=1e-9).fit(fish, fish + 1.0)
+
+
+def test_point_to_plane_names_a_fixed_set_too_small_for_normals():
+    with pytest.raises(InputError, match="`fixed` must have at least 2 points for metric='point_to_plane'"):
+        ICP(metric="point_to_plane").fit(np.random.default_rng(0).random((30, 2)), [[0.5, 0.5]])
 
 
 def test_normals_by_local_pca_on_a_sphere():
@@ -128,3 +135,22 @@ def test_icp_init_and_bad_options(fish, rot2):
         ICP(scale=True, metric="point_to_plane").fit(fish, fish)
     with pytest.raises(TypeError, match="init"):
         ICP(init="global").fit(fish, fish)
+
+
+def test_a_step_that_leaves_too_few_pairs_is_undone(fish, rot2):
+    # the pairs in reach drop below D + 1 after the first step: the fit stops at the iterate
+    # before (the last with enough pairs), with a warning and a finite history
+    class LosesPairs(ICP):
+        def _kept(self, dist, max_d):
+            keep = super()._kept(dist, max_d)
+            self.calls = getattr(self, "calls", 0) + 1
+            if self.calls > 1:
+                keep[2:] = False
+            return keep
+
+    x = fish @ rot2(10).T
+    with pytest.warns(ConvergenceWarning, match="stopped at the iterate before"):
+        icp = LosesPairs(max_iter=20).fit(fish, x)
+    assert icp.n_iter_ == 0 and len(icp.history_["objective"]) == 1
+    assert np.all(np.isfinite(icp.history_["objective"]))
+    np.testing.assert_allclose(icp.moving_transformed_, fish, atol=1e-12)  # the start (the identity)

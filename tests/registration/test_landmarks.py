@@ -68,6 +68,13 @@ def test_weak_landmarks_give_way_to_the_data(fish, rot2):
         ([(0, 1), (0, 2)], ValueError, "at most once"),
         ([(0.5, 1)], ValueError, "integer"),
         ("ab", TypeError, "landmarks"),
+        # found by a fuzz run: an overflow, numpy's messages, or read as indices before
+        ([(10**20, 0)], ValueError, "moving indices must be in"),
+        ([(np.inf, 0)], ValueError, "integer indices; got inf"),
+        ([(None, 0)], TypeError, "integer indices; got None"),
+        ([(True, False)], TypeError, "integer indices; got True"),
+        (np.array([["3", "4"]], dtype=object), TypeError, "integer indices; got '3'"),
+        ([(0, 1), (2,)], ValueError, "pairs, shape"),
     ],
 )
 def test_bad_landmarks_are_named(fish, landmarks, error, match):

@@ -118,8 +118,9 @@ def test_rotation_lattice_is_proper_and_covers(n_dims, n):
         ({"moving": [[0.0, np.nan], [1.0, 1.0], [2.0, 0.0]]}, InputError, "finite"),
         ({"scale": 1}, TypeError, "scale"),
         ({"w": 1.0}, InputError, "w"),
-        ({"random_state": -1}, TypeError, "seed"),
+        ({"random_state": -1}, TypeError, "`random_state`"),
         ({"n_rotations": 0}, InputError, "n_rotations"),
+        ({"n_rotations": 10**12}, InputError, r"n_rotations.*\[1, 100000\]"),  # a MemoryError before
         ({"n_hypotheses": 0}, InputError, "n_hypotheses"),
         ({"max_points": 2}, InputError, "max_points"),
     ],

@@ -121,10 +121,20 @@ def add_progress(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _column_list(text: str) -> str:
+    """--columns: comma-separated names or indices, none of them empty (checked by argparse)."""
+    if not text.strip() or any(not item.strip() for item in text.split(",")):
+        raise argparse.ArgumentTypeError(
+            f"expected comma-separated column names or 0-based indices, e.g. x,y,z or 1,2; got {text!r}"
+        )
+    return text
+
+
 def add_point_options(parser: argparse.ArgumentParser) -> None:
     """--columns and --variable, for commands that read point sets."""
     parser.add_argument(
         "--columns",
+        type=_column_list,
         metavar="COLS",
         help="coordinate columns of text, PLY and PCD files, by name or 0-based index, e.g. x,y,z or 1,2 "
         "(default: the columns named x, y[, z], else all columns but an index column)",

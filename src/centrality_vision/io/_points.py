@@ -197,6 +197,8 @@ def _check_columns(columns):
             out.append(int(item))
         elif isinstance(item, str) and item:
             out.append(int(item) if re.fullmatch(r"\d+", item) else item)
+        elif isinstance(item, str):
+            raise InputError(f"`columns` must not hold an empty name; got {columns!r}.")
         else:
             raise TypeError(f"`columns` must hold column names or 0-based indices; got {item!r} in {columns!r}.")
     if not out:

@@ -25,6 +25,7 @@ Conventions every variant shares:
 from __future__ import annotations
 
 import math
+import numbers
 import warnings
 from dataclasses import dataclass, replace
 
@@ -32,6 +33,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from .._seeding import as_generator
 from .._validation import ANY_DIMS, as_points, check_choice, check_float, check_int
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
 from ..transforms import (
@@ -42,6 +44,7 @@ from ..transforms import (
     centred,
     power_of_two_scale,
     proper_rotation,
+    rms_radius,
 )
 from ._estep import (
     E_STEP_METHODS,
@@ -112,6 +115,8 @@ class Snapshots:
     """
 
     def __init__(self, iterations):
+        if isinstance(iterations, (str, bytes)) or not hasattr(iterations, "__iter__"):
+            raise TypeError(f"`iterations` must be a sequence of ints; got {iterations!r}.")
         self.iterations = {check_int(i, name="iterations[i]", low=0) for i in iterations}
         self.frames = {}
         self._last = None
@@ -133,16 +138,30 @@ def initial_sigma2(moving, fixed) -> float:
     """
     moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
     fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
-    return _initial_sigma2(moving, fixed)
+    sigma2 = _initial_sigma2(moving, fixed)
+    if not math.isfinite(sigma2):
+        raise InputError(
+            "The mean squared distance between `moving` and `fixed` is beyond float64; rescale the sets "
+            "(the estimators do so themselves with normalize=True)."
+        )
+    return sigma2
 
 
 def _initial_sigma2(moving, fixed) -> float:
-    """:func:`initial_sigma2` of checked arrays (a fit calls it three times)."""
-    centre = fixed.mean(axis=0)
-    x, y = fixed - centre, moving - centre
-    n_fixed, n_moving, n_dims = x.shape[0], y.shape[0], x.shape[1]
-    total = n_moving * np.sum(x * x) + n_fixed * np.sum(y * y) - 2.0 * x.sum(axis=0) @ y.sum(axis=0)
-    return float(total / (n_dims * n_moving * n_fixed))
+    """:func:`initial_sigma2` of checked arrays (a fit calls it three times); inf where the
+    value is beyond float64. The sets are divided by a power of two (exactly) so that no
+    intermediate square overflows."""
+    centre = centred(fixed)[0]
+    with np.errstate(over="ignore", invalid="ignore"):
+        x, y = fixed - centre, moving - centre
+        if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y))):
+            return math.inf
+        unit = max(power_of_two_scale(x), power_of_two_scale(y))
+        x, y = x / unit, y / unit
+        n_fixed, n_moving, n_dims = x.shape[0], y.shape[0], x.shape[1]
+        total = n_moving * np.sum(x * x) + n_fixed * np.sum(y * y) - 2.0 * x.sum(axis=0) @ y.sum(axis=0)
+        sigma2 = float(total / (n_dims * n_moving * n_fixed)) * unit * unit
+    return sigma2 if math.isfinite(sigma2) else math.inf
 
 
 def alignment_error(true_moving, moving_transformed) -> float:
@@ -157,7 +176,12 @@ def alignment_error(true_moving, moving_transformed) -> float:
     b = as_points(moving_transformed, name="moving_transformed", n_dims=(a.shape[1],))
     if a.shape != b.shape:
         raise InputError(f"`true_moving` must have the shape of the moving set {b.shape}; got {a.shape}.")
-    return float(np.linalg.norm(a - b))
+    unit = max(power_of_two_scale(a), power_of_two_scale(b))  # exact: no square can overflow
+    with np.errstate(over="ignore"):
+        error = float(np.linalg.norm(a / unit - b / unit)) * unit
+    if not math.isfinite(error):
+        raise InputError("The alignment error between `true_moving` and `moving_transformed` is beyond float64.")
+    return error
 
 
 # --------------------------------------------------------------------- the normalised frame
@@ -192,12 +216,14 @@ class _Frame:
                         - np.minimum(moving.min(axis=0), fixed.min(axis=0))
                     )
                 )
-            if not span <= _SCALE_RANGE[1]:
-                # (squared distances, and so sigma2, would overflow to inf)
+            largest = max(float(np.max(np.abs(moving))), float(np.max(np.abs(fixed))))
+            if not max(span, largest) <= _SCALE_RANGE[1]:
+                # (squared distances and coordinates, and so sigma2 and the M-step's moments,
+                # would overflow to inf)
                 raise InputError(
-                    f"With `normalize=False` the points of `moving` and `fixed` must span at most "
-                    f"{_SCALE_RANGE[1]:g} on every axis (squared distances must fit in float64); got {span:.3g}. "
-                    "Use normalize=True."
+                    f"With `normalize=False` the coordinates of `moving` and `fixed` must be at most "
+                    f"{_SCALE_RANGE[1]:g} in absolute value (their squares must fit in float64); got "
+                    f"{max(span, largest):.3g}. Use normalize=True."
                 )
             return _Frame(np.zeros(dim), np.zeros(dim), 1.0), moving, fixed
         mu_x, xc = centred(fixed)
@@ -209,7 +235,7 @@ class _Frame:
             mu_y, yc = centred(moving)
         r_moving = r_fixed = 0.0
         if moving_scale:  # the moving set's radius about its own mean
-            r_moving, r_fixed = _safe_rms(centred(moving)[1] if same_centre else yc), _safe_rms(xc)
+            r_moving, r_fixed = rms_radius(moving), rms_radius(fixed)
         if (
             moving_scale
             and r_moving > 0.0
@@ -269,45 +295,58 @@ class _Frame:
         return AffineTransform(transform_n.linear, translation)
 
 
-def _safe_rms(centred_points: np.ndarray) -> float:
-    """RMS norm of the rows, without overflow for coordinates near 1e308."""
-    if centred_points.shape[0] == 0:
-        return 0.0
-    unit = power_of_two_scale(centred_points)
-    return unit * math.sqrt(float(np.sum((centred_points / unit) ** 2)) / centred_points.shape[0])
-
-
-def _rms_radius(points: np.ndarray) -> float:
-    return _safe_rms(centred(points)[1]) if points.shape[0] else 0.0
-
-
 def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
+    """``landmarks`` as an (L, 2) int64 array of in-range index pairs (None when empty).
+
+    Integer entries, or floats with integral values, are accepted; bools, text, None, NaN,
+    fractions and ragged pairs are refused by name, and the range is checked before any cast
+    (an index beyond int64 is an out-of-range index, not an overflow)."""
     if landmarks is None:
         return None
-    arr = np.asarray(landmarks)
+    shape = "a sequence of integer (moving_index, fixed_index) pairs, shape (L, 2)"
+    if isinstance(landmarks, (str, bytes)):
+        raise TypeError(f"`landmarks` must be {shape}; got text {landmarks!r}.")
+    try:
+        arr = np.asarray(landmarks)
+    except (TypeError, ValueError):
+        raise InputError(f"`landmarks` must be {shape}; got {landmarks!r}.") from None
     if arr.size == 0:
         return None
-    if arr.ndim != 2 or arr.shape[1] != 2 or not (np.issubdtype(arr.dtype, np.integer) or arr.dtype == object):
-        try:
-            as_float = np.asarray(landmarks, dtype=float)
-        except (TypeError, ValueError):
-            raise TypeError(
-                f"`landmarks` must be a sequence of (moving_index, fixed_index) pairs; got {landmarks!r}."
-            ) from None
-        if as_float.ndim != 2 or as_float.shape[1] != 2 or not np.all(as_float == np.round(as_float)):
-            raise InputError(
-                "`landmarks` must be a sequence of integer (moving_index, fixed_index) pairs, shape (L, 2); "
-                f"got shape {as_float.shape}."
-            )
-        arr = as_float
-    arr = arr.astype(np.int64)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InputError(f"`landmarks` must be {shape}; got shape {arr.shape}.")
+
+    entries = arr.ravel().tolist()
+    for value in entries:
+        if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+            raise TypeError(f"`landmarks` must hold integer indices; got {value!r} of type {type(value).__name__}.")
+        if not isinstance(value, numbers.Integral) and not (math.isfinite(value) and float(value).is_integer()):
+            raise InputError(f"`landmarks` must hold integer indices; got {value!r}.")
+    pairs = [(int(a), int(b)) for a, b in zip(entries[0::2], entries[1::2], strict=True)]
     for column, name, size in ((0, "moving", n_moving), (1, "fixed", n_fixed)):
-        bad = (arr[:, column] < 0) | (arr[:, column] >= size)
-        if np.any(bad):
-            raise InputError(f"`landmarks` {name} indices must be in [0, {size}); got {int(arr[bad, column][0])}.")
+        outside = [pair[column] for pair in pairs if not 0 <= pair[column] < size]
+        if outside:
+            raise InputError(f"`landmarks` {name} indices must be in [0, {size}); got {outside[0]}.")
+    arr = np.array(pairs, dtype=np.int64)
     if np.unique(arr[:, 0]).size != arr.shape[0]:
         raise InputError("`landmarks` must pin each moving point at most once; got a repeated moving index.")
     return arr
+
+
+def _check_prior(prior, n_moving: int, n_fixed: int, name: str) -> None:
+    """A :class:`CentralityPrior` whose arrays fit the sets and whose numbers are finite."""
+    if not isinstance(prior, CentralityPrior):
+        raise TypeError(f"`{name}` must be a CentralityPrior or None; got {prior!r} of type {type(prior).__name__}.")
+    for field, size in (("log_weight", n_moving), ("v_moving", n_moving), ("v_fixed", n_fixed)):
+        values = np.asarray(getattr(prior, field))
+        if values.shape != (size,) or not np.issubdtype(values.dtype, np.floating) or not np.all(np.isfinite(values)):
+            raise InputError(
+                f"`{name}`.{field} must be {size} finite floats (one per point); got {values.dtype} of shape "
+                f"{values.shape}."
+            )
+    for field in ("inv2phi2", "scale"):
+        value = getattr(prior, field)
+        if not isinstance(value, numbers.Real) or not math.isfinite(value) or value < 0:
+            raise InputError(f"`{name}`.{field} must be a finite number >= 0; got {value!r}.")
 
 
 def _with_landmarks(post, fixed, landmarks, weight):
@@ -394,6 +433,10 @@ class _CPD(BaseEstimator):
             raise TypeError(f"`{name}.callback` must be callable or None; got {self.callback!r}.")
         if not isinstance(self.normalize, (bool, np.bool_)):
             raise TypeError(f"`{name}.normalize` must be a bool; got {self.normalize!r}.")
+        if not isinstance(self.progress, (bool, np.bool_)):
+            raise TypeError(f"`{name}.progress` must be a bool; got {self.progress!r}.")
+        if self.random_state is not None:
+            as_generator(self.random_state, name=f"{name}.random_state")
         init = self.init
         if (
             init is not None
@@ -462,6 +505,8 @@ class _CPD(BaseEstimator):
         landmarks = _as_landmarks(landmarks, moving.shape[0], fixed.shape[0])
         if prior is not None and not (isinstance(prior, CentralityPrior) or callable(prior)):
             raise TypeError(f"`prior` must be a CentralityPrior, a callable or None; got {prior!r}.")
+        if isinstance(prior, CentralityPrior):
+            _check_prior(prior, moving.shape[0], fixed.shape[0], "prior")
         frame, moving_n, fixed_n = self._frame(moving, fixed)
         true_n = None if true_moving is None else frame.fixed_in(true_moving)
         start = self._start(moving_n, fixed_n, frame)
@@ -503,9 +548,23 @@ class _CPD(BaseEstimator):
             w = _AUTO_W_START if isinstance(self.w, str) else float(self.w)
             return global_pose_search(moving_n, fixed_n, scale=scale, w=w, random_state=self.random_state)
         linear = init.linear if isinstance(init, AffineTransform) else init.rotation
+        name = f"{type(self).__name__}.init"
         if linear.shape != (dim, dim):
-            raise InputError(f"`{type(self).__name__}.init` must be a {dim}D transform; got a {linear.shape[0]}D one.")
-        return frame.linear_in(init)
+            raise InputError(f"`{name}` must be a {dim}D transform; got a {linear.shape[0]}D one.")
+        try:
+            with np.errstate(all="ignore"):
+                start = frame.linear_in(init)
+                reach = float(np.max(np.abs(start(moving_n)))) if moving_n.size else 0.0
+        except InputError:  # the transform's result overflows float64
+            reach = math.inf
+        # the normalised frame has unit radius: a start that puts the moving set more than
+        # _SCALE_RANGE[1] radii away would overflow sigma2 and the M-step's moments
+        if not reach <= _SCALE_RANGE[1]:
+            raise InputError(
+                f"`{name}` must bring the moving set within {_SCALE_RANGE[1]:g} radii of the fixed set "
+                f"(the data's scale); it maps it {reach:.3g} radii away. Check its scale and translation."
+            )
+        return start
 
     def _run(self, moving, moving_n, fixed, frame, true_n, start, landmarks, prior):
         n_fixed, n_dims = fixed.shape
@@ -542,7 +601,11 @@ class _CPD(BaseEstimator):
         try:
             iteration = 0
             while True:
-                current_prior = prior(sigma2 / sigma2_start) if callable(prior) else prior
+                current_prior = prior
+                if callable(prior):
+                    current_prior = prior(sigma2 / sigma2_start)
+                    if current_prior is not None:
+                        _check_prior(current_prior, moving.shape[0], fixed.shape[0], "prior(sigma2_ratio)")
                 w_e = w_fraction
                 if auto_w and w_fraction > 0:
                     odds = w_fraction / (1.0 - w_fraction) * n_fixed / box
@@ -740,7 +803,7 @@ class _CPD(BaseEstimator):
         return lambda moving_t, sigma2, w, prior: knn_posterior(moving_t, fixed, sigma2, w, prior, k=k, tree=tree)
 
     def _collapse(self, moving_n, fixed, moving_t, w, post) -> str | None:
-        radius_y, radius_x, radius_t = _rms_radius(moving_n), _rms_radius(fixed), _rms_radius(moving_t)
+        radius_y, radius_x, radius_t = rms_radius(moving_n), rms_radius(fixed), rms_radius(moving_t)
         if min(radius_y, radius_x) > 0 and radius_t < _COLLAPSE_RADIUS * min(radius_y, radius_x):
             return (
                 f"the transformed moving set collapsed (RMS radius {radius_t / radius_y:.3g} of the moving set's); "
@@ -772,7 +835,11 @@ class _CPD(BaseEstimator):
         check_is_fitted(self, "transform_")
         moved = self.transform_(as_points(moving, name="moving", n_dims=ANY_DIMS))
         fixed = as_points(fixed, name="fixed", n_dims=(moved.shape[1],))
-        return -float(np.mean(cKDTree(moved).query(fixed, k=1)[0]))
+        unit = max(power_of_two_scale(moved), power_of_two_scale(fixed))  # exact: no square overflows
+        mean = float(np.mean(cKDTree(moved / unit).query(fixed / unit, k=1)[0])) * unit
+        if not math.isfinite(mean):
+            raise InputError("The mean distance from `fixed` to the transformed `moving` is beyond float64.")
+        return -mean
 
     def posterior(self) -> np.ndarray:
         """The full posterior matrix ``P`` (M x N) of the final state; ``P[m, n] = P(m | x_n)``.
@@ -850,7 +917,11 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         points whose term is above that ('truncated', a cell grid); both equal every term's
         sum to rounding; a fast Gauss transform ('fgt', about 1e-8 of the total weight; CPD only,
         not GPD). 'auto' takes the fastest by timing the paths during the fit
-        (``registration._estep.EStepPlanner``; always dense below 2^20 pairs).
+        (``registration._estep.EStepPlanner``; always dense below 2^20 pairs). Timing
+        decides, so above 2^20 pairs two fits of one problem may take different paths and
+        differ at rounding level (measured: 1e-12 at 2,000 points; up to the FGT's 1e-8 where
+        it is chosen); pass 'dense' or 'truncated' for results bit-identical across runs and
+        thread counts.
     n_neighbors : int, optional
         None (default): CPD's model, every moving point may explain every fixed point.
         An int k: the k-nearest-neighbour model (the E-step of biocpd, our own code): each

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
@@ -9,7 +10,7 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
 from .. import graphs as _graphs
-from .._validation import ANY_DIMS, as_graph, as_points, check_choice, check_float, check_int
+from .._validation import ANY_DIMS, as_graph, as_points, as_real_array, check_choice, check_float, check_int
 from ..centrality import CENTRALITIES, compute
 from ..exceptions import InputError
 from ..transforms import centred, power_of_two_scale
@@ -71,21 +72,27 @@ def normalize_centrality(values, *, name: str = "values") -> np.ndarray:
     >>> normalize_centrality([1.0, 1.0 + 1e-15])
     array([0., 0.])
     """
-    v = np.asarray(values, dtype=float)
+    v = as_real_array(values, name=name, shape="a 1D array of centrality values").astype(float)
     if v.ndim != 1 or v.size == 0:
         raise InputError(f"`{name}` must be a non-empty 1D array of centrality values; got shape {v.shape}.")
     if not np.all(np.isfinite(v)):
         raise InputError(f"`{name}` must be finite; got NaN or inf.")
     lo, hi = float(v.min()), float(v.max())
-    if hi - lo <= 1e-9 * max(abs(hi), abs(lo), 1e-300):
+    if hi / 2 - lo / 2 <= 0.5e-9 * max(abs(hi), abs(lo), 1e-300):
         return np.zeros_like(v)
-    return (v - lo) / (hi - lo)
+    if math.isfinite(hi - lo):
+        return (v - lo) / (hi - lo)
+    return (v / 2 - lo / 2) / (hi / 2 - lo / 2)  # values near the float64 limit: the span overflows
 
 
 # numpy's histogram rules; those that follow the spread of the values ("fd", "scott" and
 # "auto" through "fd") make 1 / width bins, unbounded as the spread shrinks
 _BIN_RULES = ("auto", "fd", "doane", "scott", "stone", "rice", "sturges", "sqrt")
 _MAX_RULE_BINS = 100_000
+#: ``phi`` is refused outside [_MIN_PHI, 1 / _MIN_PHI], ``kappa`` below _MIN_KAPPA (a prior
+#: weighted 1e12 times the spatial term leaves the geometry no say at all)
+_MIN_PHI = 1e-100
+_MIN_KAPPA = 1e-12
 
 
 def _rule_width(values, rule):
@@ -124,8 +131,8 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> Cen
     >>> round(p.inv2phi2, 6)  # phi2 = var([0, 1]) = 0.25
     2.0
     """
-    vy = np.asarray(v_moving, dtype=float)
-    vx = np.asarray(v_fixed, dtype=float)
+    vy = as_real_array(v_moving, name="v_moving", shape="a 1D array").astype(float)
+    vx = as_real_array(v_fixed, name="v_fixed", shape="a 1D array").astype(float)
     for name, v in (("v_moving", vy), ("v_fixed", vx)):
         if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)):
             raise InputError(f"`{name}` must be a non-empty 1D finite array; got shape {v.shape}.")
@@ -142,16 +149,19 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> Cen
             )
         edges = np.histogram_bin_edges(vy, bins=bins, range=(0.0, 1.0))
     else:
-        edges = np.linspace(0.0, 1.0, check_int(bins, name="bins", low=1) + 1)
+        edges = np.linspace(0.0, 1.0, check_int(bins, name="bins", low=1, high=_MAX_RULE_BINS) + 1)
     counts, _ = np.histogram(vy, bins=edges)
     which = np.clip(np.searchsorted(edges, vy, side="right") - 1, 0, counts.size - 1)
     log_weight = np.log(counts[which] / vy.size)
     if phi is None:
         phi2 = float(np.var(vx))
     else:
-        phi2 = check_float(phi, name="phi", low=0.0, low_open=True) ** 2
+        # centralities lie in [0, 1]: beyond these bounds the term is 0 or a hard cut, and
+        # 1 / (2 phi^2) would overflow
+        phi2 = check_float(phi, name="phi", low=_MIN_PHI, high=1.0 / _MIN_PHI) ** 2
     inv2phi2 = 0.0 if phi2 <= 0 else 1.0 / (2.0 * phi2)
-    kappa = 0.5 if kappa is None else check_float(kappa, name="kappa", low=0.0, high=1.0, low_open=True)
+    # (1 - kappa) / kappa: the prior's weight over the spatial term's, at most 1 / _MIN_KAPPA
+    kappa = 0.5 if kappa is None else check_float(kappa, name="kappa", low=_MIN_KAPPA, high=1.0)
     return CentralityPrior(log_weight, vy.copy(), vx.copy(), inv2phi2, (1.0 - kappa) / kappa)
 
 
@@ -196,12 +206,12 @@ class GPD(BaseEstimator):
         One of :data:`centrality_vision.centrality.CENTRALITIES`, or ``f(graph) -> values``.
     graph : str or callable, default='delaunay'
         One of :data:`GRAPHS` or ``f(points) -> sparse graph`` with one node per point.
-    bins : int or str, default=10
+    bins : int in [1, 100,000] or str, default=10
         Histogram bins for ``h(m)`` (see :func:`centrality_prior`).
-    phi : float, optional
+    phi : float in [1e-100, 1e100], optional
         Width of the Gaussian on centrality differences; default: the standard deviation of
         the fixed set's centralities.
-    kappa : float in (0, 1], optional
+    kappa : float in [1e-12, 1], optional
         Geometry-vs-topology balance ``kappa A + (1 - kappa) B`` (thesis 5.4.5); None or 0.5
         is the thesis' equal weighting, 1 is plain CPD.
     prior_schedule : None, 'anneal' or float in (0, 1), default=None
@@ -294,6 +304,14 @@ class GPD(BaseEstimator):
         if not isinstance(self.weights, (bool, np.bool_)):
             raise TypeError(f"`weights` must be a bool; got {self.weights!r}.")
         check_int(self.k, name="k", low=1)
+        if isinstance(self.bins, str):
+            check_choice(self.bins, _BIN_RULES, name="bins")
+        else:
+            check_int(self.bins, name="bins", low=1, high=_MAX_RULE_BINS)
+        if self.phi is not None:
+            check_float(self.phi, name="phi", low=_MIN_PHI, high=1.0 / _MIN_PHI)
+        if self.kappa is not None:
+            check_float(self.kappa, name="kappa", low=_MIN_KAPPA, high=1.0)
         schedule = self.prior_schedule
         if isinstance(schedule, str):
             check_choice(schedule, _SCHEDULES, name="prior_schedule")
@@ -302,7 +320,7 @@ class GPD(BaseEstimator):
 
     def _centrality(self, points, graph, given, name):
         if given is not None:
-            values = np.asarray(given, dtype=float)
+            values = as_real_array(given, name=f"{name}_centrality", shape="a 1D array").astype(float)
             if values.shape != (points.shape[0],):
                 raise InputError(f"`{name}_centrality` must have shape ({points.shape[0]},); got {values.shape}.")
             return normalize_centrality(values, name=f"{name}_centrality"), None
@@ -322,7 +340,7 @@ class GPD(BaseEstimator):
                     f"`{name}_graph` must have {points.shape[0]} nodes, one per point; got {graph.shape[0]}."
                 )
         if callable(self.centrality):
-            values = np.asarray(self.centrality(graph), dtype=float)
+            values = as_real_array(self.centrality(graph), name="centrality(graph)", shape="a 1D array").astype(float)
             if values.shape != (points.shape[0],):
                 raise InputError(f"`centrality(graph)` must return shape ({points.shape[0]},); got {values.shape}.")
         else:

@@ -196,6 +196,11 @@ class ICP(BaseEstimator):
         dim = moving.shape[1]
         if self.metric == "point_to_plane" and dim not in (2, 3):
             raise InputError(f"`ICP.metric='point_to_plane'` needs 2D or 3D points; got {dim}D.")
+        if self.metric == "point_to_plane" and fixed.shape[0] < dim:
+            raise InputError(
+                f"`fixed` must have at least {dim} points for metric='point_to_plane' (a normal needs {dim}); "
+                f"got {fixed.shape[0]}."
+            )
         frame, moving_n, fixed_n = _Frame.of(moving, fixed, True, same_centre=True)
         true_n = None if true_moving is None else frame.fixed_in(true_moving)
         max_d = None if self.max_distance is None else float(self.max_distance) / frame.scale
@@ -223,6 +228,7 @@ class ICP(BaseEstimator):
         iteration = 0
         scale2 = frame.scale**2
         keep = np.ones(moving_n.shape[0], dtype=bool)
+        last = None  # the previous iterate: (transform, moving_t, partner, keep)
         while True:
             dist, partner = tree.query(moving_t, k=1, workers=get_num_threads())
             keep = self._kept(dist, max_d)
@@ -231,7 +237,24 @@ class ICP(BaseEstimator):
                 residual2 = residual * residual
             else:
                 residual2 = dist * dist
-            objective = float(np.mean(residual2[keep])) if np.any(keep) else float("nan")
+            if np.count_nonzero(keep) < dim + 1:
+                if last is None:
+                    raise InputError(
+                        f"ICP found only {int(np.count_nonzero(keep))} pairs within `max_distance`="
+                        f"{self.max_distance} at the start (at least {dim + 1} are needed); start closer "
+                        "(init=) or raise `max_distance`."
+                    )
+                # the last step moved the pairs out of reach: its iterate is dropped, the one
+                # before (which had pairs) is the result
+                stopped = (
+                    f"only {int(np.count_nonzero(keep))} pairs within max_distance={self.max_distance} "
+                    f"after trimming at iteration {iteration}; stopped at the iterate before, the last "
+                    "with enough pairs. Start closer (init=) or raise `max_distance`."
+                )
+                transform, moving_t, partner, keep = last
+                iteration -= 1
+                break
+            objective = float(np.mean(residual2[keep]))
             error = None if true_n is None else float(np.linalg.norm(true_n - moving_t)) * frame.scale
             objectives.append(objective * scale2)
             errors.append(error)
@@ -247,13 +270,6 @@ class ICP(BaseEstimator):
                 )
                 if self.callback(info) is True:
                     break
-            if np.count_nonzero(keep) < dim + 1:
-                stopped = (
-                    f"only {int(np.count_nonzero(keep))} pairs within max_distance={self.max_distance} "
-                    "after trimming at "
-                    f"iteration {iteration}; stopped. Start closer (init=) or raise `max_distance`."
-                )
-                break
             if objective <= _COINCIDE or (
                 previous is not None and abs(previous - objective) <= self.tol * max(previous, 1e-300)
             ):
@@ -262,6 +278,7 @@ class ICP(BaseEstimator):
             if iteration >= self.max_iter:
                 break
             previous = objective
+            last = (transform, moving_t, partner, keep)
             if self.metric == "point_to_plane":
                 rotation, translation = _point_to_plane_step(
                     moving_t[keep], fixed_n[partner[keep]], normals[partner[keep]]

@@ -163,9 +163,11 @@ def nonrigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, ker
     rhs = post.px - p1[:, None] * moving
     system = p1[:, None] * kernel
     system[np.diag_indices_from(system)] += ls2
-    try:
-        w = linalg.solve(system, rhs, overwrite_a=True, check_finite=False)
-    except linalg.LinAlgError:
+    # LAPACK's gesv: the LU solve of scipy.linalg.solve without its condition estimate, whose
+    # "ill-conditioned" warning would fire on most fits (a Gaussian G is ill-conditioned by
+    # nature; lam sigma2 I is what regularises it)
+    _, _, w, info = linalg.lapack.dgesv(system, rhs, overwrite_a=True, overwrite_b=False)
+    if info != 0:
         # singular: lam sigma2 has underflowed beside moving points with no posterior mass
         # (P1 = 0) or repeated moving points (equal rows of G); the least-squares solution
         system = p1[:, None] * kernel

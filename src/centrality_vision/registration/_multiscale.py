@@ -55,8 +55,16 @@ class ComposedTransform:
 
     transforms: tuple
 
+    def __post_init__(self):
+        if isinstance(self.transforms, (str, bytes)) or not hasattr(self.transforms, "__iter__"):
+            raise TypeError(f"`transforms` must be a sequence of transforms; got {self.transforms!r}.")
+        bad = [t for t in self.transforms if not callable(t)]
+        if bad:
+            raise TypeError(f"`transforms` must hold callable transforms; got {bad[0]!r}.")
+        object.__setattr__(self, "transforms", tuple(self.transforms))
+
     def __call__(self, points):
-        out = np.asarray(points, dtype=float)
+        out = as_points(points, name="points", n_dims=ANY_DIMS)
         for transform in self.transforms:
             out = transform(out)
         return out
@@ -80,6 +88,8 @@ def compress_field(transform: NonRigidTransform, *, max_rank=1000, tol=1e-12) ->
     >>> small.control_points.shape[0] < 100, bool(np.abs(small(c) - t(c)).max() < 1e-8)
     (True, True)
     """
+    if not isinstance(transform, NonRigidTransform):
+        raise TypeError(f"`transform` must be a NonRigidTransform; got {type(transform).__name__}.")
     control = np.asarray(transform.control_points)
     pc = PivotedCholesky(control, transform.beta, max_rank=max_rank, tol=tol)
     centres, coefficients = nystrom_field(control, pc.pivots, pc.factor, np.asarray(transform.coefficients))

@@ -18,13 +18,16 @@ from .._parallel import run_chunks
 from .._seeding import as_generator
 from .._validation import as_points, check_float, check_int
 from ..exceptions import InputError
-from ..transforms import RigidTransform, SimilarityTransform
+from ..transforms import RigidTransform, SimilarityTransform, centred, rms_radius
 from . import _kernels as K
 
 __all__ = ["global_pose_search", "rotation_lattice"]
 
 # Defaults, in the frame where each set is centred and has unit RMS radius.
 _N_ROTATIONS = {2: 16, 3: 72}
+#: A lattice of this many rotations already takes seconds (each pose is an EM run on the
+#: subsets); a larger one is refused rather than left to run for minutes or exhaust memory
+_MAX_ROTATIONS = 100_000
 _SEARCH_SIGMA2 = 0.1  # start of each lattice hypothesis' EM: wide enough to pull in a lattice cell
 _SEARCH_ITER = 10  # EM steps per lattice hypothesis
 _REFINE_ITER = 30  # EM steps per refined hypothesis
@@ -59,7 +62,7 @@ def rotation_lattice(n_dims: int, n_rotations: int) -> np.ndarray:
     (True, True)
     """
     n_dims = check_int(n_dims, name="n_dims", low=2, high=3)
-    n_rotations = check_int(n_rotations, name="n_rotations", low=1)
+    n_rotations = check_int(n_rotations, name="n_rotations", low=1, high=_MAX_ROTATIONS)
     if n_dims == 2:
         angles = 2.0 * np.pi * np.arange(n_rotations) / n_rotations
         c, s = np.cos(angles), np.sin(angles)
@@ -87,10 +90,6 @@ def _quaternion_matrices(q: np.ndarray) -> np.ndarray:
         ],
         axis=1,
     )
-
-
-def _rms_radius(points: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(np.sum(points * points, axis=1))))
 
 
 def _subset(points: np.ndarray, size: int, rng: np.random.Generator) -> np.ndarray:
@@ -207,7 +206,7 @@ def global_pose_search(
         Seeds the subsets; the same seed gives the same pose. None draws fresh entropy
         (only sets larger than ``max_points`` are subsampled; smaller ones are deterministic).
     n_rotations : int, optional
-        Size of the rotation lattice (default 16 in 2D, 72 in 3D).
+        Size of the rotation lattice (default 16 in 2D, 72 in 3D; at most 100,000).
     n_hypotheses : int, default=3
         Lattice hypotheses refined on the larger subsets.
     max_points : int, default=150
@@ -234,22 +233,25 @@ def global_pose_search(
         raise TypeError(f"`scale` must be a bool; got {scale!r}.")
     w = check_float(w, name="w", low=0.0, high=1.0, high_open=True)
     n_dims = moving.shape[1]
-    n_rotations = _N_ROTATIONS[n_dims] if n_rotations is None else check_int(n_rotations, name="n_rotations", low=1)
+    n_rotations = (
+        _N_ROTATIONS[n_dims]
+        if n_rotations is None
+        else check_int(n_rotations, name="n_rotations", low=1, high=_MAX_ROTATIONS)
+    )
     n_hypotheses = check_int(n_hypotheses, name="n_hypotheses", low=1)
     max_points = check_int(max_points, name="max_points", low=3)
-    rng = as_generator(random_state)
+    rng = as_generator(random_state, name="random_state")
 
-    centre_m, centre_f = moving.mean(axis=0), fixed.mean(axis=0)
-    radius_m, radius_f = _rms_radius(moving - centre_m), _rms_radius(fixed - centre_f)
+    (centre_m, y), (centre_f, x) = centred(moving), centred(fixed)
+    radius_m, radius_f = rms_radius(y), rms_radius(x)
     if radius_m <= 0 or radius_f <= 0:
         raise InputError(
             "`moving` and `fixed` must each have at least two distinct points; "
             f"got RMS radii {radius_m:.3g} and {radius_f:.3g}."
         )
     if not scale:
-        radius_m = radius_f = math.sqrt(0.5 * (radius_m * radius_m + radius_f * radius_f))
-    y = (moving - centre_m) / radius_m
-    x = (fixed - centre_f) / radius_f
+        radius_m = radius_f = math.hypot(radius_m, radius_f) / math.sqrt(2.0)
+    y, x = y / radius_m, x / radius_f
     w_search = max(w, _MIN_W)
 
     y_small, x_small = _subset(y, max_points, rng), _subset(x, max_points, rng)
@@ -270,5 +272,11 @@ def global_pose_search(
     # back to the caller's units: x = r_f (s R (y - c_m) / r_m + t) + c_f
     rotation = rotation[best]
     factor = float(s[best]) * radius_f / radius_m
-    shift = centre_f + radius_f * translation[best] - factor * rotation @ centre_m
+    with np.errstate(over="ignore", invalid="ignore"):
+        shift = centre_f + radius_f * translation[best] - factor * rotation @ centre_m
+    if not (math.isfinite(factor) and factor > 0 and np.all(np.isfinite(shift))):
+        raise InputError(
+            "The pose between `moving` and `fixed` is beyond float64 (scale "
+            f"{factor:.3g}, translation {shift.tolist()}); rescale or re-centre the sets."
+        )
     return SimilarityTransform(rotation, shift, factor) if scale else RigidTransform(rotation, shift)

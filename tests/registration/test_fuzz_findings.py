@@ -1,0 +1,170 @@
+"""Inputs a fuzz run of the registration layer found mishandled (an IndexError, OverflowError,
+MemoryError or LinAlgError from inside, a numpy message naming no parameter, a NaN or inf
+in a result, or a warning leaking); each now gives a named error or a finite answer."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from centrality_vision.exceptions import ConvergenceWarning, InputError
+from centrality_vision.registration import (
+    GPD,
+    AffineCPD,
+    NonRigidCPD,
+    RigidCPD,
+    alignment_error,
+    centrality_prior,
+    initial_sigma2,
+    normalize_centrality,
+)
+from centrality_vision.registration._multiscale import ComposedTransform, compress_field
+from centrality_vision.registration._pose import global_pose_search
+from centrality_vision.transforms import RigidTransform, SimilarityTransform, rms_radius
+
+
+@pytest.fixture
+def pair():
+    y = np.random.default_rng(0).random((30, 2))
+    return y, y + 0.05
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"bins": 2**63}, InputError, r"`bins` must be an int in \[1, 100000\]"),  # IndexError before
+        ({"bins": 10**9}, InputError, "`bins`"),  # ran for minutes
+        ({"phi": 1e200}, InputError, "`phi`"),  # OverflowError before
+        ({"phi": 1e-160}, InputError, "`phi`"),  # 1 / (2 phi^2) = inf before
+        ({"kappa": 1e-320}, InputError, "`kappa`"),  # a prior weight of inf before
+    ],
+)
+def test_gpd_prior_parameters_out_of_range_are_named(pair, kwargs, error, match):
+    with pytest.raises(error, match=match):
+        GPD(**kwargs).fit(*pair)
+    with pytest.raises(error, match=match):
+        centrality_prior(np.linspace(0, 1, 5), np.linspace(0, 1, 4), **kwargs)
+
+
+@pytest.mark.parametrize(
+    ("values", "error", "match"),
+    [
+        (["a"] * 30, TypeError, "`moving_centrality` must hold real numbers"),
+        (np.random.default_rng(1).random(30) + 1j, TypeError, "complex"),  # truncated with a warning before
+    ],
+)
+def test_given_centralities_are_checked_by_name(pair, values, error, match):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(error, match=match):
+            GPD().fit(*pair, moving_centrality=values)
+
+
+def test_a_centrality_callable_returning_text_is_named(pair):
+    with pytest.raises(TypeError, match=r"`centrality\(graph\)` must hold real numbers"):
+        GPD(centrality=lambda graph: ["x"] * graph.shape[0]).fit(*pair)
+
+
+def test_normalize_centrality_near_the_float64_limit():
+    # the span 2e308 overflowed: [nan, 0] with warnings before
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_array_equal(normalize_centrality([1e308, -1e308, 0.0]), [1.0, 0.0, 0.5])
+    with pytest.raises(TypeError, match="`values` must hold real numbers"):
+        normalize_centrality(["a", "b"])
+
+
+@pytest.mark.parametrize("make", [lambda: 5, lambda: None], ids=["junk", "none"])
+def test_a_prior_callable_must_return_a_prior_or_none(pair, make):
+    prior = (lambda ratio: make()) if make() is not None else (lambda ratio: None)
+    if make() is None:  # None switches the prior off: plain CPD
+        np.testing.assert_array_equal(
+            RigidCPD().fit(*pair, prior=prior).moving_transformed_, RigidCPD().fit(*pair).moving_transformed_
+        )
+        return
+    with pytest.raises(TypeError, match=r"`prior\(sigma2_ratio\)` must be a CentralityPrior"):
+        RigidCPD().fit(*pair, prior=prior)  # AttributeError from the E-step before
+
+
+def test_a_prior_of_the_wrong_size_is_named(pair):
+    prior = centrality_prior(np.linspace(0, 1, 5), np.linspace(0, 1, 4))
+    with pytest.raises(InputError, match=r"`prior`.log_weight must be 30 finite floats"):
+        RigidCPD().fit(*pair, prior=prior)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "match"),
+    [
+        ({"progress": "yes please"}, TypeError, r"`RigidCPD.progress` must be a bool"),
+        ({"random_state": "x"}, TypeError, r"`RigidCPD.random_state` must be None"),
+        ({"random_state": -1.5, "init": "global"}, TypeError, r"`RigidCPD.random_state`"),
+    ],
+)
+def test_progress_and_random_state_are_checked(pair, kwargs, error, match):
+    # both were accepted silently (random_state was checked only with init='global', as `seed`)
+    with pytest.raises(error, match=match):
+        RigidCPD(**kwargs).fit(*pair)
+
+
+@pytest.mark.parametrize("make", [AffineCPD, NonRigidCPD, RigidCPD], ids=["affine", "nonrigid", "rigid"])
+def test_an_init_that_throws_the_set_beyond_float64_is_named(pair, make):
+    # scale 1e300: a LinAlgError with LAPACK's DLASCL message (affine), sigma2_ = inf (non-rigid)
+    init = SimilarityTransform(np.eye(2), np.zeros(2), 1e300)
+    if make is RigidCPD:
+        init = RigidTransform(np.eye(2), np.array([1e300, 0.0]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match=r"\.init` must bring the moving set within"):
+            make(init=init).fit(*pair)
+
+
+def test_nonrigid_m_step_leaks_no_conditioning_warning():
+    # scipy's "ill-conditioned matrix" LinAlgWarning fired on fits of tiny or huge sets
+    y = np.random.default_rng(1).random((30, 2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warnings.simplefilter("ignore", ConvergenceWarning)  # (max_iter=5 is meant to stop early)
+        reg = NonRigidCPD(max_iter=30).fit(y, y * 1e-300)
+        assert np.isfinite(reg.sigma2_) and np.all(np.isfinite(reg.moving_transformed_))
+        assert np.isfinite(NonRigidCPD(sigma2=1e308, max_iter=5).fit(y, y + 0.05).sigma2_)
+
+
+def test_helpers_beyond_float64_are_named_or_exact(pair):
+    y, x = pair
+    with pytest.raises(InputError, match="beyond float64"):
+        initial_sigma2(y * 1e300, x * 1e300)  # nan before
+    assert initial_sigma2(y * 1e150, x * 1e150) == pytest.approx(initial_sigma2(y, x) * 1e300, rel=1e-12)
+    with pytest.raises(InputError, match="beyond float64"):
+        alignment_error(np.full((2, 2), 1.7e308), np.full((2, 2), -1.7e308))  # inf before
+    assert alignment_error(y * 1e300, x * 1e300) == pytest.approx(alignment_error(y, x) * 1e300, rel=1e-12)
+    reg = RigidCPD().fit(y, x)
+    assert reg.score(np.full((3, 2), 1e300), x) == pytest.approx(-np.sqrt(2) * 1e300, rel=1e-12)  # -inf before
+    assert rms_radius(np.array([[1e300, 0.0], [-1e300, 0.0]])) == 1e300
+
+
+def test_global_pose_search_on_coordinates_near_1e300(pair):
+    # overflow warnings, then "`rotation` and `translation` must be finite" before
+    y, _ = pair
+    r = np.array([[0.0, -1.0], [1.0, 0.0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        pose = global_pose_search(y * 1e300, (y @ r.T) * 1e300, scale=False, w=0.0, random_state=0)
+    np.testing.assert_allclose(pose.rotation, r, atol=1e-6)
+
+
+def test_small_helpers_name_bad_arguments():
+    from centrality_vision.registration import Snapshots
+
+    with pytest.raises(TypeError, match="`iterations` must be a sequence"):
+        Snapshots(None)
+    with pytest.raises(TypeError, match="`transforms` must hold callable"):
+        ComposedTransform(("x",))
+    with pytest.raises(TypeError, match="`points` must hold real numbers"):
+        ComposedTransform((RigidTransform(np.eye(2), np.zeros(2)),))("x")
+    with pytest.raises(TypeError, match="`transform` must be a NonRigidTransform"):
+        compress_field(None)
+
+
+def test_shape_errors_list_a_run_of_dimensions_compactly():
+    with pytest.raises(InputError, match=r"must have shape \(n_points, 1 to 64\); got shape \(3,\)"):
+        RigidCPD().fit(np.zeros(3), np.zeros(3))
