@@ -314,7 +314,6 @@ def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
         return None
     if arr.ndim != 2 or arr.shape[1] != 2:
         raise InputError(f"`landmarks` must be {shape}; got shape {arr.shape}.")
-
     entries = arr.ravel().tolist()
     for value in entries:
         if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
