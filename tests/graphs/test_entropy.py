@@ -8,6 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components
+from scipy.spatial.distance import pdist, squareform
 
 from centrality_vision.graphs import _entropy_kernels as kernels
 from centrality_vision.graphs import (
@@ -363,3 +364,14 @@ def test_mwme_degrees_of_sets_of_different_sizes_is_a_named_error():
     rng = np.random.default_rng(0)
     with pytest.raises(ValueError, match="`point_sets` must be one array"):
         mwme_degrees([rng.random((5, 2)), rng.random((4, 2))])
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_entropy_graphs_store_each_edge_its_own_length(seed):
+    """Found by a fuzz run: the edges were sorted but their lengths kept the builder's order,
+    so the lengths sat on the wrong edges (their sum, and so cost and weight, stayed right)."""
+    points = np.random.default_rng(seed).random((12, 2))
+    distances = squareform(pdist(points))
+    for graph in (mwme_graph(points, method="exact").graph, mstme_graph(points, lam=1.0).graph):
+        edges = sparse.coo_array(graph)
+        np.testing.assert_allclose(edges.data, distances[edges.row, edges.col], rtol=1e-14)

@@ -6,7 +6,9 @@ import pytest
 from scipy import sparse
 from scipy.sparse.csgraph import connected_components, minimum_spanning_tree
 from scipy.spatial import ConvexHull
+from scipy.spatial.distance import pdist, squareform
 
+from centrality_vision.centrality import betweenness
 from centrality_vision.graphs import (
     complete_graph,
     delaunay_graph,
@@ -15,6 +17,7 @@ from centrality_vision.graphs import (
     knn_graph,
     to_networkx,
 )
+from centrality_vision.graphs._pointsets import edges_to_graph
 
 BUILDERS = [delaunay_graph, gabriel_graph, emst_graph, complete_graph, lambda p: knn_graph(p, k=3)]
 
@@ -182,3 +185,36 @@ def test_distances_beyond_float64_are_refused(build):
     points = np.array([[1.7e308, 0.0], [-1.7e308, 0.0], [0.0, 1.7e308], [0.0, -1.7e308]])
     with pytest.raises(ValueError, match="`points` must have every distance"):
         build(points)
+
+
+@pytest.mark.parametrize("offset", [1e6, 1e8, 2.0**40 + 0.5])
+@pytest.mark.parametrize("seed", range(6))
+def test_a_set_far_from_the_origin_gives_the_same_graphs(offset, seed):
+    """Found by a fuzz run: the points were divided by their largest coordinate (rounding each)
+    and triangulated uncentred, so at offset 1e6 the EMST was not minimal (Qhull's triangulation
+    was not Delaunay) and equal distances came out 1e-8 apart at 1e8."""
+    rng = np.random.default_rng(seed)
+    # integer points: `points + offset` is then an exact translation
+    points = np.unique(rng.integers(0, 1000, size=(int(rng.integers(4, 30)), 2)), axis=0).astype(float)
+    far = points + offset
+    for build in BUILDERS:
+        near_graph, far_graph = build(points), build(far)
+        assert (near_graph != far_graph).nnz == 0  # the same edges, bit for bit the same lengths
+    complete = sparse.csr_array(squareform(pdist(far)))
+    assert emst_graph(far).sum() / 2 == pytest.approx(minimum_spanning_tree(complete).sum(), rel=1e-12)
+
+
+def test_equal_distances_stay_equal_far_from_the_origin():
+    # the weighted betweenness of this k-NN graph has a tie that rounding broke at offset 3e8
+    points = np.array([[7.0, 6.0], [8.0, 7.0], [9.0, 7.0], [9.0, 8.0], [10.0, 6.0], [11.0, 3.0]])
+    near = betweenness(knn_graph(points, k=3), weights=True)
+    np.testing.assert_array_equal(betweenness(knn_graph(points + 300000670.0, k=3), weights=True), near)
+    np.testing.assert_array_equal(near, [0.0, 1.0, 0.5, 0.0, 2.0, 0.0])
+
+
+def test_edges_to_graph_keeps_each_length_on_its_own_edge():
+    # found by a fuzz run: the edges were sorted but given lengths kept the caller's order
+    rows, cols = [3, 1, 0, 2, 1], [0, 2, 1, 3, 2]  # (0, 3) reversed; (1, 2) twice: the first kept
+    graph = edges_to_graph(4, rows, cols, lengths=[30.0, 12.0, 1.0, 23.0, 99.0])
+    assert graph[0, 3] == graph[3, 0] == 30.0 and graph[1, 2] == 12.0 and graph[0, 1] == 1.0
+    assert graph[2, 3] == 23.0 and graph.nnz == 8
