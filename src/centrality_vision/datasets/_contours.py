@@ -12,7 +12,8 @@ __all__ = ["contour_points"]
 def contour_points(image, n_points: int, /) -> np.ndarray:
     """Points equally spaced by arc length along the outer contour of a binary shape.
 
-    The longest iso-contour at level 0.5 of the (zero-padded) mask is resampled by linear
+    The iso-contour at level 0.5 of the (zero-padded) mask that encloses the largest area
+    (the outer boundary of the largest component, never a hole's) is resampled by linear
     interpolation at ``n_points`` equally spaced arc lengths, starting at the contour's
     first point. Coordinates are (row, col) in pixels.
 
@@ -39,10 +40,18 @@ def contour_points(image, n_points: int, /) -> np.ndarray:
     mask = as_binary_image(image, name="image")
     n_points = check_int(n_points, name="n_points", low=3)
     padded = np.pad(mask, 1).astype(float)
-    contour = max(find_contours(padded, 0.5), key=len) - 1.0
+    # the outer contour is the one enclosing the largest area (a hole's outline can be the
+    # longest: a comb-shaped hole in a square, found by a fuzz run, took all the points)
+    contour = max(find_contours(padded, 0.5), key=_enclosed_area) - 1.0
     if not np.allclose(contour[0], contour[-1]):
         contour = np.vstack([contour, contour[:1]])
     steps = np.linalg.norm(np.diff(contour, axis=0), axis=1)
     arc = np.concatenate([[0.0], np.cumsum(steps)])
     targets = np.linspace(0.0, arc[-1], n_points, endpoint=False)
     return np.stack([np.interp(targets, arc, contour[:, 0]), np.interp(targets, arc, contour[:, 1])], axis=1)
+
+
+def _enclosed_area(contour: np.ndarray) -> float:
+    """Area enclosed by a closed (row, col) polygon, by the shoelace formula."""
+    rows, cols = contour[:, 0], contour[:, 1]
+    return abs(0.5 * float(np.sum(cols * np.roll(rows, -1) - np.roll(cols, -1) * rows)))

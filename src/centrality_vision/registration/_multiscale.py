@@ -33,7 +33,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import ConvergenceWarning, InputError
-from ..transforms import NonRigidTransform
+from ..transforms import NonRigidTransform, RigidTransform
 from ._estep import _nearest
 from ._lowrank import PivotedCholesky, nystrom_field
 
@@ -198,8 +198,12 @@ class MultiscaleCPD(BaseEstimator):
                 sub_moving = ComposedTransform(tuple(fields))(sub_moving)
             if i > 0:
                 est.max_iter = self.refine_iter
-                if not nonrigid:
-                    est.init = transform
+                # a refinement starts where the previous level ended: the last transform, or for
+                # non-rigid the warped subsample as it lies (the identity; without an init a
+                # normalised fit would centre it on the fixed set's mean, a jump wherever
+                # clutter or missing parts move that mean)
+                dim = moving.shape[1]
+                est.init = RigidTransform(np.eye(dim), np.zeros(dim)) if nonrigid else transform
                 moved = sub_moving if nonrigid else transform(sub_moving)
                 est.sigma2 = _start_sigma2(est, moved, sub_moving, sub_fixed, sigma2)
             with warnings.catch_warnings():

@@ -87,6 +87,16 @@ def as_shape_images(
     return masks
 
 
+def _as_mask(mask) -> np.ndarray:
+    """The boolean mask :func:`~centrality_vision.graphs.pixel_graph` reads from ``mask``.
+
+    The cache's key and node indices must be those of the pixels the values are computed
+    from: a grey image's nonzero pixels are not its shape (pixel_graph thresholds it)."""
+    if isinstance(mask, np.ndarray) and mask.dtype == bool:
+        return mask
+    return as_binary_image(mask, name="mask")
+
+
 def _key(mask: np.ndarray, connectivity: int, weights: bool = False) -> tuple:
     digest = hashlib.blake2b(np.packbits(mask).tobytes(), digest_size=16).hexdigest()
     return (mask.shape, connectivity, bool(weights), digest)
@@ -251,6 +261,7 @@ class CentralityCache:
 
     def lookup(self, mask: np.ndarray, name: str, *, connectivity: int = 8, weights: bool = False):
         """The cached values (memory, then disk) or None; never computes."""
+        mask = _as_mask(mask)
         key = _key(mask, connectivity, weights)
         with self._lock:
             entry = self._store.get(key)
@@ -279,6 +290,7 @@ class CentralityCache:
         eigenvector are the same either way. With ``wait=False``, returns None instead
         of waiting when another process holds the lock on this image.
         """
+        mask = _as_mask(mask)
         found = self.lookup(mask, name, connectivity=connectivity, weights=weights)
         if found is not None:
             return found
@@ -303,6 +315,7 @@ class CentralityCache:
 
     def put(self, mask: np.ndarray, name: str, values: np.ndarray, *, connectivity: int = 8, weights: bool = False):
         """Store values computed elsewhere (e.g. by a worker) under ``mask``'s key."""
+        mask = _as_mask(mask)
         key = _key(mask, connectivity, weights)
         values = np.array(values, dtype=np.float64)
         if values.shape != (int(np.count_nonzero(mask)),):
@@ -507,9 +520,13 @@ def shape_centralities(
         )
         for chunk, part in zip(chunks, parts):
             for i, record in zip(chunk, part):
+                stored = {}
                 for name in names:
+                    # (each put's own entry: with max_images=0 the last put's entry holds only
+                    # its own centrality, the earlier ones evicted)
                     entry = cache.put(masks[i], name, record[name], **options)
-                records[i] = {name: entry[name] for name in names} | {"nodes": entry["nodes"]}
+                    stored[name] = entry[name]
+                records[i] = stored | {"nodes": entry["nodes"]}
         missing = []
     bar = None
     if progress and missing:

@@ -376,8 +376,11 @@ def pairwise_shape_distances(
         Masks or grey images (see :func:`as_shape_images`); sizes may differ.
     method : {"profile", "chi2", "emd"}, default="profile"
         ``"profile"``: :func:`outline_profiles` matched in outline order, invariant to
-        translation, scale, rotation (up to pixelisation) and mirroring; the value is the
-        mean squared profile difference along the best alignment. ``"chi2"``: the
+        translation and scale, and to rotation and mirroring up to pixelisation and the
+        sampling of the outline (a rotated or mirrored copy's points start elsewhere on
+        it, so they land elsewhere: Kimia-99 ``dude6`` against its mirror image 3.95 at
+        ``n_points=100``, 0.82 at 200, where ``dude5`` is at 3.10 and 2.40); the value is
+        the mean squared profile difference along the best alignment. ``"chi2"``: the
         chi-square distance ``0.5 * sum (h - g)**2 / (h + g)`` between centrality
         histograms; ``"emd"``: the earth mover's distance between them (for one
         centrality, :func:`scipy.stats.wasserstein_distance` of the bin centres weighted

@@ -168,3 +168,36 @@ def test_small_helpers_name_bad_arguments():
 def test_shape_errors_list_a_run_of_dimensions_compactly():
     with pytest.raises(InputError, match=r"must have shape \(n_points, 1 to 64\); got shape \(3,\)"):
         RigidCPD().fit(np.zeros(3), np.zeros(3))
+
+
+def test_multiscale_nonrigid_levels_start_where_the_last_ended():
+    # found by a correctness fuzz run: a refinement level re-centred the warped subsample on
+    # the fixed set's mean (clutter moves that mean), so it started away from the last result
+    from centrality_vision.registration import MultiscaleCPD
+
+    rng = np.random.default_rng(20)
+    t = rng.random(600) * 2 * np.pi
+    y = np.c_[np.cos(t) * (1 + 0.3 * np.cos(3 * t)), np.sin(t) * (1 + 0.3 * np.cos(3 * t))]
+    x = np.vstack([y + 0.1 * np.sin(1.5 * y[:, ::-1]), rng.normal((1.6, 0.0), 0.1, (120, 2))])
+    starts = []
+    record = lambda info: starts.append(info.moving_transformed) if info.iteration == 0 else None  # noqa: E731
+    reg = MultiscaleCPD(NonRigidCPD(w=0.3, callback=record), sizes=(200, 1000), refine_iter=3).fit(y, x)
+    assert len(starts) == 2
+    np.testing.assert_allclose(starts[1], reg.transform_.transforms[0](y), atol=1e-12)
+
+
+@pytest.mark.parametrize("scale", [True, False])
+def test_auto_w_does_not_depend_on_the_sets_orientation(scale):
+    # found by a correctness fuzz run: the outlier density's box was axis-aligned, so rotating
+    # both sets together changed w_ (0.27 at 0 degrees, 0.0 from 10 to 60, true 0.2)
+    rng = np.random.default_rng(22)
+    y = rng.random((60, 2)) * [3.0, 0.3]
+    x = np.vstack([y + 0.05 * rng.standard_normal(y.shape), rng.random((15, 2)) * [3.0, 0.3]])
+    estimates = []
+    for degrees in (0, 10, 45, 90):
+        a = np.radians(degrees)
+        r = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+        estimates.append(RigidCPD(w="auto", scale=scale).fit(y @ r.T, x @ r.T).w_)
+    np.testing.assert_allclose(estimates, estimates[0], rtol=1e-6)
+    if not scale:
+        assert abs(estimates[0] - 0.2) < 0.08

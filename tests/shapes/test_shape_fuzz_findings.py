@@ -1,0 +1,53 @@
+"""Wrong answers a correctness fuzz run of the shape layer found, each checked against the
+definition it broke."""
+
+import numpy as np
+
+from centrality_vision.datasets import contour_points
+from centrality_vision.shapes import CentralityCache, CentralityHistogram
+
+
+def test_contour_points_follow_the_outer_contour_not_a_longer_hole():
+    # a square with a comb-shaped hole: the hole's outline (743 long) is longer than the
+    # square's (159), and the longest contour was taken: every point lay on the hole
+    mask = np.zeros((44, 44), dtype=bool)
+    mask[2:42, 2:42] = True
+    hole = np.zeros_like(mask)
+    hole[36:39, 5:39] = True
+    for col in range(5, 39, 3):
+        hole[5:37, col] = True
+    points = contour_points(mask & ~hole, 100)
+    np.testing.assert_allclose(points.min(axis=0), [1.5, 1.5])
+    np.testing.assert_allclose(points.max(axis=0), [41.5, 41.5])
+
+
+def test_the_cache_keys_a_grey_image_by_the_shape_it_computes_on():
+    # the key hashed a grey image's nonzero pixels while the values were computed on its
+    # thresholded shape: 12 values came with 52 node indices, and the 52-pixel bool mask
+    # `grey > 0` then got the 12 dark-shape values from the cache
+    grey = np.full((8, 8), 255, dtype=np.uint8)
+    grey[2:6, 2:5] = 0
+    cache = CentralityCache()
+    values, nodes = cache.get(grey, "degree")
+    assert values.shape == nodes.shape == (12,)
+    values, nodes = cache.get(grey > 0, "degree")
+    fresh, fresh_nodes = CentralityCache().get(grey > 0, "degree")
+    assert values.shape == nodes.shape == (52,)
+    np.testing.assert_array_equal(values, fresh)
+    np.testing.assert_array_equal(nodes, fresh_nodes)
+
+
+def test_a_cache_that_keeps_nothing_works_with_parallel_jobs():
+    # max_images=0 with n_jobs=2 and several centralities raised KeyError: each put evicted
+    # the entry holding the previous centrality
+    square = np.zeros((12, 12), dtype=bool)
+    square[2:9, 2:9] = True
+    other = np.zeros((12, 12), dtype=bool)
+    other[3:10, 2:8] = True
+    features = [
+        CentralityHistogram(centrality="all", cache=CentralityCache(max_images=0), n_jobs=jobs).fit_transform(
+            [square, other]
+        )
+        for jobs in (1, 2)
+    ]
+    np.testing.assert_array_equal(features[0], features[1])
