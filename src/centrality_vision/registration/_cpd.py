@@ -949,7 +949,7 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         roughly aligned, not for large rotations. k >= N is the dense model. Measured
         (``benchmarks/registration_suite.py``, Chui-Rangarajan families, 100 pairs per
         level, non-rigid, k=10): fish with as many uniform outliers as points, mean error
-        0.205 dense, 0.0104 with k=10, 0.0045 with k=10 and w='auto'; 30% occluded, 0.124
+        0.205 dense, 0.0104 with k=10, 0.0044 with k=10 and w='auto'; 30% occluded, 0.124
         dense, 0.050 with k=10; clean and noisy levels within a few percent of dense. Where
         the start is far from the answer it is worse: the CPD fish pair 0.051 against 0.0061
         dense (``outlier_weight.py --models``), the fish rotated by 45 degrees with clutter
