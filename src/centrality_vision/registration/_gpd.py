@@ -95,6 +95,20 @@ _MIN_PHI = 1e-100
 _MIN_KAPPA = 1e-12
 
 
+def _check_prior_options(bins, phi, kappa) -> None:
+    """The checks of ``bins``, ``phi`` and ``kappa`` (GPD runs them before building graphs)."""
+    if isinstance(bins, str):
+        check_choice(bins, _BIN_RULES, name="bins")
+    else:
+        check_int(bins, name="bins", low=1, high=_MAX_RULE_BINS)
+    # centralities lie in [0, 1]: beyond these bounds the Gaussian term is 0 or a hard cut,
+    # and 1 / (2 phi^2) would overflow
+    if phi is not None:
+        check_float(phi, name="phi", low=_MIN_PHI, high=1.0 / _MIN_PHI)
+    if kappa is not None:
+        check_float(kappa, name="kappa", low=_MIN_KAPPA, high=1.0)
+
+
 def _rule_width(values, rule):
     """The bin width of numpy's spread-based rules (0 where the rule does not follow the spread
     or the spread is 0, which numpy turns into one bin)."""
@@ -138,8 +152,8 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> Cen
             raise InputError(f"`{name}` must be a non-empty 1D finite array; got shape {v.shape}.")
         if v.min() < -1e-12 or v.max() > 1 + 1e-12:
             raise InputError(f"`{name}` must be normalised to [0, 1]; got range [{v.min():.6g}, {v.max():.6g}].")
+    _check_prior_options(bins, phi, kappa)
     if isinstance(bins, str):
-        check_choice(bins, _BIN_RULES, name="bins")
         width = _rule_width(vy, bins)
         if 0.0 < width < 1.0 / _MAX_RULE_BINS:
             # (a spread of centralities near zero: numpy would allocate 1 / width bins)
@@ -149,19 +163,17 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> Cen
             )
         edges = np.histogram_bin_edges(vy, bins=bins, range=(0.0, 1.0))
     else:
-        edges = np.linspace(0.0, 1.0, check_int(bins, name="bins", low=1, high=_MAX_RULE_BINS) + 1)
+        edges = np.linspace(0.0, 1.0, int(bins) + 1)
     counts, _ = np.histogram(vy, bins=edges)
     which = np.clip(np.searchsorted(edges, vy, side="right") - 1, 0, counts.size - 1)
     log_weight = np.log(counts[which] / vy.size)
     if phi is None:
         phi2 = float(np.var(vx))
     else:
-        # centralities lie in [0, 1]: beyond these bounds the term is 0 or a hard cut, and
-        # 1 / (2 phi^2) would overflow
-        phi2 = check_float(phi, name="phi", low=_MIN_PHI, high=1.0 / _MIN_PHI) ** 2
+        phi2 = float(phi) ** 2
     inv2phi2 = 0.0 if phi2 <= 0 else 1.0 / (2.0 * phi2)
     # (1 - kappa) / kappa: the prior's weight over the spatial term's, at most 1 / _MIN_KAPPA
-    kappa = 0.5 if kappa is None else check_float(kappa, name="kappa", low=_MIN_KAPPA, high=1.0)
+    kappa = 0.5 if kappa is None else float(kappa)
     return CentralityPrior(log_weight, vy.copy(), vx.copy(), inv2phi2, (1.0 - kappa) / kappa)
 
 
@@ -304,14 +316,7 @@ class GPD(BaseEstimator):
         if not isinstance(self.weights, (bool, np.bool_)):
             raise TypeError(f"`weights` must be a bool; got {self.weights!r}.")
         check_int(self.k, name="k", low=1)
-        if isinstance(self.bins, str):
-            check_choice(self.bins, _BIN_RULES, name="bins")
-        else:
-            check_int(self.bins, name="bins", low=1, high=_MAX_RULE_BINS)
-        if self.phi is not None:
-            check_float(self.phi, name="phi", low=_MIN_PHI, high=1.0 / _MIN_PHI)
-        if self.kappa is not None:
-            check_float(self.kappa, name="kappa", low=_MIN_KAPPA, high=1.0)
+        _check_prior_options(self.bins, self.phi, self.kappa)
         schedule = self.prior_schedule
         if isinstance(schedule, str):
             check_choice(schedule, _SCHEDULES, name="prior_schedule")
