@@ -332,3 +332,11 @@ def test_write_points_refuses_an_empty_set_it_could_not_read_back(tmp_path, suff
     with pytest.raises(ValueError, match="`points` must hold at least one point"):
         write_points(tmp_path / f"e{suffix}", np.zeros((0, 3)))
     assert not list(tmp_path.iterdir())
+
+
+def test_a_binary_pcd_without_points_holds_width_times_height(tmp_path):
+    # found by a fuzz run: the count fell back to WIDTH alone, so 12 points were cut to 4
+    header = b"VERSION .7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 4\nHEIGHT 3\nDATA binary\n"
+    path = tmp_path / "organised.pcd"
+    path.write_bytes(header + np.arange(36, dtype="<f4").tobytes())
+    np.testing.assert_array_equal(read_points(path), np.arange(36.0).reshape(12, 3))

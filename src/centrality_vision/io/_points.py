@@ -569,7 +569,10 @@ def _read_pcd(path: Path) -> _Table:
     counts = header.get("COUNT", ["1"] * n)
     try:
         sizes, counts = [int(s) for s in sizes], [int(c) for c in counts]
-        n_points = int(header.get("POINTS", [header.get("WIDTH", ["0"])[0]])[0])
+        if "POINTS" in header:
+            n_points = int(header["POINTS"][0])
+        else:  # (older headers: an organised cloud holds WIDTH x HEIGHT points)
+            n_points = int(header.get("WIDTH", ["0"])[0]) * int(header.get("HEIGHT", ["1"])[0])
     except ValueError:
         raise InputError(f"{path}: the PCD header has a SIZE, COUNT or POINTS that is not an integer.") from None
     if not (len(sizes) == len(types) == len(counts) == n) or min(counts) < 1:
