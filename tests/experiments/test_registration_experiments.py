@@ -142,3 +142,15 @@ def test_table_2_1_explanation_follows_the_numbers():
     result["claims"]["closeness equals Table 2.1 to two decimals"] = False
     text = table_2_1.explain(result)
     assert text.startswith("3 of 4") and "closeness differ" in text and "0.05" in text
+
+
+def test_fig_7_1_table_gives_the_msts_cost_under_the_figures_lambda():
+    # found by a fuzz run: the table printed the MST's cost at lambda 0 (4.00) under the
+    # heading lambda = 1, where the text said 3.28
+    from centrality_vision.experiments import fig_7_1
+
+    result = fig_7_1.run()
+    mst = result["ours"]["mst"]
+    expected = f"{mst['weight'] - result['lam'] * mst['entropy']:.2f}"
+    row = next(line for line in fig_7_1.format_table(result).splitlines() if line.strip().startswith("MST "))
+    assert expected in row.split() and expected in fig_7_1.explain(result)
