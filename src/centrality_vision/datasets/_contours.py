@@ -42,7 +42,7 @@ def contour_points(image, n_points: int, /) -> np.ndarray:
     padded = np.pad(mask, 1).astype(float)
     # the outer contour is the one enclosing the largest area (a hole's outline can be the
     # longest: a comb-shaped hole in a square, found by a fuzz run, took all the points)
-    contour = max(find_contours(padded, 0.5), key=_enclosed_area) - 1.0
+    contour = max(find_contours(padded, 0.5), key=lambda c: abs(signed_area(c))) - 1.0
     if not np.allclose(contour[0], contour[-1]):
         contour = np.vstack([contour, contour[:1]])
     steps = np.linalg.norm(np.diff(contour, axis=0), axis=1)
@@ -51,7 +51,8 @@ def contour_points(image, n_points: int, /) -> np.ndarray:
     return np.stack([np.interp(targets, arc, contour[:, 0]), np.interp(targets, arc, contour[:, 1])], axis=1)
 
 
-def _enclosed_area(contour: np.ndarray) -> float:
-    """Area enclosed by a closed (row, col) polygon, by the shoelace formula."""
+def signed_area(contour: np.ndarray) -> float:
+    """Signed area of a closed (row, col) polygon by the shoelace formula (positive
+    counter-clockwise in (col, row) axes)."""
     rows, cols = contour[:, 0], contour[:, 1]
-    return abs(0.5 * float(np.sum(cols * np.roll(rows, -1) - np.roll(cols, -1) * rows)))
+    return 0.5 * float(np.sum(cols * np.roll(rows, -1) - np.roll(cols, -1) * rows))

@@ -123,11 +123,10 @@ def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
 def _outline(mask: np.ndarray, n_points: int) -> np.ndarray:
     """``n_points`` points equally spaced along the outer contour, counter-clockwise."""
     from ..datasets import contour_points
+    from ..datasets._contours import signed_area
 
     points = contour_points(mask, n_points)
-    rows, cols = points[:, 0], points[:, 1]
-    signed_area = 0.5 * np.sum(cols * np.roll(rows, -1) - np.roll(cols, -1) * rows)
-    return points[::-1].copy() if signed_area < 0 else points
+    return points[::-1].copy() if signed_area(points) < 0 else points
 
 
 def _raw_profile(mask: np.ndarray, n_points: int, resolution: int) -> np.ndarray:
