@@ -281,8 +281,8 @@ def as_binary_image(
         shapes on black (MPEG-7) both come out as the shape.
 
     With ``check_inverted=True`` (for inputs meant to be silhouettes), a shape that
-    touches more than half of the border pixels while the background touches some
-    looks inverted, and a :class:`UserWarning` says so (images smaller than 8 x 8 are
+    touches more than half of the border pixels (the whole border included) while
+    some background is left looks inverted, and a :class:`UserWarning` says so (images smaller than 8 x 8 are
     not judged; with ``"auto"`` on a grey image this cannot happen).
 
     Raises :class:`TypeError` for non-numeric input and
@@ -346,7 +346,7 @@ def as_binary_image(
         raise InputError(f"`{name}` must have at least one foreground pixel; got none (shape {arr.shape}).")
     if check_inverted and (is_mask or foreground != "auto") and min(mask.shape) >= 8:
         border = _border(mask)
-        if 2 * int(border.sum()) > border.size and not border.all():
+        if 2 * int(border.sum()) > border.size and not mask.all():
             import warnings
 
             warnings.warn(

@@ -94,3 +94,18 @@ def test_an_inverted_looking_shape_warns(tmp_path):
 def test_a_0_1_image_is_a_mask(tmp_path):
     iio.imwrite(tmp_path / "m.png", SHAPE.astype(np.uint8))
     assert np.array_equal(read_shape(tmp_path / "m.png"), SHAPE)
+
+
+@pytest.mark.parametrize("suffix", [".png", ".bmp", ".tif"])
+def test_a_1_bit_black_on_white_file_is_the_black_shape(tmp_path, suffix):
+    # PIL writes a bool array as a 1-bit image and imageio decodes it as 0/1 again; white
+    # (1) is the background here, so reading it as a mask (1 = shape) inverted the shape
+    from PIL import Image
+
+    Image.fromarray(~SHAPE).save(tmp_path / f"bw{suffix}")
+    with Image.open(tmp_path / f"bw{suffix}") as written:
+        assert written.mode == "1"
+    assert np.array_equal(read_shape(tmp_path / f"bw{suffix}"), SHAPE)
+    assert np.array_equal(read_shape(tmp_path / f"bw{suffix}", foreground="dark"), SHAPE)
+    with pytest.warns(UserWarning, match="looks inverted"):
+        assert np.array_equal(read_shape(tmp_path / f"bw{suffix}", foreground="light"), ~SHAPE)

@@ -30,6 +30,53 @@ def test_ply_written_by_plyfile_ascii_and_binary_with_an_intensity(tmp_path):
         assert np.allclose(picked, np.column_stack([CLOUD[:, 2], np.arange(7)]))
 
 
+@pytest.mark.parametrize("text", [True, False])
+def test_ply_properties_in_any_order_and_columns_by_file_position(tmp_path, text):
+    # meshio's ASCII reader took the first three properties as x, y, z: a file storing
+    # y before x came back with its axes mixed, silently
+    plyfile = pytest.importorskip("plyfile")
+    vertex = np.zeros(7, dtype=[("y", "f8"), ("red", "u1"), ("x", "f8"), ("z", "f8")])
+    vertex["x"], vertex["y"], vertex["z"] = CLOUD.T
+    vertex["red"] = np.arange(7)
+    faces = np.array([([0, 1, 2],), ([2, 3, 4],)], dtype=[("vertex_indices", "i4", (3,))])
+    elements = [plyfile.PlyElement.describe(vertex, "vertex"), plyfile.PlyElement.describe(faces, "face")]
+    path = tmp_path / "mixed.ply"
+    plyfile.PlyData(elements, text=text).write(str(path))
+    written = plyfile.PlyData.read(str(path))["vertex"]
+    assert np.allclose(read_points(path), np.column_stack([written["x"], written["y"], written["z"]]), atol=1e-12)
+    # indices count the file's properties in its order, as for text and PCD files
+    assert np.allclose(read_points(path, columns=[2, 0, 3]), CLOUD, atol=1e-12)
+    assert np.allclose(read_points(path, columns=[1, 3]), np.column_stack([np.arange(7), CLOUD[:, 2]]))
+
+
+def test_ascii_ply_with_another_element_before_the_vertices(tmp_path):
+    path = tmp_path / "cam.ply"
+    path.write_bytes(
+        b"ply\nformat ascii 1.0\nelement camera 1\nproperty float view_x\nproperty list uchar int ids\n"
+        b"element vertex 2\nproperty float z\nproperty float x\nproperty float y\nend_header\n"
+        b"9 2 7 7\n3 1 2\n6 4 5\n"
+    )
+    assert np.array_equal(read_points(path), [[1, 2, 3], [4, 5, 6]])
+
+
+@pytest.mark.parametrize(
+    ("body", "match"),
+    [
+        (b"1 2\n4 5 6\n", r"vertex 0 is not a row of the header's 3 vertex properties: '1 2'"),
+        (b"1 2 3 4\n4 5 6\n", "vertex 0 is not a row"),
+        (b"1 2 3\n", "declares 2 vertices but the file holds 1"),
+        (b"1 2 x\n4 5 6\n", "vertex 0 is not a row"),
+    ],
+)
+def test_ascii_ply_rows_that_do_not_match_the_header(tmp_path, body, match):
+    path = tmp_path / "rows.ply"
+    head = b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+    head += b"end_header\n"
+    path.write_bytes(head + body)
+    with pytest.raises(InputError, match=match):
+        read_points(path)
+
+
 @pytest.mark.slow  # importing Open3D takes seconds
 def test_pcd_written_by_open3d_ascii_and_binary(tmp_path):
     o3d = pytest.importorskip("open3d")

@@ -91,3 +91,14 @@ def test_input_not_modified_and_not_returned():
 def test_bad_inputs_name_the_parameter(image, kwargs, error, match):
     with pytest.raises(error, match=match):
         as_binary_image(image, **kwargs)
+
+
+def test_a_background_taken_as_the_shape_warns_even_when_it_covers_the_whole_border():
+    # the usual inverted mask: a centred shape's background touches every border pixel
+    inside = np.zeros((20, 20), bool)
+    inside[5:15, 6:12] = True
+    with pytest.warns(UserWarning, match="looks inverted: its shape .* touches 76 of the 76"):
+        as_binary_image(~inside, check_inverted=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        as_binary_image(np.ones((20, 20), bool), check_inverted=True)  # no background: nothing to judge

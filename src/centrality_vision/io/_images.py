@@ -94,9 +94,11 @@ def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = N
     ``foreground`` says which side is the shape: ``"dark"`` (below the threshold, e.g.
     black silhouettes on white as in Kimia-99), ``"light"`` (above it), or ``"auto"``:
     the side that touches less of the image border, so both dark-on-white and
-    white-on-black files work. An image holding only 0 and 1 is a mask (1 = shape). A
-    shape that covers most of the border with an explicit ``foreground`` gives a
-    :class:`UserWarning` (it looks inverted).
+    white-on-black files work. A file is always read as grey levels: a 1-bit image
+    (black and white, decoded as 0 and 1) is split the same way, so black on white is
+    a black shape, not a mask whose white pixels are the shape. A shape that covers
+    most of the border with an explicit ``foreground`` gives a :class:`UserWarning`
+    (it looks inverted).
 
     Parameters
     ----------
@@ -136,6 +138,10 @@ def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = N
            [0, 0, 0, 0, 0]])
     """
     pixels = read_image(path)
+    if threshold is None and np.all((pixels == 0) | (pixels == 1)):
+        # 0/1 pixels from a file are black and white, not a mask: split them at half their
+        # range like any grey image, so ``foreground="auto"`` still finds the shape
+        threshold = 0.5
     try:
         return as_binary_image(pixels, name="image", foreground=foreground, threshold=threshold, check_inverted=True)
     except InputError as exc:

@@ -83,8 +83,9 @@ def read_points(
         :func:`scipy.io.loadmat`; ``variable`` names the array, needed only when the file
         holds more than one 2D numeric array.
     ``.ply``
-        The vertex element of an ASCII or binary PLY file (read by ``meshio``); its
-        properties (``x``, ``y``, ``z``, ``intensity``, ...) are the columns.
+        The vertex element of an ASCII PLY file (parsed here) or a binary one (decoded
+        by ``meshio``); its scalar properties (``x``, ``y``, ``z``, ``intensity``, ...)
+        are the columns, in the file's order.
     ``.pcd``
         A Point Cloud Library file, ``DATA ascii`` or ``binary`` (``binary_compressed``
         is refused); its ``FIELDS`` are the columns.
@@ -461,39 +462,65 @@ _PLY_SIZES = {
 }
 
 
-def _ply_vertex_count(path: Path, data: bytes) -> int:
-    """The vertex count a PLY header declares, checked against the bytes that follow it."""
+def _ply_header(path: Path, data: bytes):
+    """The format, the elements ``[name, count, [(property, is_list), ...]]`` and the body offset.
+
+    The vertex count is checked against the bytes that follow the header (a binary
+    element takes at least its scalar sizes, a list at least its count's bytes).
+    """
     end = data.find(b"end_header")
     if not data.startswith(b"ply") or end < 0:
         raise InputError(f"{path}: not a PLY file (no 'ply' ... 'end_header' header).")
     header = data[:end].decode("ascii", errors="replace").splitlines()
-    body = len(data) - (data.find(b"\n", end) + 1)
-    fmt, elements = "", []
+    if header[0].strip() != "ply":
+        raise InputError(f"{path}: not a readable PLY file (its first line is not 'ply').")
+    body_offset = data.find(b"\n", end) + 1 if data.find(b"\n", end) >= 0 else len(data)
+    body = len(data) - body_offset
+    fmt, elements, sizes = "", [], []
     for line in header:
         words = line.split()
         if words[:1] == ["format"] and len(words) > 1:
             fmt = words[1]
         elif words[:1] == ["element"] and len(words) == 3 and words[2].isdigit():
-            elements.append([words[1], int(words[2]), 0])
+            elements.append([words[1], int(words[2]), []])
+            sizes.append(0)
         elif words[:1] == ["property"] and elements:
-            # a list property takes at least its count's bytes; a scalar its size (a damaged
-            # line without its type counts one byte: the reader refuses it later)
-            kind = words[2:3] if words[1:2] == ["list"] else words[1:2]
-            elements[-1][2] += _PLY_SIZES.get(kind[0] if kind else "", 1)
+            # a list property takes at least its count's bytes, a scalar its size
+            is_list = words[1:2] == ["list"]
+            types = words[2:4] if is_list else words[1:2]
+            if len(words) != (5 if is_list else 3) or not all(kind in _PLY_SIZES for kind in types):
+                raise InputError(f"{path}: not a readable PLY file (a damaged property line: {_clip(line)!r}).")
+            sizes[-1] += _PLY_SIZES[types[0]]
+            elements[-1][2].append((words[-1], is_list))
+    if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
+        raise InputError(f"{path}: not a readable PLY file (unknown format {fmt!r}).")
     vertex = [element for element in elements if element[0] == "vertex"]
     if not vertex:
         raise InputError(f"{path}: the PLY file has no vertex element.")
-    at_least = sum(count * size for _, count, size in elements) if fmt.startswith("binary") else vertex[0][1]
+    at_least = (
+        sum(element[1] * size for element, size in zip(elements, sizes)) if fmt.startswith("binary") else vertex[0][1]
+    )
     if at_least > body:
         raise InputError(
             f"{path}: the header declares {vertex[0][1]} vertices but the file holds only {body} bytes after it."
         )
-    return vertex[0][1]
+    return fmt, elements, body_offset
 
 
 def _read_ply(path: Path) -> _Table:
+    """The vertex element, one column per scalar property in the file's order.
+
+    ASCII files are parsed here (meshio's ASCII reader assumes the properties start
+    with x, y, z and reads other orders wrongly); binary ones are decoded by meshio.
+    """
+    data = path.read_bytes()
+    fmt, elements, body_offset = _ply_header(path, data)
+    vertex = next(element for element in elements if element[0] == "vertex")
+    count, properties = vertex[1], vertex[2]
+    names = [name for name, is_list in properties if not is_list]
+    if fmt == "ascii":
+        return _read_ply_ascii(path, data[body_offset:], elements, names)
     meshio = _meshio()
-    count = _ply_vertex_count(path, path.read_bytes())
     try:
         # meshio's PLY reader itself: meshio.read prints and calls sys.exit(1) on a ReadError
         mesh = meshio.ply.read(str(path))
@@ -502,14 +529,51 @@ def _read_ply(path: Path) -> _Table:
     points = np.asarray(mesh.points, dtype=np.float64)
     if points.shape[0] != count:
         raise InputError(f"{path}: the header declares {count} vertices but the file holds {points.shape[0]}.")
-    names = ["x", "y", "z"][: points.shape[1]]
-    extra = [
-        (key, np.asarray(value))
-        for key, value in mesh.point_data.items()
-        if np.asarray(value).ndim == 1 and np.issubdtype(np.asarray(value).dtype, np.number)
+    columns = {axis: points[:, k] for k, axis in enumerate(("x", "y", "z")[: points.shape[1]])}
+    columns.update((key, np.asarray(value)) for key, value in mesh.point_data.items())
+    kept = [
+        name
+        for name in names
+        if name in columns and columns[name].ndim == 1 and np.issubdtype(columns[name].dtype, np.number)
     ]
-    values = np.column_stack([points] + [value.astype(np.float64) for _, value in extra])
-    return _Table(values, names + [key for key, _ in extra])
+    values = np.column_stack([columns[name].astype(np.float64) for name in kept]) if kept else np.empty((count, 0))
+    return _Table(values.reshape(count, len(kept)), kept)
+
+
+def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Table:
+    """An ASCII PLY body: one line per element instance, elements in header order."""
+    lines = [line for line in body.decode("ascii", errors="replace").splitlines() if line.strip()]
+    first = 0
+    for name, count, properties in elements:
+        if name != "vertex":
+            first += count
+            continue
+        rows = lines[first : first + count]
+        if len(rows) != count:
+            raise InputError(f"{path}: the header declares {count} vertices but the file holds {len(rows)}.")
+        values = np.empty((count, len(names)))
+        for row, line in enumerate(rows):
+            words, at, out = line.split(), 0, []
+            try:
+                for _, is_list in properties:
+                    if is_list:
+                        length = int(words[at])
+                        if length < 0:
+                            raise ValueError(length)
+                        at += length + 1
+                    else:
+                        out.append(float(words[at]))
+                        at += 1
+            except (IndexError, ValueError):
+                at = -1
+            if at != len(words):
+                raise InputError(
+                    f"{path}: vertex {row} is not a row of the header's {len(properties)} vertex properties: "
+                    f"{_clip(line.strip())!r}."
+                )
+            values[row] = out
+        return _Table(values, names)
+    raise AssertionError("unreachable: _ply_header checked the vertex element")  # pragma: no cover
 
 
 def _meshio():
