@@ -109,3 +109,22 @@ def test_report_says_why_an_experiment_did_not_run(tmp_path, monkeypatch):
     monkeypatch.setattr(fig_5_5, "face_points", missing)
     text = run_all(tmp_path, quick=True, only=["fig-5.5"]).read_text()
     assert "**Not run here.** fig-5.5 needs the CPD face (test)" in text
+
+
+def test_report_takes_the_files_of_its_own_run_when_quick_and_full_share_a_folder(tmp_path):
+    # table-5.1 writes table-5.1-quick.* in quick runs beside a full run's table-5.1.*; the
+    # report took the first name in sorted order, the quick one, for a full report
+    from centrality_vision.experiments.report import run_all, write_report
+
+    run_all(tmp_path, quick=True, only=["table-2.1"])
+    folder = tmp_path / "table-2.1"
+    record = json.loads((folder / "table-2.1.json").read_text())
+    (folder / "table-2.1-quick.json").write_text(json.dumps(record))
+    (folder / "table-2.1-quick.txt").write_text("QUICK TABLE\n")
+    record["claims"]["degree equals Table 2.1 to two decimals"] = False
+    (folder / "table-2.1.json").write_text(json.dumps(record))
+    full = write_report(tmp_path, ["table-2.1"], quick=False, seed=0).read_text()
+    assert "3 of 4 centralities equal" in full and "QUICK TABLE" not in full
+    quick = write_report(tmp_path, ["table-2.1"], quick=True, seed=0).read_text()
+    assert "4 of 4 centralities equal" in quick and "QUICK TABLE" in quick
+    assert quick.count("```text") == 1  # the full run's table-2.1.txt has a quick twin: not shown

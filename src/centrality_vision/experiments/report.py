@@ -168,15 +168,25 @@ def run_all(
     return write_report(out, names, quick=quick, seed=seed, seeds=seeds, timings=timings, skipped=skipped)
 
 
-def _result(folder: Path, name: str):
-    files = sorted(folder.glob(f"{name}*.json"))
+def _of_this_run(files, quick: bool) -> list[Path]:
+    """The files of a quick or a full run: a ``-quick`` stem is a quick run's, and its
+    twin without ``-quick`` is the full run's (both may share one ``--out`` folder)."""
+    files = sorted(files)
+    stems = {path.stem for path in files}
+    if quick:
+        return [path for path in files if path.stem.endswith("-quick") or f"{path.stem}-quick" not in stems]
+    return [path for path in files if not path.stem.endswith("-quick")]
+
+
+def _result(folder: Path, name: str, quick: bool):
+    files = _of_this_run([path for path in folder.glob("*.json") if path.stem in (name, f"{name}-quick")], quick)
     return json.loads(files[0].read_text()) if files else None
 
 
-def _explanation(name: str, folder: Path) -> str | None:
+def _explanation(name: str, folder: Path, quick: bool) -> str | None:
     module = import_module(f"{__package__}.{REGISTRY[name].module}")
     explain = getattr(module, "explain", None)
-    result = _result(folder, name)
+    result = _result(folder, name, quick)
     if explain is None or result is None:
         return None
     return explain(result)
@@ -200,7 +210,7 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
         )
     checked = []
     for name in names:
-        result = _result(out / name, name)
+        result = _result(out / name, name, quick)
         if isinstance(result, dict) and result.get("seeds"):
             checked.append(f"{name} {len(result['seeds'])}")
     lines = [
@@ -233,7 +243,7 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
         if name in skipped:
             lines += [f"**Not run here.** {skipped[name]}", ""]
             continue
-        text = _explanation(name, folder)
+        text = _explanation(name, folder, quick)
         if text:
             lines += [f"**What the numbers show.** {text}", ""]
         if name == "table-4.1":
@@ -245,9 +255,9 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
                     + ".",
                     "",
                 ]
-        for table in sorted(folder.glob("*.txt")):
+        for table in _of_this_run(folder.glob("*.txt"), quick):
             lines += ["```text", table.read_text().rstrip(), "```", ""]
-        for figure in sorted(folder.glob("*.png")):
+        for figure in _of_this_run(folder.glob("*.png"), quick):
             lines.append(f"![{figure.stem}]({figure.relative_to(out).as_posix()})")
             lines.append("")
     path = out / "report.md"
