@@ -128,3 +128,12 @@ def test_report_takes_the_files_of_its_own_run_when_quick_and_full_share_a_folde
     quick = write_report(tmp_path, ["table-2.1"], quick=True, seed=0).read_text()
     assert "4 of 4 centralities equal" in quick and "QUICK TABLE" in quick
     assert quick.count("```text") == 1  # the full run's table-2.1.txt has a quick twin: not shown
+
+
+def test_fig_4_2_closeness_tied_with_another_centrality_does_not_change_least():
+    from centrality_vision.experiments import fig_4_2
+
+    d = {"betweenness": 0.3, "closeness": 0.1, "degree": 0.5, "eigenvector": 0.2}
+    assert fig_4_2._claims(d)[fig_4_2.CLOSENESS_MOST]
+    assert not fig_4_2._claims(d | {"eigenvector": 0.1})[fig_4_2.CLOSENESS_MOST]
+    assert not fig_4_2._claims(d | {"betweenness": 0.05})[fig_4_2.CLOSENESS_MOST]

@@ -28,6 +28,40 @@ def test_fig_5_3_quick_checks_its_claims_over_seeds(tmp_path, capsys):
     assert "Claims over 3 seeds" in out and "holds in" in out and 'thesis: "' in out
 
 
+def _methods(reach: dict) -> dict:
+    return {m: {"below": {"0.01": k}} for m, k in reach.items()}
+
+
+def test_fig_5_3_a_tie_with_betweenness_or_degree_is_not_the_quickest_decay():
+    reach = {"betweenness": 7, "closeness": 5, "degree": 9, "eigenvector": 5, "CPD": 12}
+    assert fig_5_3._claims(_methods(reach))[fig_5_3.FASTEST]  # tied only with each other: both quickest
+    assert not fig_5_3._claims(_methods(reach | {"degree": 5}))[fig_5_3.FASTEST]
+    assert not fig_5_3._claims(_methods(reach | {"betweenness": 4}))[fig_5_3.FASTEST]
+    assert not fig_5_3._claims(_methods(dict.fromkeys(reach)))[fig_5_3.FASTEST]  # nobody reached 1%
+
+
+def test_median_iterations_count_a_seed_that_never_reached_1_percent_as_beyond_the_cap():
+    from centrality_vision.experiments import fig_5_5
+
+    # closeness reaches 1% in 3 iterations on one seed and never on two: its median is beyond
+    # the cap, not 3 (the median over the one seed that got there)
+    per_seed = [
+        {
+            "below": {m: {"0.01": k} for m, k in zip(fig_5_3.METHODS, row)},
+            "error_at_10": dict.fromkeys(fig_5_3.METHODS, 0.1),
+        }
+        for row in ([4, 3, 6, 5, 10], [4, None, 6, 5, None], [5, None, 7, 5, 12])
+    ]
+    result = {"per_seed": per_seed, "max_iter": 40}
+    text = fig_5_3.explain(result)
+    assert "betweenness 4, closeness more than 40, degree 6, eigenvector 5, CPD 12" in text
+    assert "CPD needs 3.00x, 2.00x, 2.40x the iterations of GPD with betweenness, degree, eigenvector" in text
+    per_seed[0]["below"]["CPD"]["0.01"] = None
+    text = fig_5_3.explain(result)
+    assert "CPD more than 40 (not reached" in text and "CPD needs more than 10.00x, more than 6.67x" in text
+    assert "closeness more than 40" in fig_5_5.explain(result) and "nan" not in fig_5_5.explain(result)
+
+
 def test_fig_5_3_transform_is_a_seeded_similarity():
     moving, fixed, t = fig_5_3.problem(4)
     a = np.radians(t["rotation_deg"])

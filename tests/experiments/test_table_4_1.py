@@ -65,6 +65,25 @@ def test_claims_are_checked_where_they_belong():
     assert table_4_1.FOREST_HELD_OUT not in claims
 
 
+def test_a_tie_is_not_the_most_or_the_least_accurate():
+    nb = {
+        "NB all": [0.9, 0.5, 0.4, 0.3],
+        "NB betweenness": [0.9, 0.9, 0.4, 0.1],
+        "NB closeness": [0.8, 0.9, 0.9, 0.9],
+        "NB eigenvector": [0.7, 0.1, 0.1, 0.9],
+        "NB degree": [0.8, 0.2, 0.1, 0.1],
+    }
+    claims = table_4_1.check_claims(_table(nb, nb))
+    # NB all ties betweenness at 0%, closeness ties betweenness at 1% and eigenvector on
+    # held-out images at 10%, degree ties betweenness for the worst at 10%
+    assert not claims[table_4_1.ALL_TRAIN] and not claims[table_4_1.CLOSENESS_NOISY]
+    assert not claims[table_4_1.CLOSENESS_HELD_OUT] and not claims[table_4_1.DEGREE_WORST]
+    nb["NB all"][0], nb["NB betweenness"][1], nb["NB eigenvector"][3], nb["NB betweenness"][3] = 0.95, 0.8, 0.8, 0.2
+    claims = table_4_1.check_claims(_table(nb, nb))
+    assert claims[table_4_1.ALL_TRAIN] and claims[table_4_1.CLOSENESS_NOISY]
+    assert claims[table_4_1.CLOSENESS_HELD_OUT] and claims[table_4_1.DEGREE_WORST]
+
+
 def test_noise_is_seeded_and_exact():
     images = [np.ones((10, 10), bool), np.ones((8, 12), bool)]
     a = table_4_1.noisy_copies(images, (0.0, 0.1), seed=3)

@@ -274,7 +274,7 @@ def _run(*, quick, seed, n_folds, progress, forest, scaling, cache=None, schedul
             "criterion": "entropy",
             "max_features": "sqrt",
         },
-        "noise_seed": f"numpy default_rng([seed, level_index, image_index]) with seed={seed}",
+        "noise_seed": f"numpy default_rng([seed, level_index, position in the image list]) with seed={seed}",
         "folds": f"StratifiedKFold(n_splits={n_folds}, shuffle=True, random_state={seed})",
         "quick": quick,
     }
@@ -302,9 +302,11 @@ CLAIMS = {
 
 
 def _best(table: dict, rows, j: int, name: str, *, lowest=False) -> bool:
+    """Whether row ``name`` alone is the best (or with ``lowest``, the worst) in column ``j``:
+    a tie with another row is not "the most accurate"."""
     values = [table[r][j] for r in rows]
     target = min(values) if lowest else max(values)
-    return table[name][j] == target
+    return table[name][j] == target and values.count(target) == 1
 
 
 def check_claims(result: Table41) -> dict:
