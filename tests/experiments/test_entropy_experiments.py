@@ -49,6 +49,30 @@ def test_fig_6_4_claims_follow_the_numbers():
     assert "30.0%" in text and "95.0%" in text  # the noisy means, computed
     bad = _fig_6_4_result([[0.5, 0.4], [1.0, 0.2]], [[1.0, 0.1], [0.9, 0.1]])
     assert not any(fig_6_4.claims(bad).values())
+    # one name per claim, whatever the numbers: the odds over seeds tally the same claims
+    assert set(fig_6_4.claims(good)) == set(fig_6_4.claims(bad)) == set(fig_6_4.CLAIMS)
+
+
+def test_fig_6_4_checks_its_claims_over_every_seed(tmp_path, monkeypatch):
+    # --seeds was accepted and ignored: the claims came from the one drawn seed
+    calls = []
+
+    def fake(index, seed, method, noise):
+        calls.append((seed, index))
+        good = seed % 2 == 0  # odd seeds: the robust matching loses at the noisy level
+        return {"mwme": [1.0, 0.5, 0.4], "robust": [1.0, 0.9 if good else 0.3, 0.8]}
+
+    monkeypatch.setattr(fig_6_4, "match_image", fake)
+    assert (
+        fig_6_4.main(["--quick", "--out", str(tmp_path), "--seed", "4", "--seeds", "3", "--scheduler", "serial"]) == 0
+    )
+    record = json.loads((tmp_path / "fig-6.4.json").read_text())
+    assert sorted({s for s, _ in calls}) == [4, 5, 6] and len(calls) == 3 * len(record["names"])
+    assert record["seeds"] == [4, 5, 6] and [r["seed"] for r in record["per_seed"]] == [4, 5, 6]
+    assert record["odds"][fig_6_4.ROBUST_BEATS]["k"] == 2 and record["odds"][fig_6_4.ROBUST_BEATS]["n"] == 3
+    assert record["odds"][fig_6_4.EXACT_GLOBAL]["k"] == 3
+    text = (tmp_path / "fig-6.4.txt").read_text()
+    assert "Claims over 3 seeds (4-6)" in text and "holds in 2 of 3 seeds" in text
 
 
 def test_fig_7_4_perturbation_and_share():
@@ -95,10 +119,33 @@ def test_fig_7_4_claims_and_explanation_are_computed():
     assert "keeps more edges than delaunay at 3 of 3" in fig_7_4.explain(above)
     assert "keeps more edges than delaunay at 0 of 3" in fig_7_4.explain(below)
     above["mst_share"]["fish"] = 0.1
-    assert not fig_7_4.claims(above)[
-        "the MSTME differs from the MST on at least a quarter of the fish's edges (here 10%)"
-    ]
+    assert not fig_7_4.claims(above)[fig_7_4.NOT_THE_MST]
+    assert set(fig_7_4.claims(above)) == set(fig_7_4.claims(below)) == set(fig_7_4.CLAIMS)
     assert "MSTME" in fig_7_4.format_table(above)
+    # no level where any edge survives: 'at every level' cannot hold on nothing
+    dead = _fig_7_4_result(True)
+    dead["shares"]["fish"] = {g: [[0.0] * 2] * 3 for g in fig_7_4.GRAPHS}
+    assert not fig_7_4.claims(dead)[fig_7_4.FISH_ALWAYS]
+
+
+def test_fig_7_4_checks_its_claims_over_every_seed(tmp_path, monkeypatch):
+    # --seeds was accepted and ignored: the claims came from the one drawn seed
+    calls = []
+
+    def fake(name, d, level, batch, seed, n_copies):
+        calls.append(seed)
+        mstme = 0.9 if seed != 2 else 0.1  # seed 2: the MSTME loses to Delaunay everywhere
+        return {g: (mstme if g == "mstme" else 0.5) for g in fig_7_4.GRAPHS}
+
+    monkeypatch.setattr(fig_7_4, "stability_batch", fake)
+    monkeypatch.setattr(fig_7_4, "lambda_sweep", lambda seed, n_copies: {})
+    result = fig_7_4.run(quick=True, seed=1, seeds=[1, 2, 3], scheduler="serial", progress=False)
+    assert sorted(set(calls)) == [1, 2, 3] and len(calls) == 3 * 3 * 3 * 3  # seeds x sets x levels x batches
+    assert result["seeds"] == [1, 2, 3] and [r["seed"] for r in result["per_seed"]] == [1, 2, 3]
+    assert result["odds"][fig_7_4.FISH_ALWAYS]["k"] == 2 and result["odds"][fig_7_4.FISH_ALWAYS]["n"] == 3
+    assert result["claims"][fig_7_4.FISH_ALWAYS]  # seed 1, the one drawn
+    assert "Claims over 3 seeds (1-3)" in fig_7_4.format_table(result)
+    assert "holds in 2 of 3 seeds" in fig_7_4.explain(result)
 
 
 def test_fig_7_4_figures(tmp_path):
@@ -118,4 +165,9 @@ def test_fig_7_4_lambda_sweep_sentences():
     }
     text = fig_7_4.explain(result)
     assert "grows from 0% to 33% and the stable share at 1 eps falls from 0.90 to 0.20" in text
+    result["lambda_sweep"]["fish"]["1"]["stable_1"] = 0.9  # level from lambda 0 to 1: not "falls"
+    assert (
+        "fish: from lambda 0 to 2 the share of edges not in the MST grows from 0% to 33% and the stable share at "
+        "1 eps does not rise (level at some steps) from 0.90 to 0.20" in fig_7_4.explain(result)
+    )
     assert "lam 1: 25% | 0.50, 0.25" in fig_7_4.format_table(result)

@@ -188,3 +188,19 @@ def test_fig_7_1_table_gives_the_msts_cost_under_the_figures_lambda():
     expected = f"{mst['weight'] - result['lam'] * mst['entropy']:.2f}"
     row = next(line for line in fig_7_1.format_table(result).splitlines() if line.strip().startswith("MST "))
     assert expected in row.split() and expected in fig_7_1.explain(result)
+
+
+def test_odds_never_print_an_interval_that_rounds_to_nothing():
+    # 1000 of 1000 has a 95% interval of 99.6-100%: whole percents printed '100-100%'
+    from centrality_vision.experiments._common import percents, share
+    from centrality_vision.experiments._compare import odds_sentences
+
+    always = tally([{"c": True}] * 1000)
+    assert "(95% interval 99.6-100.0%)" in share(always["c"])
+    once = tally([{"c": True}] + [{"c": False}] * 999)
+    assert '"c" holds in 1 of 1000 seeds (0.10%, 95% interval 0.02-0.56%)' in odds_sentences(once)[0]
+    assert share(tally([{"c": True}] * 17 + [{"c": False}] * 3)["c"]) == "holds in 17 of 20 (95% interval 64-95%)"
+    for k, n in [(0, 1), (1, 3), (499, 1000), (999, 1000), (99_999, 100_000)]:
+        cell = tally([{"c": True}] * k + [{"c": False}] * (n - k))["c"]
+        low, high = (float(t) for t in percents(cell["low"], cell["high"]))
+        assert low < high and (0 < low or cell["low"] == 0) and (high < 100 or cell["high"] == 1)

@@ -204,6 +204,25 @@ def verdict(cell: dict) -> str:
     return "undecided"
 
 
+def percents(*shares: float) -> list[str]:
+    """Shares (0..1) as percent strings with the fewest decimals that neither
+    round a share strictly between 0 and 1 to "0" or "100" nor make two different shares equal
+    (six at most).
+
+    Examples
+    --------
+    >>> percents(0.64, 0.948), percents(0.9962, 1.0), percents(0.0, 0.0012)
+    (['64', '95'], ['99.6', '100.0'], ['0.0', '0.1'])
+    """
+    for digits in range(7):
+        text = [f"{100 * v:.{digits}f}" for v in shares]
+        inside = all(v in (0, 1) or float(t) not in (0.0, 100.0) for v, t in zip(shares, text))
+        distinct = len(set(text)) == len(set(shares))
+        if inside and distinct:
+            break
+    return text
+
+
 def share(cell: dict) -> str:
     """``"k of n (95% interval lo-hi%)"``.
 
@@ -212,7 +231,8 @@ def share(cell: dict) -> str:
     >>> share({"k": 17, "n": 20, "low": 0.64, "high": 0.948})
     'holds in 17 of 20 (95% interval 64-95%)'
     """
-    return f"holds in {cell['k']} of {cell['n']} (95% interval {100 * cell['low']:.0f}-{100 * cell['high']:.0f}%)"
+    low, high = percents(cell["low"], cell["high"])
+    return f"holds in {cell['k']} of {cell['n']} (95% interval {low}-{high}%)"
 
 
 def odds_lines(odds: dict, thesis: dict | None = None, *, unit: str = "seeds") -> list[str]:

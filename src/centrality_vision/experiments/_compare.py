@@ -136,14 +136,14 @@ def iterations_text(value: float, cap: int) -> str:
 def odds_sentences(odds: dict, n_label: str = "seeds") -> list[str]:
     """One sentence per tallied claim, from its numbers: 'It holds in 7 of 20 seeds (35%, 95%
     interval 18-57%): undecided.'"""
-    from ._common import verdict
+    from ._common import percents, verdict
 
     out = []
     for claim, cell in odds.items():
+        rate, low, high = percents(cell["k"] / cell["n"], cell["low"], cell["high"])
         out.append(
-            f'"{claim}" holds in {cell["k"]} of {cell["n"]} {n_label} ({100 * cell["k"] / cell["n"]:.0f}%, 95% '
-            "interval "
-            f"{100 * cell['low']:.0f}-{100 * cell['high']:.0f}%): {verdict(cell)}."
+            f'"{claim}" holds in {cell["k"]} of {cell["n"]} {n_label} ({rate}%, 95% interval {low}-{high}%): '
+            f"{verdict(cell)}."
         )
     return out
 
