@@ -137,3 +137,14 @@ def test_fig_4_2_closeness_tied_with_another_centrality_does_not_change_least():
     assert fig_4_2._claims(d)[fig_4_2.CLOSENESS_MOST]
     assert not fig_4_2._claims(d | {"eigenvector": 0.1})[fig_4_2.CLOSENESS_MOST]
     assert not fig_4_2._claims(d | {"betweenness": 0.05})[fig_4_2.CLOSENESS_MOST]
+
+
+def test_fig_5_1_a_partner_tied_with_others_is_ranked_after_them():
+    from centrality_vision.experiments.fig_5_1 import partner_ranks
+
+    prior = np.full((12, 2), 0.05)
+    prior[:, 1] = np.linspace(0.2, 0.01, 12)
+    # fixed point 0: all twelve moving points tie, so the partner is not "among the ten"
+    assert partner_ranks(prior) == [12, 2]
+    prior[0, 0] = 0.06
+    assert partner_ranks(prior)[0] == 1

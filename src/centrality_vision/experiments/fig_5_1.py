@@ -26,7 +26,7 @@ import numpy as np
 
 from ..exceptions import InputError
 
-__all__ = ["CLAIMS", "prior_and_posterior", "run", "format_table", "explain", "plot", "main"]
+__all__ = ["CLAIMS", "prior_and_posterior", "partner_ranks", "run", "format_table", "explain", "plot", "main"]
 
 TOP = 10
 RANK = f"the true partner is among the {TOP} most likely moving points under GPD's prior alone"
@@ -74,6 +74,21 @@ def prior_and_posterior(moving, fixed, *, centrality: str = "closeness", graph: 
     }
 
 
+def partner_ranks(prior) -> list[int]:
+    """Rank of moving point ``i`` among all moving points under column ``i`` of ``prior`` (the
+    prior of each moving point for fixed point ``i``, whose true partner is moving point ``i``).
+
+    1 is the most likely. Ties count against the partner: its rank is the number of moving
+    points at least as likely, so a partner tied with others is not called "among the ten"
+    when only some of the tied points fit.
+
+    >>> partner_ranks(np.array([[0.5, 0.2], [0.5, 0.8]]))
+    [2, 1]
+    """
+    prior = np.asarray(prior)
+    return [int(np.sum(prior[:, i] >= prior[i, i])) for i in range(prior.shape[1])]
+
+
 def run(*, quick: bool = False, seed: int = 0) -> dict:
     """The problem of fig-5.3's seed ``seed``; priors, posteriors and the per-point claims."""
     from ._common import tally
@@ -82,7 +97,7 @@ def run(*, quick: bool = False, seed: int = 0) -> dict:
     moving, fixed, transform = problem(seed)
     pp = prior_and_posterior(moving, fixed)
     n = fixed.shape[0]  # fixed[i] is the image of moving[i]
-    ranks = [int(np.sum(pp["prior_gpd"][:, i] > pp["prior_gpd"][i, i])) + 1 for i in range(n)]
+    ranks = partner_ranks(pp["prior_gpd"])
     per_point = [
         {RANK: r <= TOP, MASS: bool(pp["posterior_gpd"][i, i] > pp["posterior_cpd"][i, i])} for i, r in enumerate(ranks)
     ]
