@@ -523,10 +523,10 @@ def test_reproduce_runs_an_experiment_and_resumes_with_a_scheduler(tmp_path, cap
     assert main(["reproduce", "table-2.1", "--out", str(tmp_path)]) == 0
     assert "0.83 | 0.83" in capsys.readouterr().out
     assert (tmp_path / "table-2.1" / "table-2.1.json").is_file()
-    args = ["reproduce", "fig-6.4", "--quick", "--out", str(tmp_path), "--scheduler", "serial"]
+    args = ["reproduce", "fig-6.4", "--quick", "--seeds", "2", "--out", str(tmp_path), "--scheduler", "serial"]
     assert main(args) == 0
     lines = (tmp_path / "fig-6.4" / "fig-6.4-quick.jsonl").read_text().splitlines()
-    assert len(lines) == 9  # one unit per image, every 11th of the 99
+    assert len(lines) == 2 * 9  # one unit per seed and image, every 11th of the 99
     assert main(args) == 0  # a re-run finds every unit done and recomputes nothing
     assert (tmp_path / "fig-6.4" / "fig-6.4-quick.jsonl").read_text().splitlines() == lines
 

@@ -77,6 +77,22 @@ def test_ascii_ply_rows_that_do_not_match_the_header(tmp_path, body, match):
         read_points(path)
 
 
+@pytest.mark.parametrize(
+    ("row", "expected"),
+    [(b"2 7 7 1 2 3\n", [[1, 2, 3]]), (b"0 1 2 3\n", [[1, 2, 3]]), (b"-1 1 2 3\n", None), (b"3 7 7 1 2 3\n", None)],
+)
+def test_ascii_ply_vertex_with_a_list_property(tmp_path, row, expected):
+    path = tmp_path / "list.ply"
+    head = b"ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar int ids\n"
+    head += b"property float x\nproperty float y\nproperty float z\nend_header\n"
+    path.write_bytes(head + row)
+    if expected is None:
+        with pytest.raises(InputError, match="vertex 0 is not a row of the header's 4 vertex properties"):
+            read_points(path)
+    else:
+        assert np.array_equal(read_points(path), expected)
+
+
 @pytest.mark.slow  # importing Open3D takes seconds
 def test_pcd_written_by_open3d_ascii_and_binary(tmp_path):
     o3d = pytest.importorskip("open3d")

@@ -556,11 +556,9 @@ def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Tab
             words, at, out = line.split(), 0, []
             try:
                 for _, is_list in properties:
-                    if is_list:
+                    if is_list:  # a count, then that many items; a negative count: the row cannot match
                         length = int(words[at])
-                        if length < 0:
-                            raise ValueError(length)
-                        at += length + 1
+                        at = at + length + 1 if length >= 0 else len(words) + 1
                     else:
                         out.append(float(words[at]))
                         at += 1
