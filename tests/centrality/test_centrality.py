@@ -373,3 +373,26 @@ def test_set_num_threads_validates():
 def test_compute_names_the_unknown_option():
     with pytest.raises(TypeError, match=r"unknown option `bogus`; it accepts: .*normalized"):
         cen.compute(np.eye(3), "degree", bogus=1)
+
+
+def test_eigenvector_runs_lapack_on_one_blas_thread(monkeypatch):
+    # LAPACK's eigh in a 1-thread worker and in a many-thread parent differed in the last bits,
+    # so features depended on n_jobs; every BLAS call of the eigenvector runs on one thread
+    from threadpoolctl import threadpool_info
+
+    from centrality_vision.centrality import _spectral
+
+    seen = []
+    eigh = np.linalg.eigh
+
+    def spy(a):
+        seen.append(max(info["num_threads"] for info in threadpool_info()))
+        return eigh(a)
+
+    monkeypatch.setattr(_spectral.np.linalg, "eigh", spy)
+    graph = sparse.csr_array(np.ones((5, 5)) - np.eye(5))
+    blocks = sparse.block_diag([graph, graph[:3, :3]], format="csr")
+    values = cen.eigenvector(blocks)
+    assert seen == [1, 1]  # one call per component, each on one thread
+    np.testing.assert_allclose(values[:5], values[0])
+    np.testing.assert_allclose(values[5:], values[5])

@@ -64,17 +64,12 @@ def _perron(adjacency: sparse.csr_array) -> tuple[float, np.ndarray]:
         lam, vec = vals[-1], vecs[:, -1]
     else:
         from scipy.sparse.linalg import ArpackNoConvergence, eigsh
-        from threadpoolctl import threadpool_limits
 
-        # One BLAS thread: ARPACK's small dense steps gain nothing from more, and with
-        # OpenBLAS threads on a loaded machine they spin (measured 25x slower), and the
-        # result then would not depend on the core count either.
-        with threadpool_limits(limits=1):
-            try:
-                vals, vecs = eigsh(adjacency, k=1, which="LA", v0=np.ones(n), tol=0, ncv=min(n, 32), maxiter=40)
-                lam, vec = vals[0], vecs[:, 0]
-            except ArpackNoConvergence:
-                lam, vec = _collatz_wielandt(adjacency, np.full(n, 1.0 / np.sqrt(n)))
+        try:
+            vals, vecs = eigsh(adjacency, k=1, which="LA", v0=np.ones(n), tol=0, ncv=min(n, 32), maxiter=40)
+            lam, vec = vals[0], vecs[:, 0]
+        except ArpackNoConvergence:
+            lam, vec = _collatz_wielandt(adjacency, np.full(n, 1.0 / np.sqrt(n)))
     vec = np.abs(vec)  # the Perron vector of a connected graph is positive
     return float(lam), vec / np.linalg.norm(vec)
 
@@ -132,13 +127,20 @@ def eigenvector(graph, /, *, strengths: bool = False, normalized: bool = True, a
         adjacency.eliminate_zeros()
     n = adjacency.shape[0]
     n_comp, labels = connected_components(adjacency, directed=False)
-    if n_comp == 1:
-        members = [np.arange(n)]
-        results = [_perron(adjacency)]
-    else:
-        order = np.argsort(labels, kind="stable")
-        members = np.split(order, np.cumsum(np.bincount(labels, minlength=n_comp))[:-1])
-        results = [_perron(adjacency[idx][:, idx]) for idx in members]
+    from threadpoolctl import threadpool_limits
+
+    # One BLAS thread: the result then does not depend on the core count (LAPACK's eigh in
+    # a 1-thread worker and in a many-thread parent differed in the last bits), and ARPACK's
+    # small dense steps gain nothing from more (with OpenBLAS threads on a loaded machine
+    # they spin: measured 25x slower).
+    with threadpool_limits(limits=1):
+        if n_comp == 1:
+            members = [np.arange(n)]
+            results = [_perron(adjacency)]
+        else:
+            order = np.argsort(labels, kind="stable")
+            members = np.split(order, np.cumsum(np.bincount(labels, minlength=n_comp))[:-1])
+            results = [_perron(adjacency[idx][:, idx]) for idx in members]
     lam_max = max(lam for lam, _ in results)
     values = np.zeros(n)
     for idx, (lam, vec) in zip(members, results):
@@ -154,7 +156,7 @@ def _spectral_radius(adjacency: sparse.csr_array) -> float:
     from threadpoolctl import threadpool_limits
 
     n = adjacency.shape[0]
-    with threadpool_limits(limits=1):  # as in _perron
+    with threadpool_limits(limits=1):  # as in eigenvector
         if n <= 512:
             return float(np.abs(np.linalg.eigvals(adjacency.toarray())).max())
         return float(np.abs(eigs(adjacency, k=1, which="LM", return_eigenvectors=False, maxiter=100 * n)).max())

@@ -62,7 +62,13 @@ def _histogram(values: np.ndarray, bins: int, scaling: str) -> np.ndarray:
     else:  # "max"
         lo, hi = 0.0, values.max()
     scaled = (values - lo) / (hi - lo) if hi > lo else np.zeros_like(values)
-    counts = np.bincount(np.minimum((scaled * bins).astype(np.int64), bins - 1), minlength=bins)
+    position = scaled * bins
+    # a value on a bin edge (0.5 of the largest, say: common in symmetric shapes) computed a
+    # few ulp below it on one graph and above it on its transpose or mirror image would fall
+    # in different bins; snap positions within 1e-9 of an edge onto it
+    edge = np.rint(position)
+    position = np.where(np.abs(position - edge) <= 1e-9, edge, position)
+    counts = np.bincount(np.minimum(position.astype(np.int64), bins - 1), minlength=bins)
     return counts / values.size
 
 
