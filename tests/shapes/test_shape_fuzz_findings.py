@@ -72,3 +72,35 @@ def test_a_shape_and_its_transpose_or_mirror_image_get_the_same_histogram():
     bar[1:6, 1] = True
     rows = CentralityHistogram(centrality="harmonic", bins=36, weights=True).fit_transform([bar, bar.T])
     np.testing.assert_array_equal(rows[0], rows[1])
+
+
+def test_a_stored_file_of_another_length_or_with_nan_is_recomputed_not_used(tmp_path):
+    square = np.zeros((6, 6), dtype=bool)
+    square[1:5, 1:5] = True
+    expected, _ = CentralityCache(directory=tmp_path).get(square, "closeness")
+    (path,) = tmp_path.glob("*closeness.npy")
+    for foreign in (np.ones(5), np.full(16, np.nan), np.arange(16), np.ones((4, 4))):
+        np.save(path, foreign)
+        cache = CentralityCache(directory=tmp_path)
+        values, nodes = cache.get(square, "closeness")
+        np.testing.assert_array_equal(values, expected)
+        assert values.shape == nodes.shape == (16,) and cache.misses == 1
+        features = CentralityHistogram(cache=CentralityCache(directory=tmp_path), bins=5).fit_transform([square])
+        assert features[0, -1] < 1  # the ones were binned as one full last bin
+
+
+def test_parameters_changed_after_fit_are_checked_not_mixed_with_the_fitted_ones():
+    import pytest
+
+    from centrality_vision.exceptions import InputError
+
+    disk = np.add.outer((np.arange(15) - 7) ** 2, (np.arange(15) - 7) ** 2) < 30
+    model = CentralityHistogram(bins=10).fit([disk])
+    with pytest.raises(InputError, match=r"changed since fit \(closeness in 10 bins, now closeness in 20\)"):
+        model.set_params(bins=20).transform([disk])  # was a numpy broadcast error
+    with pytest.raises(InputError, match=r"now degree in 10\); call fit again"):
+        model.set_params(bins=10, centrality="degree").transform([disk])  # silently stayed closeness
+    with pytest.raises(InputError, match="`scaling` must be one of"):
+        model.set_params(centrality="closeness", scaling="bogus").transform([disk])  # silently 'max'
+    refit = model.set_params(scaling="minmax", bins=20).fit([disk]).transform([disk])
+    assert refit.shape == (1, 20) and np.isclose(refit.sum(), 1)

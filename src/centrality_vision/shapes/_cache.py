@@ -184,14 +184,20 @@ class CentralityCache:
         suffix = "-w" if weights else ""  # unweighted files keep the names of earlier versions
         return self.directory / f"{digest}-{rows}x{cols}-c{connectivity}{suffix}-{name}.npy"
 
-    def _load(self, key: tuple, name: str):
+    def _load(self, key: tuple, name: str, n_nodes: int):
+        """The stored values, or None when absent or not this image's: a file of another
+        length, type or with NaN values (a foreign or stale file under the same name) is
+        recomputed, never used."""
         if self.directory is None:
             return None
         path = self._path(key, name)
         try:
-            return np.load(path)
-        except (FileNotFoundError, EOFError, ValueError):  # absent, or a foreign partial file
+            values = np.load(path)
+        except (FileNotFoundError, EOFError, ValueError, OSError):  # absent, or a foreign partial file
             return None
+        if values.shape != (n_nodes,) or values.dtype.kind != "f" or np.isnan(values).any():
+            return None
+        return values
 
     def _save(self, key: tuple, name: str, values: np.ndarray) -> None:
         if self.directory is None:
@@ -272,7 +278,7 @@ class CentralityCache:
                     if self.directory is not None and not self._path(key, name).exists():
                         self._save(key, name, entry[name])  # computed before a directory was set
                     return entry[name], entry["nodes"]
-        values = self._load(key, name)
+        values = self._load(key, name, int(np.count_nonzero(mask)))
         if values is None:
             return None
         with self._lock:
@@ -298,7 +304,7 @@ class CentralityCache:
         while True:
             with self._claim(key, name) as mine:
                 if mine:
-                    values = self._load(key, name)  # written while we were looking
+                    values = self._load(key, name, int(np.count_nonzero(mask)))  # written while we were looking
                     if values is None:
                         with self._lock:
                             self.misses += 1

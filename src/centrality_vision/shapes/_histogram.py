@@ -215,6 +215,13 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "centralities_")
+        names = self._validate_params()
+        if names != self.centralities_ or len(names) * self.bins != self.n_features_out_:
+            raise InputError(
+                f"`centrality` or `bins` changed since fit ({', '.join(self.centralities_)} in "
+                f"{self.n_features_out_ // len(self.centralities_)} bins, now {', '.join(names)} in {self.bins}); "
+                "call fit again."
+            )
         records = self._centralities(self._masks(X), self.centralities_)
         out = np.empty((len(records), self.n_features_out_))
         for i, record in enumerate(records):
