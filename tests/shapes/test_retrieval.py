@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from scipy import ndimage
+from scipy import ndimage, sparse
 from scipy.stats import wasserstein_distance
 
 from centrality_vision.shapes import (
@@ -173,6 +173,24 @@ def test_rerank_of_huge_finite_distances_stays_finite():
     assert retrieval_counts(r, np.repeat([0, 1], 4), k=3).sum() == 24
 
 
+_D4 = np.abs(np.subtract.outer([0.0, 1, 10, 11], [0.0, 1, 10, 11]))
+
+
+def test_rerank_of_shapes_with_exact_copies_keeps_the_classes_apart():
+    # a shape with `bandwidth` exact copies had scale 0: every other affinity was 0 and the
+    # ranking past the copies went by index (bullseye 1.0 before re-ranking, 0.58 after)
+    rng = np.random.default_rng(0)
+    x = np.repeat(np.concatenate([10 * c + 3 * rng.random(6) for c in range(4)]), 3)
+    d = np.abs(np.subtract.outer(x, x))
+    labels = np.repeat(np.arange(4), 18)
+    assert bullseye_score(d, labels, top=36) == 1.0
+    r = diffusion_rerank(d, n_neighbors=5, bandwidth=2)
+    assert np.all(np.isfinite(r))
+    assert bullseye_score(r, labels, top=36) > 0.85
+    # the labels' own types are kept: ints and strings still score alike
+    assert bullseye_score(d, labels.astype(str), top=36) == bullseye_score(d, list(labels), top=36) == 1.0
+
+
 @pytest.mark.parametrize(
     ("call", "error", "match"),
     [
@@ -185,6 +203,18 @@ def test_rerank_of_huge_finite_distances_stays_finite():
         (lambda: retrieval_counts(np.zeros((3, 3)), [0, 1]), ValueError, "one label per shape"),
         (lambda: nearest_neighbour_accuracy(np.zeros((4, 4)), [0, 0, 1, 1], n_train=2), ValueError, "`n_train`"),
         (lambda: diffusion_rerank(np.zeros((3, 3)), n_neighbors=5), ValueError, "`n_neighbors`"),
+        # found by a fuzz run: labels numpy merged or NaN that matched no class
+        (lambda: retrieval_counts(_D4, [1, "1", 2, "2"], k=1), TypeError, "all strings or all numbers; got a mix"),
+        (lambda: bullseye_score(_D4, [np.nan, np.nan, 1.0, 1.0], top=2), ValueError, "must not hold NaN or None"),
+        (lambda: bullseye_score(_D4, [None, None, "b", "b"], top=2), TypeError, "got NoneType, str"),
+        (lambda: nearest_neighbour_accuracy(_D4, [np.nan] * 2 + [1.0] * 2, n_train=1), ValueError, "NaN or None"),
+        (lambda: bullseye_score(sparse.csr_array(_D4), [0, 0, 1, 1]), TypeError, "`distances` must be a dense"),
+        (lambda: diffusion_rerank(np.array([[0, [1]], [1, 0]], dtype=object)), TypeError, "`distances` must be"),
+        (
+            lambda: diffusion_rerank(_D4 - 1, n_neighbors=2, bandwidth=2),
+            ValueError,
+            "`distances` must not be negative; got a smallest value of -1",
+        ),
     ],
 )
 def test_bad_inputs(call, error, match):
