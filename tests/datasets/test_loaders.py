@@ -218,6 +218,8 @@ def test_load_mpeg7_reads_gifs_by_class(tmp_path, monkeypatch):
     assert len(load_mpeg7()) == 3  # $CENTRALITY_VISION_DATA itself holds the GIFs
     with pytest.raises(InputError, match="unknown"):
         load_mpeg7(tmp_path, classes=["pear"])
+    with pytest.raises(InputError, match="`classes` must name at least one class"):
+        load_mpeg7(tmp_path, classes=[])  # was an empty data set
     _write_gif(tmp_path / "noclass.gif", bar)
     with pytest.raises(InputError, match="<class>-<number>"):
         load_mpeg7(tmp_path)

@@ -104,3 +104,29 @@ def test_parameters_changed_after_fit_are_checked_not_mixed_with_the_fitted_ones
         model.set_params(centrality="closeness", scaling="bogus").transform([disk])  # silently 'max'
     refit = model.set_params(scaling="minmax", bins=20).fit([disk]).transform([disk])
     assert refit.shape == (1, 20) and np.isclose(refit.sum(), 1)
+
+
+def test_bad_options_of_the_shape_layer_name_the_parameter():
+    import pytest
+
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.shapes import CentralityComparisons, outline_profiles, shape_centralities
+
+    square = np.zeros((8, 8), dtype=bool)
+    square[2:6, 2:6] = True
+    # one name is a name, not its letters ("got 'd'")
+    np.testing.assert_array_equal(
+        shape_centralities([square], "degree")[0]["degree"], shape_centralities([square], ["degree"])[0]["degree"]
+    )
+    cases = [
+        (lambda: shape_centralities([square], None), TypeError, "`names` must be a centrality name or a sequence"),
+        (lambda: shape_centralities([square], ["degree"], connectivity=8.0), InputError, "`connectivity` must be 4"),
+        (lambda: shape_centralities([square], ["degree"], progress="x"), TypeError, "`progress` must be True"),
+        (lambda: CentralityHistogram(connectivity=8.0).fit([square]), InputError, "connectivity"),
+        (lambda: CentralityHistogram(fill_holes="x").fit([square]), TypeError, "`fill_holes` must be True"),
+        (lambda: CentralityComparisons(random_state=-1).fit([square, square], [0, 1]), TypeError, "`random_state`"),
+        (lambda: outline_profiles(np.zeros((20, 20))), InputError, r"^`image` must have at least one foreground"),
+    ]
+    for call, error, match in cases:
+        with pytest.raises(error, match=match):
+            call()

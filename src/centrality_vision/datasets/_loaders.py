@@ -396,6 +396,9 @@ def load_mpeg7(path=None, *, classes=None) -> MPEG7:
             classes = [classes]
         if not hasattr(classes, "__iter__") or not all(isinstance(c, str) for c in classes):
             raise TypeError(f"`classes` must be a class name or a sequence of them; got {classes!r}.")
+        classes = list(classes)
+        if not classes:
+            raise InputError("`classes` must name at least one class (None loads them all); got an empty list.")
         unknown = sorted(set(classes) - set(labels))
         if unknown:
             raise InputError(f"`classes` must be MPEG-7 classes found in {folder}; got unknown {unknown}.")

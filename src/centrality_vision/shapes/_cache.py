@@ -11,6 +11,7 @@ read when it is ready, so parallel cross-validation folds never compute the same
 from __future__ import annotations
 
 import hashlib
+import numbers
 import os
 import threading
 import time
@@ -445,7 +446,7 @@ def shape_centralities(
     images : sequence of 2D arrays
         Shapes; sizes may differ. Masks (True/1 = shape) or grey images (see
         :func:`as_shape_images` for ``foreground`` and ``threshold``).
-    names : sequence of str
+    names : str or sequence of str
         Centralities to compute (see :data:`centrality_vision.centrality.CENTRALITIES`).
     connectivity : {8, 4}
     weights : bool, default=False
@@ -486,9 +487,18 @@ def shape_centralities(
     from ..centrality import CENTRALITIES
 
     masks = as_shape_images(images, foreground=foreground, threshold=threshold)
+    if isinstance(names, str):  # one name, not its letters
+        names = [names]
+    try:
+        names = list(names)
+    except TypeError:
+        raise TypeError(f"`names` must be a centrality name or a sequence of names; got {names!r}.") from None
     names = [check_choice(n, CENTRALITIES, name="centrality") for n in names]
-    if connectivity not in (4, 8) or isinstance(connectivity, bool):
+    if isinstance(connectivity, bool) or not isinstance(connectivity, numbers.Integral) or connectivity not in (4, 8):
         raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
+    connectivity = int(connectivity)
+    if not isinstance(progress, (bool, np.bool_)):
+        raise TypeError(f"`progress` must be True or False; got {progress!r}.")
     if not isinstance(weights, (bool, np.bool_)):
         raise TypeError(f"`weights` must be True or False; got {weights!r}.")
     weights = bool(weights)

@@ -133,10 +133,11 @@ def _nearest_pixels(mask: np.ndarray, pixels: np.ndarray) -> tuple[np.ndarray, n
     return rows, cols
 
 
-def _random_state(estimator):
-    """``random_state``, or the deprecated ``seed`` when it was given (with a FutureWarning)."""
+def _random_state(estimator) -> np.random.Generator:
+    """The generator of ``random_state``, or of the deprecated ``seed`` when it was given
+    (with a FutureWarning); a bad value's error names the parameter it came from."""
     if estimator.seed is None:
-        return estimator.random_state
+        return as_generator(estimator.random_state, name="random_state")
     import warnings
 
     warnings.warn(
@@ -144,7 +145,7 @@ def _random_state(estimator):
         FutureWarning,
         stacklevel=3,
     )
-    return estimator.seed
+    return as_generator(estimator.seed)
 
 
 class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
@@ -241,7 +242,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         check_choice(self.reference, ("centroid", "graph-centre"), name="reference")
         check_choice(self.orientation, ("image", "principal"), name="orientation")
         self._masks(X)
-        rng = as_generator(_random_state(self))
+        rng = _random_state(self)
         self.centralities_ = names
         self.offsets_ = rng.uniform(-extent, extent, size=(n, 2, 2))
         self.which_ = rng.integers(0, len(names), size=n)
@@ -375,7 +376,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         self.seed = seed
 
     def _seeds(self) -> tuple[int, int]:
-        rng = as_generator(_random_state(self))
+        rng = _random_state(self)
         a, b = rng.integers(0, 2**31 - 1, size=2)
         return int(a), int(b)
 

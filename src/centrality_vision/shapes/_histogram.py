@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
@@ -22,8 +24,11 @@ class ShapeInputMixin:
     """
 
     def _masks(self, X):
+        fill = getattr(self, "fill_holes", False)
+        if not isinstance(fill, (bool, np.bool_)):
+            raise TypeError(f"`fill_holes` must be True or False; got {fill!r}.")
         masks = as_shape_images(X, foreground=self.foreground, threshold=self.threshold)
-        if getattr(self, "fill_holes", False):
+        if fill:
             from scipy.ndimage import binary_fill_holes
 
             masks = [binary_fill_holes(mask) for mask in masks]
@@ -189,7 +194,11 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         names = resolve_centralities(self.centrality)
         check_int(self.bins, name="bins", low=1)
         check_choice(self.scaling, ("minmax", "max"), name="scaling")
-        if self.connectivity not in (4, 8) or isinstance(self.connectivity, bool):
+        if (
+            isinstance(self.connectivity, bool)
+            or not isinstance(self.connectivity, numbers.Integral)
+            or self.connectivity not in (4, 8)
+        ):
             raise InputError(
                 "`connectivity`: the 'connectivity' parameter of CentralityHistogram must be 4 or 8. "
                 f"Got {self.connectivity!r} instead."

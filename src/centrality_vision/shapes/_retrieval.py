@@ -262,7 +262,10 @@ def outline_profiles(
     """
     n_points = check_int(n_points, name="n_points", low=8)
     resolution = check_int(resolution, name="resolution", low=8)
-    (mask,) = as_shape_images([image], name="image", foreground=foreground, threshold=threshold)
+    try:
+        (mask,) = as_shape_images([image], name="image", foreground=foreground, threshold=threshold)
+    except (InputError, TypeError) as exc:  # one image, not a sequence: no index in the name
+        raise type(exc)(str(exc).replace("`image[0]`", "`image`")) from None
     return _profiles(mask, n_points, resolution)[0]
 
 
@@ -576,7 +579,10 @@ def bullseye_score(distances, labels, /, *, top: int = 40) -> float:
     For every query the shapes are ranked by distance, the query itself first; the
     same-class shapes among the first ``top`` are counted, and the total is divided by
     the most that could be found (each class size, at most ``top``). On MPEG-7 (classes
-    of 20, ``top=40``) this is the standard score out of 28,000.
+    of 20, ``top=40``) this is the standard score out of 28,000. With classes of unequal
+    size one ``top`` serves every query (the textbook score uses twice each query's class
+    size). Row ``i`` holds query ``i``'s distances; equal distances rank the lower index
+    first. ``labels`` are all strings or all numbers.
 
     Examples
     --------
@@ -598,7 +604,7 @@ def retrieval_counts(distances, labels, /, *, k: int = 10) -> np.ndarray:
     """How many queries have a same-class shape at rank 1, 2, ..., k (the query left out).
 
     The Kimia-99 protocol reports these ``k=10`` counts (out of 99 each, 990 in all);
-    Kimia-216 the first 11.
+    Kimia-216 the first 11. Equal distances rank the lower index first.
 
     Examples
     --------
@@ -619,7 +625,8 @@ def nearest_neighbour_accuracy(distances, labels, /, *, n_train: int = 10, n_spl
 
     In each of ``n_splits`` splits, ``n_train`` shapes of every class are drawn at
     random as the training set; every other shape takes the class of its nearest
-    training shape. Returns the mean accuracy (MPEG-7 protocol: 10 per class).
+    training shape (on equal distances, the lower index). Returns the mean accuracy
+    (MPEG-7 protocol: 10 per class).
 
     Examples
     --------
