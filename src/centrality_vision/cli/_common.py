@@ -278,11 +278,17 @@ def transform_record(transform) -> dict:
     from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, SimilarityTransform
 
     if isinstance(transform, NonRigidTransform):
+        dim = transform.control_points.shape[1]
+        # the affine part applied before the field (z -> u + field(u), u = linear z + translation):
+        # without it the record did not reproduce the registration (CPD sets it whenever it
+        # normalises the sets); identity and zero when the transform has none
         return {
             "type": "nonrigid",
             "control_points": transform.control_points,
             "coefficients": transform.coefficients,
             "beta": float(transform.beta),
+            "linear": np.eye(dim) if transform.linear is None else transform.linear,
+            "translation": np.zeros(dim) if transform.translation is None else transform.translation,
         }
     if isinstance(transform, AffineTransform):
         return {

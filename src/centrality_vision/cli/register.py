@@ -43,7 +43,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "marks a point with no true position, e.g. an outlier); the per-point RMS alignment\n"
         "error over the other points is then recorded per iteration (and plotted with --plot).\n"
         "--out .json/.npz: the transform, the aligned moving set, iterations, convergence, the\n"
-        "history of objective/sigma2/error, the correspondences and every parameter.\n"
+        "history of objective/sigma2/error, the correspondences and every parameter. A nonrigid\n"
+        "transform maps z to u + sum_m coefficients[m] exp(-|u - control_points[m]|^2 / (2 beta^2)),\n"
+        "u = linear z + translation.\n"
         f"--out a point-set file ({', '.join(POINT_OUTPUTS)}): the aligned moving set, and all the\n"
         "rest in NAME.json beside it.",
         example="centrality-vision register fish_moving.txt fish_fixed.txt --method gpd --transform nonrigid \\\n"
