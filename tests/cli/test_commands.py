@@ -594,3 +594,23 @@ def test_out_that_is_a_file_is_a_named_one_line_error(tmp_path, capsys, argv):
     afile.write_text("")
     assert main([*argv, "--out", str(afile)]) == 2
     assert "`--out` must be a folder that can be created" in _one_line_error(capsys, only=True)
+
+
+@pytest.mark.parametrize(("command", "suffix"), [("centrality", ".NPY"), ("centrality", ".NPZ"), ("register", ".NPZ")])
+def test_outputs_keep_an_upper_case_suffix(tmp_path, command, suffix):
+    # "wrote C.NPY" while numpy wrote C.NPY.npy
+    np.save(tmp_path / "m.npy", _points(12, seed=3))
+    inputs = [str(tmp_path / "m.npy")] * (2 if command == "register" else 1)
+    assert main([command, *inputs, "--out", str(tmp_path / f"out{suffix}")]) == 0
+    written = sorted(p.name for p in tmp_path.iterdir() if p.name.startswith("out"))
+    assert written == ([f"out{suffix}", "out.json"] if suffix == ".NPY" else [f"out{suffix}"])
+    loaded = np.load(tmp_path / f"out{suffix}")
+    assert loaded.shape[0] == 12 if suffix == ".NPY" else "parameters" in loaded
+
+
+def test_a_nonrigid_record_without_an_affine_part_holds_the_identity():
+    from centrality_vision.cli._common import transform_record
+
+    record = transform_record(NonRigidTransform(np.zeros((2, 3)), np.ones((2, 3)), 1.0))
+    np.testing.assert_array_equal(record["linear"], np.eye(3))
+    np.testing.assert_array_equal(record["translation"], np.zeros(3))

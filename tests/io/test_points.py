@@ -403,3 +403,11 @@ def test_a_binary_pcd_without_points_holds_width_times_height(tmp_path):
     path = tmp_path / "organised.pcd"
     path.write_bytes(header + np.arange(36, dtype="<f4").tobytes())
     np.testing.assert_array_equal(read_points(path), np.arange(36.0).reshape(12, 3))
+
+
+@pytest.mark.parametrize("suffix", [".NPY", ".MAT", ".Npy"])
+def test_write_points_keeps_an_upper_case_suffix(tmp_path, suffix):
+    # numpy and scipy appended their lower-case suffix: points.NPY became points.NPY.npy
+    path = write_points(tmp_path / f"points{suffix}", FLAT)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [f"points{suffix}"]
+    np.testing.assert_array_equal(read_points(path), FLAT)

@@ -278,6 +278,8 @@ def transform_record(transform) -> dict:
     from ..transforms import AffineTransform, NonRigidTransform, RigidTransform, SimilarityTransform
 
     if isinstance(transform, NonRigidTransform):
+        import numpy as np
+
         dim = transform.control_points.shape[1]
         # the affine part applied before the field (z -> u + field(u), u = linear z + translation):
         # without it the record did not reproduce the registration (CPD sets it whenever it

@@ -80,7 +80,8 @@ def write_npz(path, arrays: Mapping, parameters: Mapping) -> Path:
     path = _prepare(path)
     entries = {key: np.asarray(value) for key, value in arrays.items() if value is not None}
     entries["parameters"] = np.array(json.dumps(to_jsonable(parameters)))
-    np.savez_compressed(path, **entries)
+    with open(path, "wb") as handle:  # by name, numpy would write NAME.NPZ.npz
+        np.savez_compressed(handle, **entries)
     return path
 
 
@@ -96,7 +97,8 @@ def _write_table(path: Path, columns: Mapping[str, np.ndarray]) -> None:
     names = list(columns)
     arrays = [np.asarray(columns[name]) for name in names]
     if path.suffix.lower() == ".npy":
-        np.save(path, np.column_stack([a.astype(np.float64) for a in arrays]))
+        with open(path, "wb") as handle:  # by name, numpy would write NAME.NPY.npy
+            np.save(handle, np.column_stack([a.astype(np.float64) for a in arrays]))
         return
 
     def cell(value, kind: str) -> str:

@@ -776,12 +776,16 @@ def write_points(path, points, /) -> Path:
     if path.parent != Path("."):
         path.parent.mkdir(parents=True, exist_ok=True)
     names = ["x", "y", "z"][: arr.shape[1]] if arr.shape[1] <= 3 else [f"x{k}" for k in range(arr.shape[1])]
+    # numpy and scipy append a lower-case suffix to a name that lacks it (points.NPY became
+    # points.NPY.npy): write through an open file, under exactly the name given
     if suffix == ".npy":
-        np.save(path, arr)
+        with open(path, "wb") as handle:
+            np.save(handle, arr)
     elif suffix == ".mat":
         from scipy.io import savemat
 
-        savemat(path, {"points": arr})
+        with open(path, "wb") as handle:
+            savemat(handle, {"points": arr})
     elif suffix == ".ply":
         _meshio().write_points_cells(path, arr, [], file_format="ply", binary=True)
     elif suffix == ".obj":
