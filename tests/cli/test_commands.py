@@ -52,8 +52,8 @@ def test_reproduce_rejects_unknown_experiment(capsys):
 # --------------------------------------------------------------------------------------
 
 
-def _points(n=12, seed=0):
-    return np.random.default_rng(seed).random((n, 2))
+def _points(n=12, seed=0, dim=2):
+    return np.random.default_rng(seed).random((n, dim))
 
 
 def _png(path, pixels):
@@ -614,3 +614,27 @@ def test_a_nonrigid_record_without_an_affine_part_holds_the_identity():
     record = transform_record(NonRigidTransform(np.zeros((2, 3)), np.ones((2, 3)), 1.0))
     np.testing.assert_array_equal(record["linear"], np.eye(3))
     np.testing.assert_array_equal(record["translation"], np.zeros(3))
+
+
+@pytest.mark.parametrize(
+    ("option", "value", "message"),
+    [
+        ("--seed", "-1", "argument --seed: must be in [0, 4294967295]; got -1"),  # was sklearn's traceback
+        ("--seed", "4294967296", "must be in [0, 4294967295]"),
+        ("--bins", "100000000", "argument --bins: must be in [1, 100000]"),  # was killed for memory
+        ("--trees", "1000000000", "argument --trees: must be in [1, 100000]"),
+    ],
+)
+def test_classify_bounds_its_numbers(tmp_path, capsys, option, value, message):
+    folder = _shapes_folder(tmp_path / "shapes")
+    with pytest.raises(SystemExit) as info:
+        main(["classify", str(folder), option, value, "--out", str(tmp_path / "c.json")])
+    assert info.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_centrality_plot_of_all_measures_on_a_3d_set(tmp_path):
+    # eight 3D panels in a 3 x 3 grid: the hidden ninth broke matplotlib's layout (a traceback)
+    np.save(tmp_path / "p.npy", _points(20, seed=4, dim=3))
+    argv = ["centrality", str(tmp_path / "p.npy"), "--measure", "all", "--out", str(tmp_path / "c.json")]
+    assert main([*argv, "--plot", str(tmp_path / "c.png")]) == 0
+    assert (tmp_path / "c.png").stat().st_size > 20_000

@@ -202,6 +202,6 @@ def _plot(args, names, values, *, graph, coordinates, is_image, shape, nodes) ->
                 norm=norm,
             )
     for ax in axes.ravel()[len(names) :]:
-        ax.set_visible(False)
+        ax.remove()  # a hidden 3D panel broke the constrained layout (no tight bbox)
     fig.suptitle(Path(args.input).name)
     save_figure(fig, args.plot)

@@ -52,7 +52,9 @@ def add_parser(sub) -> argparse.ArgumentParser:
         default="closeness",
         help="centrality whose histogram is the feature; 'all' concatenates four (default: %(default)s)",
     )
-    parser.add_argument("--bins", type=number(int, low=1), default=40, help="histogram bins (default: %(default)s)")
+    parser.add_argument(
+        "--bins", type=number(int, low=1, high=100_000), default=40, help="histogram bins (default: %(default)s)"
+    )
     parser.add_argument(
         "--classifier",
         choices=CLASSIFIERS,
@@ -61,7 +63,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--trees",
-        type=number(int, low=1),
+        type=number(int, low=1, high=100_000),
         default=300,
         help="trees of --classifier forest (default: %(default)s)",
     )
@@ -69,7 +71,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--folds", type=number(int, low=2), default=5, help="cross-validation folds (default: %(default)s)"
     )
     parser.add_argument(
-        "--seed", type=int, default=0, help="seed of the fold shuffling and of the forest (default: %(default)s)"
+        "--seed",
+        type=number(int, low=0, high=2**32 - 1),
+        default=0,
+        help="seed of the fold shuffling and of the forest (default: %(default)s)",
     )
     parser.add_argument(
         "--foreground",

@@ -46,6 +46,11 @@ class ShapeInputMixin:
         )
 
 
+#: The most histogram bins a shape feature takes: far more than any shape has pixel values
+#: to tell apart, and 100,000 float64 per image and centrality is still small.
+MAX_BINS = 100_000
+
+
 def resolve_centralities(centrality, *, name: str = "centrality") -> tuple[str, ...]:
     """``"all"`` -> the four shape centralities; a name -> itself; a list -> checked tuple."""
     if isinstance(centrality, str):
@@ -94,7 +99,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
     centrality : str or list of str, default="closeness"
         A name from :data:`centrality_vision.centrality.CENTRALITIES`, ``"all"``, or a list.
     bins : int, default=40
-        Bins per centrality (the thesis uses 40).
+        Bins per centrality (the thesis uses 40), at most 100,000.
     connectivity : {8, 4}, default=8
         Pixel neighbourhood.
     scaling : {"max", "minmax"}, default="max"
@@ -192,7 +197,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
 
     def _validate_params(self) -> tuple[str, ...]:
         names = resolve_centralities(self.centrality)
-        check_int(self.bins, name="bins", low=1)
+        check_int(self.bins, name="bins", low=1, high=MAX_BINS)
         check_choice(self.scaling, ("minmax", "max"), name="scaling")
         if (
             isinstance(self.connectivity, bool)

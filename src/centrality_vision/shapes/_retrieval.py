@@ -429,8 +429,10 @@ def pairwise_shape_distances(
     jobs = _effective_jobs(n_jobs)
     masks = as_shape_images(images, name="images", foreground=foreground, threshold=threshold)
     if method != "profile":
+        from ._histogram import MAX_BINS
+
         out = _histogram_distances(
-            masks, method, centrality, check_int(bins, name="bins", low=1), resolution, weights, n_jobs
+            masks, method, centrality, check_int(bins, name="bins", low=1, high=MAX_BINS), resolution, weights, n_jobs
         )
     else:
         forward, backward = _descriptors(masks, n_points, resolution, jobs)
