@@ -30,9 +30,10 @@ def test_demo_writes_figures_and_results(tmp_path, capsys):
 
 
 def test_demo_unknown_shape_is_a_one_line_error(tmp_path, capsys):
-    assert main(["demo", "--out", str(tmp_path), "--shape", "unicorn"]) == 2
+    assert main(["demo", "--out", str(tmp_path / "demo"), "--shape", "unicorn"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "unicorn" in err[0]
+    assert len(err) == 1 and "unicorn" in err[0] and "--shape: must be one of" in err[0]
+    assert not (tmp_path / "demo").exists()  # the folder was made before the name was checked
 
 
 def test_no_command_prints_help(capsys):
@@ -638,3 +639,33 @@ def test_centrality_plot_of_all_measures_on_a_3d_set(tmp_path):
     argv = ["centrality", str(tmp_path / "p.npy"), "--measure", "all", "--out", str(tmp_path / "c.json")]
     assert main([*argv, "--plot", str(tmp_path / "c.png")]) == 0
     assert (tmp_path / "c.png").stat().st_size > 20_000
+
+
+def test_output_places_are_checked_before_any_work(tmp_path, capsys):
+    # the output was written and then the plot failed, or an OS error told after the whole run
+    np.savetxt(tmp_path / "p.txt", _points())
+    (tmp_path / "side.json").mkdir()
+    (tmp_path / "afile").write_text("x")
+    graph = ["graph", str(tmp_path / "p.txt")]
+    cases = [
+        (["--out", str(tmp_path / "side.csv")], "--out (its .json record beside it): ", "is a folder, not a file"),
+        (["--out", str(tmp_path / "side.json")], "--out: ", "is a folder, not a file"),
+        (["--out", str(tmp_path / "afile" / "g.json")], "--out: cannot create", "afile is a file, not a folder"),
+        (["--out", str(tmp_path / "g.json"), "--plot", str(tmp_path / "afile" / "p.png")], "--plot: ", "a file"),
+    ]
+    for options, start, end in cases:
+        assert main([*graph, *options]) == 2
+        message = _one_line_error(capsys)
+        assert start in message and end in message
+    assert not (tmp_path / "side.csv").exists() and not (tmp_path / "g.json").exists()
+
+
+def test_a_plot_that_cannot_be_drawn_leaves_no_output(tmp_path, capsys):
+    pixels = np.full((6, 6), 255, dtype=np.uint8)
+    pixels[2, 2] = pixels[3, 3] = 0  # two diagonal pixels: no betweenness above 0 under 4-neighbours
+    _png(tmp_path / "diag.png", pixels)
+    argv = ["centrality", str(tmp_path / "diag.png"), "--connectivity", "4", "--measure", "betweenness"]
+    argv += ["--norm", "log", "--plot", str(tmp_path / "d.png"), "--out", str(tmp_path / "d.json")]
+    assert main(argv) == 2
+    assert "'log' needs at least one value > 0" in _one_line_error(capsys)
+    assert not (tmp_path / "d.json").exists()

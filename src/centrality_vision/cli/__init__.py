@@ -21,7 +21,15 @@ from __future__ import annotations
 import sys
 
 from . import centrality, classify, demo, graph, match, register, reproduce
-from ._common import CENTRALITY_NAMES, GPD_GRAPHS, GRAPH_KINDS, Parser, progress_on, quiet_progress
+from ._common import (
+    CENTRALITY_NAMES,
+    GPD_GRAPHS,
+    GRAPH_KINDS,
+    Parser,
+    check_output_places,
+    progress_on,
+    quiet_progress,
+)
 
 __all__ = ["main", "build_parser", "CENTRALITY_NAMES", "GPD_GRAPHS", "GRAPH_KINDS"]
 
@@ -73,6 +81,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{prog}: warning: {text}", file=sys.stderr)
 
     try:
+        check_output_places(args)
         with warnings.catch_warnings(), quiet_progress(progress_on(args)):
             warnings.filterwarnings("always", category=UserWarning)  # shown on one line, never raised
             warnings.showwarning = show

@@ -29,6 +29,7 @@ __all__ = [
     "data_graph",
     "edge_list",
     "transform_record",
+    "check_output_places",
 ]
 
 # Spelled out here so that building the parser imports nothing heavy; tests check them
@@ -103,6 +104,7 @@ def add_out(parser: argparse.ArgumentParser, *suffixes: str, what: str = "") -> 
     parser.add_argument(
         "--out", required=True, metavar="FILE", type=out_file(*suffixes), help=f"output file ({kinds}){what}"
     )
+    parser.set_defaults(_out_is_file=True)
 
 
 def add_plot(parser: argparse.ArgumentParser, what: str) -> None:
@@ -110,6 +112,39 @@ def add_plot(parser: argparse.ArgumentParser, what: str) -> None:
     parser.add_argument(
         "--plot", metavar="FILE.png", type=out_file(*FIGURE_SUFFIXES), help=f"also draw {what} ({kinds})"
     )
+
+
+def check_output_places(args) -> None:
+    """Before any work: every output file of ``args`` (``--out``, its ``.json`` sidecar,
+    ``--plot``) can be written. A folder in a file's place, a file where a folder must be
+    created, or a place that refuses new files is an :class:`InputError` naming the
+    option, instead of an OS error after the computation (or after other outputs were
+    written)."""
+    import tempfile
+
+    from ..exceptions import InputError
+
+    places = []
+    if getattr(args, "_out_is_file", False) and getattr(args, "out", None):
+        out = Path(args.out)
+        places.append(("--out", out))
+        if out.suffix.lower() not in (".json", ".npz"):
+            places.append(("--out (its .json record beside it)", out.with_suffix(".json")))
+    if getattr(args, "plot", None):
+        places.append(("--plot", Path(args.plot)))
+    for option, path in places:
+        if path.is_dir():
+            raise InputError(f"{option}: {path} is a folder, not a file.")
+        ancestor = path.parent
+        while not ancestor.exists():
+            ancestor = ancestor.parent
+        if not ancestor.is_dir():
+            raise InputError(f"{option}: cannot create {path}: {ancestor} is a file, not a folder.")
+        try:
+            with tempfile.TemporaryFile(dir=ancestor):
+                pass
+        except OSError as exc:
+            raise InputError(f"{option}: cannot write {path}: {ancestor} refuses new files ({exc.strerror}).") from None
 
 
 def add_progress(parser: argparse.ArgumentParser) -> None:

@@ -151,8 +151,7 @@ def run(args: argparse.Namespace) -> int:
     if suffix(args.out) == ".json":
         record.update(node=node, coordinates=coordinates, centrality=values)
     columns = {"node": node, **coordinates, **values}
-    written = write_output(args.out, record, arrays=columns, table=columns)
-    if args.plot:
+    if args.plot:  # first: a plot that cannot be drawn (--norm log of no positive value) leaves no output
         _plot(
             args,
             names,
@@ -163,6 +162,8 @@ def run(args: argparse.Namespace) -> int:
             shape=info.get("image_shape"),
             nodes=nodes,
         )
+    written = write_output(args.out, record, arrays=columns, table=columns)
+    if args.plot:
         written.append(Path(args.plot))
     say(f"wrote {', '.join(map(str, written))} in {time.perf_counter() - started:.1f} s")
     return 0

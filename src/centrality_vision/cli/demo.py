@@ -45,16 +45,19 @@ def run(args: argparse.Namespace) -> int:
     from .. import __version__
     from .. import centrality as cen
     from ..datasets import load_fish, load_kimia99
+    from ..exceptions import InputError
     from ..experiments._common import make_out_folder
     from ..graphs import delaunay_graph, pixel_graph
     from ..plotting import plot_alignment_errors, plot_centrality_image, plot_graph, plot_registration, save_figure
     from ..registration import GPD, RigidCPD
 
     plt = pyplot()
-    out = make_out_folder(args.out)
     started = time.perf_counter()
-
-    image = load_kimia99().image(args.shape)  # fail on a bad name before any work
+    try:  # fail on a bad name before any work, and before the output folder is made
+        image = load_kimia99().image(args.shape)
+    except InputError as exc:
+        raise InputError(f"--shape: {exc}".replace("`name` ", "")) from None
+    out = make_out_folder(args.out)
     fish = load_fish().fixed
     graph = delaunay_graph(fish)
     values = {name: cen.compute(graph, name) for name in CENTRALITIES}

@@ -38,8 +38,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "mwme (2D or 3D): the thesis' global MWME matching (ch. 6): sets of the same size; exact on\n"
         "  copies, fragile under noise. Its cost grows as n^3.\n"
         "shape-context (2D): shape contexts with a one-to-one Hungarian assignment (the baseline).\n"
-        "Writes the correspondence (moving[i] -> fixed[correspondence[i]], -1 for a moving point\n"
-        "without partner) and the transform taking MOVING onto FIXED.",
+        "Writes the correspondence (moving[i] -> fixed[correspondence[i]]) and the transform\n"
+        "taking MOVING onto FIXED. robust gives each moving point, once transformed, its nearest\n"
+        "fixed point within two sampling steps, else -1: a point near a fixed point it does not\n"
+        "truly belong to gets that one (several may share it); judge by the transform.",
         example="centrality-vision match moving.txt fixed.txt --method robust --out matching.json --plot matching.png",
     )
     parser.add_argument("moving", metavar="MOVING", help="point-set file")
@@ -126,7 +128,8 @@ def run(args: argparse.Namespace) -> int:
         "parameters": parameters_block(options(args)),
         "method": args.method,
         "correspondence": correspondence,
-        "correspondence_meaning": "moving[i] matches fixed[correspondence[i]]; -1: no partner",
+        "correspondence_meaning": "moving[i] matches fixed[correspondence[i]]; -1: no fixed point within two "
+        "sampling steps (robust)",
         "n_matched": int(matched.sum()),
         "transform": transform_parts,
         "moving_transformed": moved,
