@@ -669,3 +669,43 @@ def test_a_plot_that_cannot_be_drawn_leaves_no_output(tmp_path, capsys):
     assert main(argv) == 2
     assert "'log' needs at least one value > 0" in _one_line_error(capsys)
     assert not (tmp_path / "d.json").exists()
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (["--tol", "inf"], "argument --tol: must be a finite number; got 'inf'"),  # passed "(0, inf]"
+        (["--transform", "nonrigid", "--beta", "1e308"], "argument --beta: must be in [1e-150, 1e+150]"),
+        (["--transform", "nonrigid", "--lam", "1e-300"], "argument --lam: must be in [1e-150, 1e+150]"),
+    ],
+)
+def test_register_options_out_of_the_library_range_are_usage_errors(tmp_path, capsys, options, message):
+    np.save(tmp_path / "m.npy", _points())
+    with pytest.raises(SystemExit) as info:
+        main(
+            ["register", str(tmp_path / "m.npy"), str(tmp_path / "m.npy"), *options, "--out", str(tmp_path / "r.json")]
+        )
+    assert info.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_register_records_what_ran(tmp_path, capsys):
+    np.save(tmp_path / "m.npy", _points())
+    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "m.npy"), "--method", "gpd"]
+    # k >= the number of points: the library took the complete graph while the record said k=200
+    assert main([*argv, "--graph", "knn", "--k", "12", "--out", str(tmp_path / "r.json")]) == 2
+    assert "--k must be smaller than the number of points of each set (12 and 12); got 12" in _one_line_error(capsys)
+    # two identical runs record the same estimator (its callback's repr held a memory address)
+    records = []
+    for name in ("a.json", "b.json"):
+        assert main([*argv, "--out", str(tmp_path / name)]) == 0
+        records.append(json.loads((tmp_path / name).read_text())["estimator"])
+    assert records[0] == records[1] and " at 0x" not in records[0]
+
+
+def test_classify_tells_a_file_from_a_missing_folder(tmp_path, capsys):
+    (tmp_path / "afile").write_text("x")
+    assert main(["classify", str(tmp_path / "afile"), "--out", str(tmp_path / "c.json")]) == 2
+    assert "afile: is a file, not a folder of images" in _one_line_error(capsys)
+    folder = _shapes_folder(tmp_path / "shapes")
+    assert main(["classify", str(folder), "--labels", str(tmp_path), "--out", str(tmp_path / "c.json")]) == 2
+    assert "--labels: " in (message := _one_line_error(capsys)) and "is a folder, not a CSV file" in message

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import sys
 from pathlib import Path
 
@@ -68,14 +69,15 @@ def number(kind, *, low=None, low_open=False, high=None, high_open=False):
         except ValueError:
             wanted = "an integer" if kind is int else "a number"
             raise argparse.ArgumentTypeError(f"must be {wanted}; got {text!r}") from None
-        if kind is float and value != value:
-            raise argparse.ArgumentTypeError(f"must be a number; got {text!r}")
+        if kind is float and not math.isfinite(value):  # the library refuses inf anyway, after the reading
+            raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}")
         too_low = low is not None and (value <= low if low_open else value < low)
         too_high = high is not None and (value >= high if high_open else value > high)
         if too_low or too_high:
             left = "(" if low_open else "["
             right = ")" if high_open else "]"
             span = f"{left}{'-inf' if low is None else low}, {'inf' if high is None else high}{right}"
+            span = span.replace("[-inf", "(-inf").replace("inf]", "inf)")
             raise argparse.ArgumentTypeError(f"must be in {span}; got {text}")
         return value
 

@@ -101,7 +101,7 @@ def _read_labels(path) -> dict:
 
     path = Path(path)
     if not path.is_file():
-        raise InputError(f"{path}: no such file.")
+        raise InputError(f"--labels: {path}: " + ("is a folder, not a CSV file." if path.is_dir() else "no such file."))
     with path.open("r", encoding="utf-8-sig", newline="") as handle:
         reader = csv.DictReader(handle)
         if reader.fieldnames is None or not {"file", "label"} <= set(reader.fieldnames):
@@ -134,7 +134,9 @@ def run(args: argparse.Namespace) -> int:
     started = time.perf_counter()
     folder = Path(args.images_dir)
     if not folder.is_dir():
-        raise InputError(f"{folder}: no such folder.")
+        raise InputError(
+            f"{folder}: " + ("is a file, not a folder of images." if folder.exists() else "no such folder.")
+        )
     files = sorted(path for path in folder.iterdir() if path.suffix.lower() in IMAGE_SUFFIXES and path.is_file())
     if not files:
         raise InputError(f"{folder}: holds no images ({', '.join(IMAGE_SUFFIXES)}).")

@@ -102,13 +102,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--beta",
-        type=number(float, low=0, low_open=True),
+        type=number(float, low=1e-150, high=1e150),  # the library's range (its square must be representable)
         default=2.0,
         help="nonrigid: width of the Gaussian kernel (default: %(default)s)",
     )
     parser.add_argument(
         "--lam",
-        type=number(float, low=0, low_open=True),
+        type=number(float, low=1e-150, high=1e150),  # the library's range (its square must be representable)
         default=2.0,
         help="nonrigid: smoothness weight (default: %(default)s)",
     )
@@ -149,6 +149,9 @@ def _estimator(args: argparse.Namespace, callback):
 
 class _Watch:
     """The callback of the run: a progress bar over iterations and the per-point RMS error."""
+
+    def __repr__(self) -> str:  # in the recorded estimator: the same for identical runs (no address)
+        return "<the command's progress and error recorder>"
 
     def __init__(self, *, total: int, label: str, show: bool, true_moving=None):
         import numpy as np
@@ -199,6 +202,13 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(
             f"{args.moving} and {args.fixed}: the point sets must have the same dimension; "
             f"got {moving.shape[1]} and {fixed.shape[1]} columns."
+        )
+    smaller = min(moving.shape[0], fixed.shape[0])
+    if args.method == "gpd" and args.graph == "knn" and args.k >= smaller:
+        # the library would take the complete graph instead, and the record say k=args.k
+        raise InputError(
+            f"--k must be smaller than the number of points of each set ({moving.shape[0]} and "
+            f"{fixed.shape[0]}); got {args.k}."
         )
     if suffix(args.out) in (".ply", ".pcd", ".obj") and moving.shape[1] != 3:
         raise InputError(

@@ -234,7 +234,8 @@ class GPD(BaseEstimator):
     weights : bool, default=False
         Use edge lengths in the centrality (shortest paths by length) instead of hop counts.
     k : int, default=6
-        Neighbours for ``graph='knn'``.
+        Neighbours for ``graph='knn'``; on a set of ``n <= k`` points, ``n - 1`` (the
+        complete graph).
 
     Attributes
     ----------
