@@ -492,7 +492,7 @@ def test_other_input_errors_are_one_line(tmp_path, capsys):
 
     iio.imwrite(tmp_path / "s.png", (np.arange(64).reshape(8, 8) * 4).astype(np.uint8))
     assert main(["centrality", str(tmp_path / "s.png"), "--threshold", "nan", "--out", str(tmp_path / "c.csv")]) == 2
-    assert "`threshold` must be a finite real number" in _one_line_error(capsys)
+    assert "--threshold must be a finite real number" in _one_line_error(capsys)
 
 
 @pytest.mark.parametrize(
@@ -584,7 +584,7 @@ def test_reproduce_checks_its_numbers_before_running_anything(tmp_path, capsys, 
 @pytest.mark.parametrize("scheduler", ["tcp://", "tcp://localhost:notaport", "tcp://[::1", "tcp://host:70000"])
 def test_reproduce_refuses_a_malformed_scheduler_address(tmp_path, capsys, scheduler):
     assert main(["reproduce", "fig-5.3", "--quick", "--scheduler", scheduler, "--out", str(tmp_path)]) == 2
-    assert "`scheduler` must be one of" in _one_line_error(capsys, only=True)
+    assert "--scheduler must be one of" in _one_line_error(capsys, only=True)
 
 
 @pytest.mark.parametrize(
@@ -709,3 +709,11 @@ def test_classify_tells_a_file_from_a_missing_folder(tmp_path, capsys):
     folder = _shapes_folder(tmp_path / "shapes")
     assert main(["classify", str(folder), "--labels", str(tmp_path), "--out", str(tmp_path / "c.json")]) == 2
     assert "--labels: " in (message := _one_line_error(capsys)) and "is a folder, not a CSV file" in message
+
+
+def test_library_messages_name_the_command_line_options(tmp_path, capsys):
+    # "`columns` must not repeat a column": the user typed --columns
+    np.savetxt(tmp_path / "p.txt", _points())
+    assert main(["graph", str(tmp_path / "p.txt"), "--columns", "0,0", "--out", str(tmp_path / "g.json")]) == 2
+    message = _one_line_error(capsys)
+    assert "--columns must not repeat a column" in message and "`columns`" not in message

@@ -87,7 +87,7 @@ def main(argv: list[str] | None = None) -> int:
             warnings.showwarning = show
             return args.run(args)
     except (InputError, OSError) as exc:
-        message = " ".join(str(exc).split()) or type(exc).__name__
+        message = _in_cli_words(" ".join(str(exc).split()) or type(exc).__name__, getattr(args, "_parser", None))
         print(f"{prog}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
@@ -100,6 +100,17 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+
+
+def _in_cli_words(message: str, parser) -> str:
+    """A library message with its parameter names (```tol```) as this command's options (``--tol``)."""
+    if parser is None:
+        return message
+    for action in parser._actions:
+        longs = [option for option in action.option_strings if option.startswith("--")]
+        if longs:
+            message = message.replace(f"`{action.dest}`", longs[0])
+    return message
 
 
 if __name__ == "__main__":  # pragma: no cover
