@@ -2,7 +2,8 @@ import numpy as np
 import pytest
 
 from centrality_vision.datasets import contour_points, load_kimia99
-from centrality_vision.matching import mwme_match
+from centrality_vision.exceptions import InputError
+from centrality_vision.matching import match, mwme_match
 from centrality_vision.transforms import SimilarityTransform, fit_similarity
 
 
@@ -89,3 +90,39 @@ def test_contour_points_spacing():
     assert steps.std() / steps.mean() < 0.1
     with pytest.raises(ValueError, match="`n_points`"):
         contour_points(disk, 2)
+
+
+@pytest.mark.parametrize("method", ["local", "greedy"])
+@pytest.mark.parametrize("far", [1e8, 1e9, 1e10])
+def test_relabelling_a_set_with_one_far_point_does_not_change_the_matching(method, far):
+    # ties to 1e-9 of the total: the far point dominated every total, every difference among
+    # the others was a tie, the first index won, and a relabelled copy was matched wrongly
+    for seed in range(8):
+        rng = np.random.default_rng(seed)
+        fixed = np.vstack([rng.random((10, 2)), [[far, 0.0]]])
+        perm = rng.permutation(11)
+        correspondence, _ = mwme_match(fixed[perm], fixed, method=method)
+        np.testing.assert_array_equal(correspondence, perm)
+
+
+def test_rigid_mwme_matching_of_incomparable_extents_and_bad_options_are_errors():
+    rng = np.random.default_rng(0)
+    points = rng.random((7, 2))
+    # both candidates' residuals overflowed to inf and the first one won, right or not
+    with pytest.raises(InputError, match=r"`scale=False` needs `moving` and `fixed` of comparable extent"):
+        mwme_match(points * 1e200, points, scale=False)
+    for scale in (None, 0, "no", np.nan):  # a rigid or a similarity fit, silently
+        with pytest.raises(TypeError, match="`scale` must be True or False"):
+            mwme_match(points, points, scale=scale)
+    with pytest.raises(InputError, match="`mwme_method` must be one of"):  # it named `method`
+        match(points, points, method="mwme", mwme_method="fast")
+
+
+def test_a_similarity_match_of_a_tiny_copy_raises_no_overflow_warning():
+    import warnings
+
+    points = np.random.default_rng(1).random((12, 2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the unused rigid unit ratio overflowed in ldexp
+        result = match(points, points * 1e-308)
+    assert result.transform.scale == pytest.approx(1e-308)

@@ -86,12 +86,16 @@ def mwme_exact(dist, joining):
     return order, dp[full - 1]
 
 
-_TIE = 1e-9  # relative: values closer than this are ties, broken by the invariant key
+# relative: values closer than this are ties, broken by the invariant key. Rounding in a
+# sum of n distances is about n * 2e-16 of it; 1e-9 was far looser and, with one point a
+# billion times farther than the others' spacing, made every difference among the others
+# a tie, so the first index won and relabelling the points changed the matching
+_TIE = 1e-12
 
 
 @njit(cache=True, nogil=True, inline="always")
 def _better(value, key, best_value, best_key):
-    """``value`` beats ``best_value``, ties (to 1e-9 relative) going to the smaller ``key``."""
+    """``value`` beats ``best_value``, ties (to ``_TIE`` relative) going to the smaller ``key``."""
     tol = _TIE * max(abs(value), abs(best_value))
     if value < best_value - tol:
         return True

@@ -107,3 +107,20 @@ def assign_nearest(moved: np.ndarray, fixed_tree: cKDTree, radius: float) -> np.
     """Each moved point's nearest fixed point, or -1 when it is farther than ``radius``."""
     dist, index = fixed_tree.query(moved)
     return np.where(dist <= radius, index, -1).astype(np.int64)
+
+
+#: With ``scale=False``, the largest ratio (as a power of two) between the extents of the two
+#: sets: beyond it squared distances of the unscaled set overflow float64.
+MAX_RIGID_EXPONENT = 300
+
+
+def check_rigid_extents(norm_m: Normalised, norm_f: Normalised) -> None:
+    """Refuse a rigid fit (``scale=False``) between sets whose extents differ beyond
+    :data:`MAX_RIGID_EXPONENT` powers of two."""
+    gap = abs(norm_m.exponent - norm_f.exponent)
+    if gap > MAX_RIGID_EXPONENT:
+        raise InputError(
+            f"`scale=False` needs `moving` and `fixed` of comparable extent; their extents differ by a factor "
+            f"2^{gap} (more than 2^{MAX_RIGID_EXPONENT}), so a rigid transform cannot bring one onto the other "
+            "(and its squared distances overflow); use `scale=True`."
+        )

@@ -8,7 +8,7 @@ from .._validation import as_points
 from ..exceptions import InputError
 from ..graphs import mwme_graph
 from ..transforms import SimilarityTransform
-from ._common import fit_pairs, normalise, similarity_to_units
+from ._common import check_rigid_extents, fit_pairs, normalise, similarity_to_units
 
 __all__ = ["mwme_match"]
 
@@ -23,8 +23,12 @@ def mwme_match(
     The two nodes sharing the degree ``floor(n/2)`` are paired both ways and the
     assignment whose fitted similarity transform leaves the smaller residual wins. The
     matching is exact under similarity transforms whenever both graphs are the same
-    optimum, which holds for the exact solver and, in general position, for the
-    deterministic greedy and local solvers too (they see only distances, up to scale).
+    optimum: for the exact solver when the optimum is unique (sets with tied optima,
+    common on integer grids, can pair the wrong points, whatever the solver: check the
+    transform's residual), and in general position for the deterministic greedy and
+    local solvers too (they see only distances, up to scale), as long as the set's
+    extent stays within about 1e10 times its smallest spacing (beyond, float64 sums
+    cannot tell its orders apart).
     Both sets are centred and divided by a power of two first (exactly), so coordinates
     anywhere in float64's range give finite products and SVD inputs.
 
@@ -65,8 +69,12 @@ def mwme_match(
         raise InputError(
             f"`moving` and `fixed` must have the same shape for MWME matching; got {moving.shape} and {fixed.shape}."
         )
+    if not isinstance(scale, (bool, np.bool_)):
+        raise TypeError(f"`scale` must be True or False; got {scale!r}.")
     n = moving.shape[0]
     norm_m, norm_f = normalise(moving), normalise(fixed)
+    if not scale:  # else both candidates' residuals overflow and the first one wins, right or not
+        check_rigid_extents(norm_m, norm_f)
     graph_m = mwme_graph(norm_m.points, method=method)
     graph_f = mwme_graph(norm_f.points, method=method)
     repeated = n // 2
