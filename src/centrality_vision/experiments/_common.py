@@ -140,6 +140,22 @@ def save_outputs(out: Path, stem: str, text: str, result) -> None:
     (out / f"{stem}.json").write_text(record + "\n")
 
 
+def with_drawn_seed(seed: int, seeds) -> list[int]:
+    """The seeds a multi-seed run checks its claims on: ``seeds`` (default ``[seed]``),
+    with ``seed``, the run drawn in the tables and figures, among them."""
+    seeds = [seed] if seeds is None else list(seeds)
+    return seeds if seed in seeds else [seed, *seeds]
+
+
+def claims_block(result: dict, sources: dict | None = None) -> list[str]:
+    """The claims on the drawn seed and, when checked over several seeds, their odds."""
+    lines = [f"Claims on seed {result['seed']} (the run drawn above):", *claim_lines(result["claims"])]
+    if result.get("odds"):
+        seeds = result["seeds"]
+        lines += [f"Claims over {len(seeds)} seeds ({seeds[0]}-{seeds[-1]}):", *odds_lines(result["odds"], sources)]
+    return lines
+
+
 def claim_lines(claims: dict, suffix: str = "") -> list[str]:
     """One ``[holds]`` / ``[does not hold]`` line per claim (one run)."""
     return [f"[{'holds' if holds else 'does not hold'}] {claim}{suffix}" for claim, holds in claims.items()]

@@ -74,16 +74,10 @@ def faster_than_cpd(methods: dict, level: float = 0.01) -> dict:
 def comparison_text(header: str, result: dict, figure: str, *, at=(), sources=None) -> str:
     """The printed table of a comparison experiment: header, iteration counts, the thesis, the
     claims on this seed and, when checked over several seeds, their odds."""
-    from ._common import claim_lines, odds_lines
+    from ._common import claims_block
 
     lines = [header, *format_comparison(result["methods"], at=at), f"Thesis ({figure}): {result['thesis']}."]
-    lines += [f"Claims on seed {result['seed']} (the run drawn above):", *claim_lines(result["claims"])]
-    if result.get("odds"):
-        lines += [
-            f"Claims over {len(result['seeds'])} seeds ({result['seeds'][0]}-{result['seeds'][-1]}):",
-            *odds_lines(result["odds"], sources),
-        ]
-    return "\n".join(lines)
+    return "\n".join(lines + claims_block(result, sources))
 
 
 def seed_summary(result: dict) -> dict:

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import claim_lines, experiment_parser, odds_lines, prepare_out, save_outputs, seed_list
+from ._common import claims_block, experiment_parser, prepare_out, save_outputs, seed_list, with_drawn_seed
 
 __all__ = ["NOISE", "METHODS", "CLAIMS", "run", "claims", "explain", "format_table", "plot", "main"]
 
@@ -88,9 +88,7 @@ def run(
     from ._runner import Unit, run_units
 
     data = load_kimia99()
-    seeds = [seed] if seeds is None else list(seeds)
-    if seed not in seeds:
-        seeds = [seed, *seeds]
+    seeds = with_drawn_seed(seed, seeds)
     index = list(range(0, len(data), 11)) if quick else list(range(len(data)))
     noise = NOISE[:3] if quick else NOISE
     started = time.perf_counter()
@@ -204,10 +202,7 @@ def format_table(result: dict) -> str:
             for c in (acc[:, j], rob[:, j])
         )
         lines.append(f"{sigma:>18.2f}{cells}")
-    lines += [f"Claims on seed {result['seed']} (the run shown above):", *claim_lines(result["claims"])]
-    if result.get("odds"):
-        seeds = result["seeds"]
-        lines += [f"Claims over {len(seeds)} seeds ({seeds[0]}-{seeds[-1]}):", *odds_lines(result["odds"], CLAIMS)]
+    lines += claims_block(result, CLAIMS)
     lines += ["", explain(result)]
     return "\n".join(lines)
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import claim_lines, experiment_parser, odds_lines, prepare_out, save_outputs, seed_list
+from ._common import claims_block, experiment_parser, prepare_out, save_outputs, seed_list, with_drawn_seed
 
 __all__ = [
     "GRAPHS",
@@ -136,9 +136,7 @@ def run(
     from ._common import tally
     from ._runner import Unit, run_units
 
-    seeds = [seed] if seeds is None else list(seeds)
-    if seed not in seeds:
-        seeds = [seed, *seeds]
+    seeds = with_drawn_seed(seed, seeds)
     levels = (1, 5, 10) if quick else tuple(range(1, 11))
     n_batches = n_batches or (3 if quick else 10)
     n_copies = 10 if quick else n_copies
@@ -356,13 +354,7 @@ def format_table(result: dict) -> str:
             )
             lines.append(f"{name:<6}{cells}")
     lines.append("thesis (fig. 7.4): MSTME more stable than Delaunay on fish (always) and cow1 (in general).")
-    lines += [
-        f"Claims on seed {result['seed']} (the run shown above):",
-        *claim_lines(result.get("claims") or claims(result)),
-    ]
-    if result.get("odds"):
-        seeds = result["seeds"]
-        lines += [f"Claims over {len(seeds)} seeds ({seeds[0]}-{seeds[-1]}):", *odds_lines(result["odds"], CLAIMS)]
+    lines += claims_block({**result, "claims": result.get("claims") or claims(result)}, CLAIMS)
     lines += ["", explain(result)]
     return "\n".join(lines)
 
