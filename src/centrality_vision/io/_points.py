@@ -551,6 +551,13 @@ def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Tab
         rows = lines[first : first + count]
         if len(rows) != count:
             raise InputError(f"{path}: the header declares {count} vertices but the file holds {len(rows)}.")
+        if not any(is_list for _, is_list in properties):  # the usual case, at numpy's speed
+            try:
+                values = np.array([line.split() for line in rows], dtype=np.float64).reshape(count, -1)
+            except ValueError:  # ragged or not numbers: the row-by-row reading below names the row
+                values = None
+            if values is not None and values.shape[1] == len(names):
+                return _Table(values, names)
         values = np.empty((count, len(names)))
         for row, line in enumerate(rows):
             words, at, out = line.split(), 0, []
