@@ -126,3 +126,20 @@ def test_a_similarity_match_of_a_tiny_copy_raises_no_overflow_warning():
         warnings.simplefilter("error")  # the unused rigid unit ratio overflowed in ldexp
         result = match(points, points * 1e-308)
     assert result.transform.scale == pytest.approx(1e-308)
+
+
+@pytest.mark.parametrize(
+    ("method", "options", "error"),
+    [
+        ("mwme", {"n_neighbours": None}, TypeError),
+        ("mwme", {"n_candidates": -5}, InputError),
+        ("mwme", {"refine": "nonsense"}, InputError),
+        ("mwme", {"outlier_weight": np.nan}, InputError),
+        ("robust", {"mwme_method": "nonsense"}, InputError),
+        ("shape-context", {"mwme_method": 3}, InputError),
+    ],
+)
+def test_every_option_is_checked_whatever_the_method(method, options, error):
+    points = np.random.default_rng(2).random((8, 2))
+    with pytest.raises(error, match=f"`{next(iter(options))}`"):
+        match(points, points, method=method, **options)

@@ -125,20 +125,21 @@ def match(
     method = check_choice(method, METHODS, name="method")
     if not isinstance(scale, (bool, np.bool_)):
         raise TypeError(f"`scale` must be True or False; got {scale!r}.")
-    if method == "mwme":
-        from ._mwme import mwme_match
-
-        moving_arr = as_points(moving, name="moving", n_dims=(2, 3), min_points=3, allow_duplicates=False)
-        mwme_method = check_choice(mwme_method, ("local", "greedy", "exact"), name="mwme_method")
-        correspondence, transform = mwme_match(moving_arr, fixed, method=mwme_method, scale=bool(scale))
-        transform = _rigid_if_unscaled(transform, scale)
-        return MatchResult(correspondence, transform, method, int(moving_arr.shape[0]), {"mwme_method": mwme_method})
+    # every option is checked whatever the method, so a typo is caught before it matters
+    mwme_method = check_choice(mwme_method, ("local", "greedy", "exact"), name="mwme_method")
     n_neighbours = check_int(n_neighbours, name="n_neighbours", low=3, high=19)
     n_candidates = check_int(n_candidates, name="n_candidates", low=1)
     refine = check_choice(refine, ("icp", "cpd"), name="refine")
     outlier_weight = check_float(outlier_weight, name="outlier_weight", low=0.0, high=1.0)
     if outlier_weight >= 1.0:
         raise InputError(f"`outlier_weight` must be in [0, 1); got {outlier_weight!r}.")
+    if method == "mwme":
+        from ._mwme import mwme_match
+
+        moving_arr = as_points(moving, name="moving", n_dims=(2, 3), min_points=3, allow_duplicates=False)
+        correspondence, transform = mwme_match(moving_arr, fixed, method=mwme_method, scale=bool(scale))
+        transform = _rigid_if_unscaled(transform, scale)
+        return MatchResult(correspondence, transform, method, int(moving_arr.shape[0]), {"mwme_method": mwme_method})
     moving = as_points(moving, name="moving", n_dims=(2,), min_points=4, allow_duplicates=False)
     fixed = as_points(fixed, name="fixed", n_dims=(2,), min_points=4, allow_duplicates=False)
     norm_m, norm_f = normalise(moving), normalise(fixed)
