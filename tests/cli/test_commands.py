@@ -717,3 +717,21 @@ def test_library_messages_name_the_command_line_options(tmp_path, capsys):
     assert main(["graph", str(tmp_path / "p.txt"), "--columns", "0,0", "--out", str(tmp_path / "g.json")]) == 2
     message = _one_line_error(capsys)
     assert "--columns must not repeat a column" in message and "`columns`" not in message
+
+
+def test_warnings_name_the_command_line_options_too(tmp_path, capsys, monkeypatch):
+    import warnings
+
+    from centrality_vision.cli import register
+
+    real = register._estimator
+
+    def warn_then_build(args, callback):
+        warnings.warn("Try a smaller `w` or more `max_iter`.", UserWarning)
+        return real(args, callback)
+
+    monkeypatch.setattr(register, "_estimator", warn_then_build)
+    np.save(tmp_path / "m.npy", _points())
+    assert main(["register", str(tmp_path / "m.npy"), str(tmp_path / "m.npy"), "--out", str(tmp_path / "r.json")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: Try a smaller --w or more --max-iter." in err

@@ -76,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     args._warnings = []
 
     def show(message, category, filename, lineno, file=None, line=None):
-        text = " ".join(str(message).split())
+        text = _in_cli_words(" ".join(str(message).split()), getattr(args, "_parser", None))
         args._warnings.append(f"{category.__name__}: {text}")
         print(f"{prog}: warning: {text}", file=sys.stderr)
 
