@@ -727,7 +727,7 @@ def test_warnings_name_the_command_line_options_too(tmp_path, capsys, monkeypatc
     real = register._estimator
 
     def warn_then_build(args, callback):
-        warnings.warn("Try a smaller `w` or more `max_iter`.", UserWarning)
+        warnings.warn("Try a smaller `w` or more `max_iter`.", UserWarning, stacklevel=2)
         return real(args, callback)
 
     monkeypatch.setattr(register, "_estimator", warn_then_build)
