@@ -735,3 +735,23 @@ def test_warnings_name_the_command_line_options_too(tmp_path, capsys, monkeypatc
     assert main(["register", str(tmp_path / "m.npy"), str(tmp_path / "m.npy"), "--out", str(tmp_path / "r.json")]) == 0
     err = capsys.readouterr().err
     assert "warning: Try a smaller --w or more --max-iter." in err
+
+
+def test_the_before_panel_shows_the_moving_file_as_given(tmp_path, monkeypatch):
+    # it showed CPD's iteration 0, the moving set already centred on the fixed set
+    from centrality_vision import plotting
+
+    drawn = {}
+    real = plotting.plot_registration
+
+    def spy(fixed, moving, **kwargs):
+        drawn[kwargs.get("title")] = np.array(moving)
+        return real(fixed, moving, **kwargs)
+
+    monkeypatch.setattr(plotting, "plot_registration", spy)
+    moving = _points(15, seed=6)
+    np.save(tmp_path / "m.npy", moving)
+    np.save(tmp_path / "f.npy", moving @ _rotation(0.3).T + 5.0)
+    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--out", str(tmp_path / "r.json")]
+    assert main([*argv, "--plot", str(tmp_path / "r.png")]) == 0
+    np.testing.assert_array_equal(drawn["before"], moving)

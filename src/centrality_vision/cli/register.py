@@ -157,7 +157,6 @@ class _Watch:
         import numpy as np
 
         self.rms: list[float] = []
-        self.first = None
         self.true_moving = true_moving
         self.known = None if true_moving is None else ~np.isnan(true_moving).any(axis=1)
         self.bar = None
@@ -170,8 +169,6 @@ class _Watch:
         import numpy as np
 
         moved = np.asarray(info.moving_transformed)
-        if self.first is None:
-            self.first = moved.copy()
         if self.true_moving is not None:
             diff = moved[self.known] - self.true_moving[self.known]
             self.rms.append(float(np.sqrt(np.mean(np.sum(diff**2, axis=1)))))
@@ -284,7 +281,9 @@ def run(args: argparse.Namespace) -> int:
     arrays["warnings"] = np.array(record["warnings"], dtype=str)
     written = write_output(args.out, record, arrays=arrays, points=aligned)
     if args.plot:
-        _plot(args, fixed, watch.first if watch.first is not None else moving, aligned, watch.rms, label)
+        # "before" is the MOVING file as given (the callback's first state is CPD's start,
+        # already centred on the fixed set, which is not what the user passed)
+        _plot(args, fixed, moving, aligned, watch.rms, label)
         written.append(Path(args.plot))
     say(f"wrote {', '.join(map(str, written))}")
     return 0
