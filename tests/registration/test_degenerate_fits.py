@@ -103,3 +103,25 @@ def test_knn_posterior_skips_neighbours_the_tree_cannot_place():
     post = knn_posterior(moving, fixed, 1.0, 0.0, k=2)
     assert post.p1[1] == 0.0 and np.isclose(post.p1[0], 2.0)  # its two nearest fixed points
     assert np.all(np.isfinite(post.px)) and np.isfinite(post.neg_log_likelihood)
+
+
+@pytest.mark.parametrize(
+    ("moving", "spanning"),
+    [
+        (np.array([[0.3, 0.4]]), 0),
+        (np.array([[0.3, 0.4], [0.9, 0.1]]), 1),
+        (np.c_[np.arange(6.0), 2 * np.arange(6.0) + 1], 1),  # collinear
+    ],
+)
+def test_affine_cpd_warns_when_the_moving_points_do_not_determine_the_linear_map(moving, spanning):
+    # one point gave the zero matrix and two a rank-1 map, silently, reported as converged
+    from centrality_vision.registration import GPD
+
+    fixed = np.random.default_rng(0).random((30, 2))
+    message = f"`moving` spans {spanning} of 2 dimensions .* `transform_` is right on `moving` only"
+    for estimator in (AffineCPD(), GPD(AffineCPD(), graph="complete")):
+        with pytest.warns(UserWarning, match=message):
+            estimator.fit(moving, fixed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UserWarning)
+        AffineCPD().fit(fixed[:3], fixed)  # three points in general position: no warning

@@ -1139,7 +1139,29 @@ class AffineCPD(_CPD):
     >>> reg = AffineCPD(tol=1e-12).fit(y, y @ a.T + 0.3)
     >>> bool(np.allclose(reg.transform_.linear, a, atol=1e-6))
     True
+
+    Moving points that do not span every dimension (fewer than D + 1, or all on one line
+    in 2D or one plane in 3D) do not determine the linear map: the fit still aligns them,
+    but ``transform_`` is then right on them only (its linear part is the least-norm one,
+    collapsed across the missing directions), and a :class:`UserWarning` says so.
     """
+
+    def _validate(self, moving, fixed, true_moving):
+        moving, fixed, true_moving = super()._validate(moving, fixed, true_moving)
+        dim = moving.shape[1]
+        centred = moving - moving.mean(axis=0)
+        rank = int(np.linalg.matrix_rank(centred / max(float(np.abs(centred).max()), np.finfo(float).tiny)))
+        if rank < dim:
+            import warnings
+
+            warnings.warn(
+                f"`moving` spans {rank} of {dim} dimensions ({moving.shape[0]} points): an affine transform is not "
+                f"determined by it (it takes at least {dim + 1} points, not all on one "
+                f"{'line' if dim == 2 else 'hyperplane'}); `transform_` is right on `moving` only.",
+                UserWarning,
+                stacklevel=3,
+            )
+        return moving, fixed, true_moving
 
     def _init_state(self, moving, fixed, start):
         self._work = moving
