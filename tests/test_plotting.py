@@ -475,3 +475,16 @@ def test_coordinates_beyond_what_matplotlib_can_lay_out_are_named():
     with pytest.raises(ValueError, match=r"`snapshots\['A'\]\[0\]` must lie within"):
         plot_registration_snapshots(x, {"A": {0: x * 1.7e308, 1: x}})
     plot_graph(x * 1e306, sparse.csr_array((5, 5)))  # large but drawable
+
+
+@pytest.mark.parametrize("dtype", [np.uint8, np.int8, np.uint16, np.int64])
+def test_centrality_image_takes_pixel_indices_of_any_integer_type(dtype):
+    from centrality_vision.plotting import plot_centrality_image
+
+    # uint8 indices wrapped around in the crop arithmetic: a mirrored view of empty space
+    ax = plot_centrality_image([1.0, 2.0], np.array([1, 2], dtype=dtype), (4, 4))
+    assert ax.get_xlim() == (-0.5, 3.5) and ax.get_ylim() == (3.5, -0.5)
+    plt.close(ax.figure)
+    wide = plot_centrality_image([1.0, 2.0], np.array([100, 120], dtype=dtype), (1, 300))  # int8 overflowed
+    assert wide.get_xlim() == (96.5, 123.5)
+    plt.close(wide.figure)

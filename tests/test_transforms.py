@@ -126,3 +126,22 @@ def test_transforms_compare_and_hash_by_value():
     assert a != RigidTransform(_I2, [1, 0]) and a != AffineTransform(_I2, [0, 0])
     n = NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0)
     assert n == NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0) and hash(n) == hash(n)
+
+
+def test_equal_transforms_hash_alike_and_stay_frozen_through_pickle_and_deepcopy():
+    import copy
+    import pickle
+
+    identity = SimilarityTransform(np.eye(2), [0.0, 0.0])
+    inverse = identity.inverse()  # its translation is -0.0: equal, but hashed differently
+    assert identity == inverse and hash(identity) == hash(inverse) and len({identity, inverse}) == 1
+    field = NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), 1.0, translation=[-0.0, 0.0])
+    assert hash(field) == hash(NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), 1.0, translation=[0.0, 0.0]))
+    shifted = SimilarityTransform(np.eye(2), [1.0, 2.0])
+    for restored in (pickle.loads(pickle.dumps(shifted)), copy.deepcopy(shifted)):
+        assert restored == shifted and hash(restored) == hash(shifted)
+        with pytest.raises(ValueError, match="read-only"):  # unpickled arrays came back writable
+            restored.translation[0] = 100.0
+    affine = copy.deepcopy(AffineTransform(np.eye(2) * 2, [1.0, 0.0]))
+    with pytest.raises(ValueError, match="read-only"):
+        affine.linear[0, 0] = 5.0

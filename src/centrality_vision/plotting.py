@@ -321,7 +321,8 @@ def _check_nodes(nodes, *, size: int, shape: tuple[int, int]) -> np.ndarray:
         )
     if np.unique(arr).size != arr.size:
         raise InputError(f"`nodes` must not repeat a pixel; got {arr.size - np.unique(arr).size} repeated index(es).")
-    return arr
+    # a small or unsigned type (uint8, int16) wrapped around in the row/column arithmetic
+    return arr.astype(np.intp)
 
 
 def plot_centrality_image(

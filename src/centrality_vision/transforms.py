@@ -67,10 +67,20 @@ class _ArrayEquality:
         )
 
     def __hash__(self):
+        # "+ 0.0" turns -0.0 into 0.0: equal values (np.array_equal) must hash alike, and an
+        # inverse's translation of an identity is -0.0
         parts = [type(self).__name__]
         for value in self._fields():
-            parts.append(None if value is None else (np.asarray(value).shape, np.asarray(value).tobytes()))
+            parts.append(None if value is None else (np.shape(value), (np.asarray(value) + 0.0).tobytes()))
         return hash(tuple(parts))
+
+    def __setstate__(self, state: dict) -> None:
+        # pickle and deepcopy restore the fields without __post_init__: keep the arrays read-only
+        for name, value in state.items():
+            if isinstance(value, np.ndarray):
+                value = value.copy()
+                value.setflags(write=False)
+            object.__setattr__(self, name, value)
 
 
 @dataclass(frozen=True, eq=False)
