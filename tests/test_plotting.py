@@ -488,3 +488,24 @@ def test_centrality_image_takes_pixel_indices_of_any_integer_type(dtype):
     wide = plot_centrality_image([1.0, 2.0], np.array([100, 120], dtype=dtype), (1, 300))  # int8 overflowed
     assert wide.get_xlim() == (96.5, 123.5)
     plt.close(wide.figure)
+
+
+def test_plot_matching_checks_its_graphs_and_axes():
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.plotting import plot_matching
+
+    points = np.random.default_rng(3).random((7, 2))
+    match = np.arange(7)
+    cases = [
+        ({"moving_graph": np.ones((5, 5))}, InputError, r"`moving_graph` must have shape \(7, 7\)"),  # drawn anyway
+        ({"fixed_graph": np.ones((9, 9))}, InputError, r"`fixed_graph` must have shape \(7, 7\)"),  # an IndexError
+        ({"fixed_graph": "g"}, TypeError, "`fixed_graph`"),
+        ({"ax": "x"}, TypeError, "`ax` must be a matplotlib Axes"),
+    ]
+    for kwargs, error, message in cases:
+        with pytest.raises(error, match=message):
+            plot_matching(points, points, match, **kwargs)
+    fig = plt.figure()
+    with pytest.raises(InputError, match="`ax` must be a 2D Axes"):
+        plot_matching(points, points, match, ax=fig.add_subplot(projection="3d"))
+    plt.close(fig)

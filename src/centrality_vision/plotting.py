@@ -565,8 +565,21 @@ def plot_matching(
         )
     max_lines = check_int(max_lines, name="max_lines", low=0)
     max_edges = 3 * n if max_edges is None else check_int(max_edges, name="max_edges", low=0)
+    graphs = {}
+    for name, graph, size in (("moving_graph", moving_graph, n), ("fixed_graph", fixed_graph, fixed.shape[0])):
+        if graph is None:
+            continue
+        graphs[name] = as_graph(graph, name=name)
+        if graphs[name].shape != (size, size):
+            points = name.split("_")[0]
+            raise InputError(
+                f"`{name}` must have shape ({size}, {size}), one node per point of `{points}`; "
+                f"got shape {graphs[name].shape}."
+            )
     if ax is None:
         _, ax = plt.subplots(figsize=(10, 5), layout="constrained")
+    else:
+        _check_ax(ax, three_d=False, why="for a matching of 2D points")
     span = np.ptp(np.vstack([moving, fixed]), axis=0)
     right = fixed + np.array([moving[:, 0].max() - fixed[:, 0].min() + 0.3 * max(span[0], 1e-12), 0.0])
     colours = plt.get_cmap("hsv")(np.linspace(0, 0.9, n)) if n else np.empty((0, 4))
@@ -587,10 +600,10 @@ def plot_matching(
             zorder=2,
         )
     )
-    for pts, graph, name in ((moving, moving_graph, "moving"), (right, fixed_graph, "fixed")):
-        if graph is None:
+    for pts, name in ((moving, "moving"), (right, "fixed")):
+        if f"{name}_graph" not in graphs:
             continue
-        coo = sparse.triu(sparse.csr_array(graph), k=1).tocoo()
+        coo = sparse.triu(graphs[f"{name}_graph"], k=1).tocoo()
         if coo.nnz > max_edges:
             ax.plot([], [], " ", label=f"{name} graph: {coo.nnz} edges, not drawn")
             continue
