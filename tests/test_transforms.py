@@ -145,3 +145,40 @@ def test_equal_transforms_hash_alike_and_stay_frozen_through_pickle_and_deepcopy
     affine = copy.deepcopy(AffineTransform(np.eye(2) * 2, [1.0, 0.0]))
     with pytest.raises(ValueError, match="read-only"):
         affine.linear[0, 0] = 5.0
+
+
+def test_the_public_helpers_check_their_input():
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.transforms import (
+        centred,
+        fit_similarity,
+        least_squares_similarity,
+        power_of_two_scale,
+        proper_rotation,
+        rms_radius,
+    )
+
+    # lists work (they raised AttributeError)
+    assert rms_radius([[0, 0], [2, 0]]) == 1.0 and power_of_two_scale([3.0, 5.0]) == 4.0
+    np.testing.assert_array_equal(centred([[0, 0], [2, 0]])[0], [1.0, 0.0])
+    cases = [
+        (lambda: rms_radius([[np.nan, 0.0]]), InputError, "`points` must be finite"),  # returned nan
+        (lambda: power_of_two_scale([np.nan, 1.0]), InputError, "`points` must be finite"),  # returned 0.5
+        (lambda: least_squares_similarity(np.ones((3, 2)), np.ones((4, 2)), scale=True), InputError, "paired rows"),
+        (lambda: least_squares_similarity(np.ones((0, 2)), np.ones((0, 2)), scale=True), InputError, "n >= 1"),
+        (lambda: proper_rotation(np.ones(3)), InputError, r"`cross` must be a square \(D, D\) matrix"),
+        (lambda: fit_similarity(np.eye(2), np.eye(2), scale="no"), TypeError, "`scale` must be True or False"),
+        (lambda: centred(np.ones((0, 2))), InputError, "at least one row"),
+    ]
+    for call, error, message in cases:
+        with pytest.raises(error, match=message):
+            call()
+
+
+def test_a_displacement_beyond_float64_is_an_error_not_inf():
+    from centrality_vision.exceptions import InputError
+
+    flip = NonRigidTransform([[0.0, 0.0]], [[0.0, 0.0]], 1.0, linear=-np.eye(2))
+    np.testing.assert_array_equal(flip.displacement([[1.0, 2.0]]), [[-2.0, -4.0]])
+    with pytest.raises(InputError, match="leave the float64 range"):  # was [[-inf, 0.]]
+        flip.displacement([[1.7e308, 0.0]])

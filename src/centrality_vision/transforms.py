@@ -350,7 +350,9 @@ class NonRigidTransform(_ArrayEquality):
     def displacement(self, points) -> np.ndarray:
         """The displacement ``T(z) - z`` at each row of ``points``, in blocks of rows."""
         points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
-        return self(points) - points
+        with np.errstate(over="ignore", invalid="ignore"):
+            moved = self(points) - points  # each finite, their difference need not be
+        return _finite_result(moved, "NonRigidTransform's displacement")
 
     def __call__(self, points) -> np.ndarray:
         points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
@@ -401,12 +403,27 @@ def fit_similarity(source, target, *, scale: bool = True) -> SimilarityTransform
     >>> round(t.scale, 6), np.allclose(t.rotation, r)
     (2.0, True)
     """
+    if not isinstance(scale, (bool, np.bool_)):
+        raise TypeError(f"`scale` must be True or False; got {scale!r}.")
     source = as_points(source, name="source", n_dims=(2, 3), min_points=2)
     target = as_points(target, name="target", n_dims=(source.shape[1],), min_points=2)
     if source.shape != target.shape:
         raise InputError(f"`source` and `target` must have the same shape; got {source.shape} and {target.shape}.")
     rotation, translation, s = least_squares_similarity(source, target, scale=scale)
     return SimilarityTransform(rotation, translation, s)
+
+
+def _finite_array(values, name: str, *, ndim: int | None = 2) -> np.ndarray:
+    """``values`` as a finite float64 array (of ``ndim`` dimensions), or a named error."""
+    try:
+        arr = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f"`{name}` must be an array of real numbers; got {type(values).__name__}.") from None
+    if ndim is not None and arr.ndim != ndim:
+        raise InputError(f"`{name}` must be a {ndim}D array; got shape {arr.shape}.")
+    if not np.all(np.isfinite(arr)):
+        raise InputError(f"`{name}` must be finite; got NaN or inf.")
+    return arr
 
 
 def proper_rotation(cross: np.ndarray) -> tuple[np.ndarray, float]:
@@ -424,6 +441,8 @@ def proper_rotation(cross: np.ndarray) -> tuple[np.ndarray, float]:
            [0., 1.]]), 3.0)
     """
     cross = np.asarray(cross, dtype=float)
+    if cross.ndim != 2 or cross.shape[0] != cross.shape[1] or cross.size == 0:
+        raise InputError(f"`cross` must be a square (D, D) matrix; got shape {cross.shape}.")
     if not np.all(np.isfinite(cross)):
         raise InputError(
             "`cross` (the cross-covariance of two point sets) must be finite; got NaN or inf "
@@ -446,6 +465,7 @@ def power_of_two_scale(points: np.ndarray) -> float:
     >>> power_of_two_scale(np.array([[3.0, -5.0]])), power_of_two_scale(np.zeros((2, 2)))
     (4.0, 1.0)
     """
+    points = _finite_array(points, "points", ndim=None)
     peak = float(np.max(np.abs(points))) if points.size else 0.0
     if peak == 0.0:
         return 1.0
@@ -460,6 +480,7 @@ def rms_radius(points: np.ndarray) -> float:
     >>> rms_radius(np.array([[1e300, 0.0], [-1e300, 0.0]]))
     1e+300
     """
+    points = _finite_array(points, "points")
     if points.shape[0] == 0:
         return 0.0
     rows = centred(points)[1]
@@ -480,6 +501,9 @@ def centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     >>> mean.tolist(), c.tolist()
     ([100000001.0, 1.0], [[-1.0, -1.0], [1.0, 1.0]])
     """
+    points = _finite_array(points, "points")
+    if points.shape[0] == 0:
+        raise InputError("`points` must hold at least one row; got none.")
     unit = power_of_two_scale(points)
     scaled = points / unit
     mean = scaled.mean(axis=0)
@@ -493,8 +517,8 @@ def least_squares_similarity(
     """``(rotation, translation, s)`` minimising ``sum |s R x_i + t - y_i|^2`` for paired rows
     (``s = 1`` without ``scale``, or when the sets are degenerate); inputs must be finite.
 
-    Each centred set is divided by a power of two above its largest coordinate before the
-    cross-covariance is formed, so coordinates up to the float64 limit give finite products
+    Each centred set is divided by a power of two within a factor 2 of its largest
+    coordinate before the cross-covariance is formed, so coordinates up to the float64 limit give finite products
     (no inf reaches the SVD).
 
     Examples
@@ -505,6 +529,12 @@ def least_squares_similarity(
     >>> np.allclose(rotation, quarter_turn), np.allclose(translation, [3, 4]), round(s, 12)
     (True, True, 2.0)
     """
+    source, target = _finite_array(source, "source"), _finite_array(target, "target")
+    if source.shape != target.shape or source.shape[0] == 0:
+        raise InputError(
+            f"`source` and `target` must be paired rows of one shape (n >= 1, D); got {source.shape} and "
+            f"{target.shape}."
+        )
     mu_s, xs = centred(source)
     mu_t, xt = centred(target)
     a, b = power_of_two_scale(xs), power_of_two_scale(xt)
