@@ -509,3 +509,21 @@ def test_plot_matching_checks_its_graphs_and_axes():
     with pytest.raises(InputError, match="`ax` must be a 2D Axes"):
         plot_matching(points, points, match, ax=fig.add_subplot(projection="3d"))
     plt.close(fig)
+
+
+def test_values_too_large_to_scale_and_bad_error_curves_are_named():
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.plotting import plot_alignment_errors, plot_centrality_image, plot_graph
+
+    points = np.random.default_rng(0).random((6, 2))
+    graph = sparse.csr_array(np.ones((6, 6)) - np.eye(6))
+    cases = [  # matplotlib's "Axis limits cannot be NaN or Inf", naming nothing
+        (lambda: plot_graph(points, graph, [-1.7e308, 1.7e308, 0, 0, 0, 0]), "`values` must lie within"),
+        (lambda: plot_centrality_image([-1.7e308, 1.7e308], [0, 1], (1, 2)), "`values` must lie within"),
+        (lambda: plot_alignment_errors({"A": [1e308, 1.7e308]}), r"`errors\['A'\]` must lie within"),
+        (lambda: plot_alignment_errors({"A": [1.0, np.nan]}), r"`errors\['A'\]` must be finite"),  # named `values`
+    ]
+    for call, message in cases:
+        with pytest.raises(InputError, match=message):
+            call()
+    plt.close("all")

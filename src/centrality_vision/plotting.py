@@ -105,22 +105,30 @@ def _equal_3d(ax, points: np.ndarray) -> None:
     ax.tick_params(labelsize=7, pad=0)
 
 
-def _as_values(values, *, n: int, other: str) -> np.ndarray:
-    """``values`` as a finite float64 array of shape (n,); ``other`` names what fixes n."""
+def _as_values(values, *, n: int, other: str, name: str = "values") -> np.ndarray:
+    """``values`` as a finite float64 array of shape (n,); ``other`` names what fixes n,
+    ``name`` the argument an error names."""
     if sparse.issparse(values):
-        raise TypeError(f"`values` must be a dense array of shape (n,); got {_describe(values)}.")
+        raise TypeError(f"`{name}` must be a dense array of shape (n,); got {_describe(values)}.")
     arr = np.asarray(values)
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
-        raise TypeError(f"`values` must hold real numbers; got {_describe(arr)}.")
+        raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
     if np.iscomplexobj(arr):
-        raise TypeError(f"`values` must hold real numbers; got complex dtype {arr.dtype}.")
+        raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
     if arr.shape != (n,):
-        raise InputError(f"`values` must have shape ({n},), one value per row of `{other}`; got shape {arr.shape}.")
+        raise InputError(f"`{name}` must have shape ({n},), one value per row of `{other}`; got shape {arr.shape}.")
     arr = arr.astype(np.float64)  # always a copy
     if not np.all(np.isfinite(arr)):
         bad = int(np.count_nonzero(~np.isfinite(arr)))
-        raise InputError(f"`values` must be finite; got {bad} NaN or inf value(s).")
+        raise InputError(f"`{name}` must be finite; got {bad} NaN or inf value(s).")
+    # a colour or axis scale spans max - min, which overflows beyond half the float64 range
+    if arr.size and float(np.max(np.abs(arr))) > _MAX_VALUE:
+        raise InputError(f"`{name}` must lie within +-{_MAX_VALUE:g} to be drawn; got {float(np.max(np.abs(arr))):g}.")
     return arr
+
+
+#: Largest magnitude a plotted value may have: the span of two such values stays finite.
+_MAX_VALUE = 1e307
 
 
 def _check_ax(ax, *, three_d: bool, why: str) -> None:
@@ -900,7 +908,7 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
             raise InputError(f"`errors[{label!r}]` is None: fit with `true_moving=` to record alignment errors.")
         if not hasattr(values, "__len__"):
             raise TypeError(f"`errors[{label!r}]` must be a sequence of errors per iteration; got {_describe(values)}.")
-        v = _as_values(values, n=len(values), other=f"errors[{label!r}]") * scale
+        v = _as_values(values, n=len(values), other=f"errors[{label!r}]", name=f"errors[{label!r}]") * scale
         if np.any(v < 0):
             raise InputError(f"`errors[{label!r}]` must be >= 0 (errors); got a minimum of {float(v.min()):.3g}.")
         top = max(top, float(v.max(initial=0.0)))
