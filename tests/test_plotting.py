@@ -527,3 +527,14 @@ def test_values_too_large_to_scale_and_bad_error_curves_are_named():
         with pytest.raises(InputError, match=message):
             call()
     plt.close("all")
+
+
+def test_save_figure_expands_the_home_folder(tmp_path, monkeypatch):
+    from centrality_vision.plotting import save_figure
+
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    monkeypatch.chdir(tmp_path)
+    fig = plt.figure()
+    written = save_figure(fig, "~/figs/a.png", dpi=20)
+    assert written == tmp_path / "home" / "figs" / "a.png" and written.is_file()
+    assert not (tmp_path / "~").exists()  # a folder literally named "~" was made

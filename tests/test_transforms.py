@@ -182,3 +182,14 @@ def test_a_displacement_beyond_float64_is_an_error_not_inf():
     np.testing.assert_array_equal(flip.displacement([[1.0, 2.0]]), [[-2.0, -4.0]])
     with pytest.raises(InputError, match="leave the float64 range"):  # was [[-inf, 0.]]
         flip.displacement([[1.7e308, 0.0]])
+
+
+def test_fit_similarity_without_scale_is_a_rigid_transform():
+    from centrality_vision.transforms import fit_similarity
+
+    source = np.random.default_rng(4).random((8, 2))
+    rotation = random_rotation(2, seed=5)
+    rigid = fit_similarity(source, source @ rotation.T + 1.0, scale=False)
+    assert type(rigid) is RigidTransform and rigid == RigidTransform(rigid.rotation, rigid.translation)
+    np.testing.assert_allclose(rigid.rotation, rotation, atol=1e-12)
+    assert type(fit_similarity(source, 2 * source, scale=True)) is SimilarityTransform

@@ -482,7 +482,7 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
     dpi = check_float(dpi, name="dpi", low=0, low_open=True, high=_MAX_DPI)
     import matplotlib.pyplot as plt
 
-    path = Path(path)
+    path = Path(path).expanduser()  # "~/figs/a.png" is the home folder's, not a folder named "~"
     formats = fig.canvas.get_supported_filetypes()
     if path.is_dir():
         raise InputError(f"`path` must be a file, not a folder; got {str(path)!r} (add a name, e.g. 'figure.png').")

@@ -384,7 +384,8 @@ def random_rotation(n_dims: int, seed=None) -> np.ndarray:
 
 
 def fit_similarity(source, target, *, scale: bool = True) -> SimilarityTransform:
-    """Least-squares similarity (or rigid) transform taking ``source`` onto ``target``.
+    """Least-squares similarity (or, with ``scale=False``, a :class:`RigidTransform`) taking
+    ``source`` onto ``target``.
 
     Minimises ``sum |s R x_i + t - y_i|^2`` over proper rotations (Umeyama's closed form).
 
@@ -410,7 +411,7 @@ def fit_similarity(source, target, *, scale: bool = True) -> SimilarityTransform
     if source.shape != target.shape:
         raise InputError(f"`source` and `target` must have the same shape; got {source.shape} and {target.shape}.")
     rotation, translation, s = least_squares_similarity(source, target, scale=scale)
-    return SimilarityTransform(rotation, translation, s)
+    return SimilarityTransform(rotation, translation, s) if scale else RigidTransform(rotation, translation)
 
 
 def _finite_array(values, name: str, *, ndim: int | None = 2) -> np.ndarray:
