@@ -532,6 +532,11 @@ def test_choice_lists_match_the_library():
 
     assert cli.CENTRALITY_NAMES == tuple(CENTRALITIES)
     assert set(cli.GPD_GRAPHS) == set(GRAPHS) - {"edgeless"}
+    from centrality_vision.cli import _common
+    from centrality_vision.registration._cpd import KERNEL_RANGE
+    from centrality_vision.shapes._histogram import MAX_BINS
+
+    assert _common.MAX_BINS == MAX_BINS and _common.KERNEL_RANGE == KERNEL_RANGE
 
 
 def test_reproduce_runs_an_experiment_and_resumes_with_a_scheduler(tmp_path, capsys):

@@ -39,6 +39,10 @@ GRAPH_KINDS = ("delaunay", "gabriel", "emst", "knn", "complete", "mwme", "mstme"
 GPD_GRAPHS = ("delaunay", "gabriel", "emst", "knn", "complete")
 CENTRALITY_NAMES = ("degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity", "pagerank", "katz")
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
+# Bounds spelled out for the same reason, checked against centrality_vision.shapes' MAX_BINS
+# and NonRigidCPD's KERNEL_RANGE (its beta and lam)
+MAX_BINS = 100_000
+KERNEL_RANGE = (1e-150, 1e150)
 POINT_FILES = ".csv, .txt, .xyz, .npy, .mat, .ply, .pcd or .obj"
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 from ._common import (
     CENTRALITY_NAMES,
+    MAX_BINS,
     add_out,
     add_plot,
     add_progress,
@@ -53,7 +54,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="centrality whose histogram is the feature; 'all' concatenates four (default: %(default)s)",
     )
     parser.add_argument(
-        "--bins", type=number(int, low=1, high=100_000), default=40, help="histogram bins (default: %(default)s)"
+        "--bins", type=number(int, low=1, high=MAX_BINS), default=40, help="histogram bins (default: %(default)s)"
     )
     parser.add_argument(
         "--classifier",

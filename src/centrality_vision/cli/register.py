@@ -9,6 +9,7 @@ from pathlib import Path
 from ._common import (
     CENTRALITY_NAMES,
     GPD_GRAPHS,
+    KERNEL_RANGE,
     POINT_FILES,
     add_out,
     add_plot,
@@ -102,13 +103,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--beta",
-        type=number(float, low=1e-150, high=1e150),  # the library's range (its square must be representable)
+        type=number(float, low=KERNEL_RANGE[0], high=KERNEL_RANGE[1]),
         default=2.0,
         help="nonrigid: width of the Gaussian kernel (default: %(default)s)",
     )
     parser.add_argument(
         "--lam",
-        type=number(float, low=1e-150, high=1e150),  # the library's range (its square must be representable)
+        type=number(float, low=KERNEL_RANGE[0], high=KERNEL_RANGE[1]),
         default=2.0,
         help="nonrigid: smoothness weight (default: %(default)s)",
     )

@@ -331,6 +331,11 @@ def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
     return arr
 
 
+#: The range of NonRigidCPD's ``beta`` and ``lam``: beta^2 (and lam's products) must be
+#: representable in float64.
+KERNEL_RANGE = (1e-150, 1e150)
+
+
 def _principal_box_volume(points: np.ndarray) -> float:
     """Volume of the points' bounding box in their principal axes (each side at least 1e-12).
 
@@ -1275,13 +1280,14 @@ class NonRigidCPD(_CPD):
         self.low_rank = low_rank
 
     def _check_params(self):
+        low, high = KERNEL_RANGE
         beta = check_float(self.beta, name="NonRigidCPD.beta", low=0.0, low_open=True)
-        if not 1e-150 <= beta <= 1e150:
+        if not low <= beta <= high:
             raise InputError(
                 f"`NonRigidCPD.beta` must be between 1e-150 and 1e150 (beta^2 must be representable); got {beta!r}."
             )
         lam = check_float(self.lam, name="NonRigidCPD.lam", low=0.0, low_open=True)
-        if lam < 1e-150 or lam > 1e150:
+        if not low <= lam <= high:
             raise InputError(f"`NonRigidCPD.lam` must be between 1e-150 and 1e150; got {lam!r}.")
         if not (self.low_rank is None or (isinstance(self.low_rank, str) and self.low_rank == "auto")):
             check_int(self.low_rank, name="NonRigidCPD.low_rank", low=1)
