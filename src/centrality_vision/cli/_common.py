@@ -78,10 +78,9 @@ def number(kind, *, low=None, low_open=False, high=None, high_open=False):
         too_low = low is not None and (value <= low if low_open else value < low)
         too_high = high is not None and (value >= high if high_open else value > high)
         if too_low or too_high:
-            left = "(" if low_open else "["
-            right = ")" if high_open else "]"
+            left = "(" if low_open or low is None else "["  # an infinite end is open
+            right = ")" if high_open or high is None else "]"
             span = f"{left}{'-inf' if low is None else low}, {'inf' if high is None else high}{right}"
-            span = span.replace("[-inf", "(-inf").replace("inf]", "inf)")
             raise argparse.ArgumentTypeError(f"must be in {span}; got {text}")
         return value
 
