@@ -415,11 +415,11 @@ def fit_similarity(source, target, *, scale: bool = True) -> SimilarityTransform
 
 
 def _finite_array(values, name: str, *, ndim: int | None = 2) -> np.ndarray:
-    """``values`` as a finite float64 array (of ``ndim`` dimensions), or a named error."""
-    try:
-        arr = np.asarray(values, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise TypeError(f"`{name}` must be an array of real numbers; got {type(values).__name__}.") from None
+    """``values`` as a finite float64 array (of ``ndim`` dimensions), or a named error.
+
+    The public helpers below check their input once with it and then run their unchecked
+    kernels (``_unit``, ``_centred``), which call each other without checking again."""
+    arr = as_real_array(values, name=name).astype(np.float64, copy=False)
     if ndim is not None and arr.ndim != ndim:
         raise InputError(f"`{name}` must be a {ndim}D array; got shape {arr.shape}.")
     if not np.all(np.isfinite(arr)):
@@ -466,7 +466,10 @@ def power_of_two_scale(points: np.ndarray) -> float:
     >>> power_of_two_scale(np.array([[3.0, -5.0]])), power_of_two_scale(np.zeros((2, 2)))
     (4.0, 1.0)
     """
-    points = _finite_array(points, "points", ndim=None)
+    return _unit(_finite_array(points, "points", ndim=None))
+
+
+def _unit(points: np.ndarray) -> float:
     peak = float(np.max(np.abs(points))) if points.size else 0.0
     if peak == 0.0:
         return 1.0
@@ -484,8 +487,8 @@ def rms_radius(points: np.ndarray) -> float:
     points = _finite_array(points, "points")
     if points.shape[0] == 0:
         return 0.0
-    rows = centred(points)[1]
-    unit = power_of_two_scale(rows)
+    rows = _centred(points)[1]
+    unit = _unit(rows)
     return unit * math.sqrt(float(np.sum((rows / unit) ** 2)) / rows.shape[0])
 
 
@@ -505,7 +508,11 @@ def centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     points = _finite_array(points, "points")
     if points.shape[0] == 0:
         raise InputError("`points` must hold at least one row; got none.")
-    unit = power_of_two_scale(points)
+    return _centred(points)
+
+
+def _centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    unit = _unit(points)
     scaled = points / unit
     mean = scaled.mean(axis=0)
     mean = mean + (scaled - mean).mean(axis=0)
@@ -519,8 +526,8 @@ def least_squares_similarity(
     (``s = 1`` without ``scale``, or when the sets are degenerate); inputs must be finite.
 
     Each centred set is divided by a power of two within a factor 2 of its largest
-    coordinate before the cross-covariance is formed, so coordinates up to the float64 limit give finite products
-    (no inf reaches the SVD).
+    coordinate before the cross-covariance is formed, so coordinates up to the float64
+    limit give finite products (no inf reaches the SVD).
 
     Examples
     --------
@@ -536,9 +543,9 @@ def least_squares_similarity(
             f"`source` and `target` must be paired rows of one shape (n >= 1, D); got {source.shape} and "
             f"{target.shape}."
         )
-    mu_s, xs = centred(source)
-    mu_t, xt = centred(target)
-    a, b = power_of_two_scale(xs), power_of_two_scale(xt)
+    mu_s, xs = _centred(source)
+    mu_t, xt = _centred(target)
+    a, b = _unit(xs), _unit(xt)
     xs, xt = xs / a, xt / b
     rotation, trace = proper_rotation(xt.T @ xs)
     var = float(np.sum(xs * xs))
