@@ -88,6 +88,12 @@ def as_shape_images(
     return masks
 
 
+def is_connectivity(value) -> bool:
+    """Whether ``value`` is a pixel neighbourhood of the shape layer: the int 4 or 8 (not a
+    bool, not 8.0, which would also name cache files ``c8.0``)."""
+    return isinstance(value, numbers.Integral) and not isinstance(value, bool) and value in (4, 8)
+
+
 def _as_mask(mask) -> np.ndarray:
     """The boolean mask :func:`~centrality_vision.graphs.pixel_graph` reads from ``mask``.
 
@@ -494,7 +500,7 @@ def shape_centralities(
     except TypeError:
         raise TypeError(f"`names` must be a centrality name or a sequence of names; got {names!r}.") from None
     names = [check_choice(n, CENTRALITIES, name="centrality") for n in names]
-    if isinstance(connectivity, bool) or not isinstance(connectivity, numbers.Integral) or connectivity not in (4, 8):
+    if not is_connectivity(connectivity):
         raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
     connectivity = int(connectivity)
     if not isinstance(progress, (bool, np.bool_)):

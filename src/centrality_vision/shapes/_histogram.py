@@ -2,15 +2,13 @@
 
 from __future__ import annotations
 
-import numbers
-
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .._validation import check_choice, check_int
 from ..centrality import CENTRALITIES
 from ..exceptions import InputError
-from ._cache import SHAPE_CENTRALITIES, as_shape_images, shape_centralities
+from ._cache import SHAPE_CENTRALITIES, as_shape_images, is_connectivity, shape_centralities
 
 __all__ = ["CentralityHistogram", "ShapeInputMixin", "resolve_centralities"]
 
@@ -199,11 +197,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         names = resolve_centralities(self.centrality)
         check_int(self.bins, name="bins", low=1, high=MAX_BINS)
         check_choice(self.scaling, ("minmax", "max"), name="scaling")
-        if (
-            isinstance(self.connectivity, bool)
-            or not isinstance(self.connectivity, numbers.Integral)
-            or self.connectivity not in (4, 8)
-        ):
+        if not is_connectivity(self.connectivity):
             raise InputError(
                 "`connectivity`: the 'connectivity' parameter of CentralityHistogram must be 4 or 8. "
                 f"Got {self.connectivity!r} instead."
