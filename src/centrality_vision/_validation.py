@@ -282,8 +282,9 @@ def as_binary_image(
 
     With ``check_inverted=True`` (for inputs meant to be silhouettes), a shape that
     touches more than half of the border pixels (the whole border included) while
-    some background is left looks inverted, and a :class:`UserWarning` says so (images smaller than 8 x 8 are
-    not judged; with ``"auto"`` on a grey image this cannot happen).
+    some background is left looks inverted, and a :class:`UserWarning` says so
+    (images smaller than 8 x 8 are not judged; with ``"auto"`` on a grey image this
+    cannot happen).
 
     Raises :class:`TypeError` for non-numeric input and
     :class:`~centrality_vision.exceptions.InputError` for a shape other than 2D,

@@ -105,6 +105,10 @@ def _equal_3d(ax, points: np.ndarray) -> None:
     ax.tick_params(labelsize=7, pad=0)
 
 
+#: Largest magnitude a plotted value may have: the span of two such values stays finite.
+_MAX_VALUE = 1e307
+
+
 def _as_values(values, *, n: int, other: str, name: str = "values") -> np.ndarray:
     """``values`` as a finite float64 array of shape (n,); ``other`` names what fixes n,
     ``name`` the argument an error names."""
@@ -125,10 +129,6 @@ def _as_values(values, *, n: int, other: str, name: str = "values") -> np.ndarra
     if arr.size and float(np.max(np.abs(arr))) > _MAX_VALUE:
         raise InputError(f"`{name}` must lie within +-{_MAX_VALUE:g} to be drawn; got {float(np.max(np.abs(arr))):g}.")
     return arr
-
-
-#: Largest magnitude a plotted value may have: the span of two such values stays finite.
-_MAX_VALUE = 1e307
 
 
 def _check_ax(ax, *, three_d: bool, why: str) -> None:
