@@ -474,7 +474,8 @@ def _ply_header(path: Path, data: bytes):
     header = data[:end].decode("ascii", errors="replace").splitlines()
     if header[0].strip() != "ply":
         raise InputError(f"{path}: not a readable PLY file (its first line is not 'ply').")
-    body_offset = data.find(b"\n", end) + 1 if data.find(b"\n", end) >= 0 else len(data)
+    newline = data.find(b"\n", end)
+    body_offset = newline + 1 if newline >= 0 else len(data)
     body = len(data) - body_offset
     fmt, elements, sizes = "", [], []
     for line in header:
