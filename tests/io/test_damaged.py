@@ -101,3 +101,17 @@ def test_mutated_files_give_points_or_an_input_error(tmp_path, suffix, seed):
     except InputError:
         return
     assert out.dtype == bool or np.isfinite(out).all()
+
+
+@pytest.mark.parametrize(("line", "value"), [(b"POINTS", b""), (b"WIDTH", b""), (b"POINTS", b"two")])
+def test_a_pcd_count_line_without_an_integer_is_an_input_error(tmp_path, line, value):
+    # found by the mutation test above: a POINTS or WIDTH line with no value raised IndexError
+    path = tmp_path / "count.pcd"
+    header = {b"WIDTH": b"2", b"HEIGHT": b"1", b"POINTS": b"2"}
+    header[line] = value
+    if line == b"WIDTH":
+        del header[b"POINTS"]  # WIDTH x HEIGHT counts only without POINTS
+    body = b"".join(key + (b" " + v if v else b"") + b"\n" for key, v in header.items())
+    path.write_bytes(b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n" + body + b"DATA ascii\n1 2 3\n4 5 6\n")
+    with pytest.raises(InputError, match="POINTS, WIDTH or HEIGHT line without an integer"):
+        read_points(path)

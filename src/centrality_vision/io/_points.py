@@ -643,8 +643,10 @@ def _read_pcd(path: Path) -> _Table:
             n_points = int(header["POINTS"][0])
         else:  # (older headers: an organised cloud holds WIDTH x HEIGHT points)
             n_points = int(header.get("WIDTH", ["0"])[0]) * int(header.get("HEIGHT", ["1"])[0])
-    except ValueError:
-        raise InputError(f"{path}: the PCD header has a SIZE, COUNT or POINTS that is not an integer.") from None
+    except (ValueError, IndexError):  # not a number, or a POINTS/WIDTH/HEIGHT line with none
+        raise InputError(
+            f"{path}: the PCD header has a SIZE, COUNT, POINTS, WIDTH or HEIGHT line without an integer."
+        ) from None
     if not (len(sizes) == len(types) == len(counts) == n) or min(counts) < 1:
         raise InputError(f"{path}: the PCD header's FIELDS, SIZE, TYPE and COUNT lines do not match.")
     names = []
