@@ -31,6 +31,59 @@ def test_a_mat_file_that_crashed_scipy_is_an_input_error(tmp_path):
         read_points(path)
 
 
+def _savemat_bytes(contents, **kwargs) -> bytes:
+    from scipy.io import savemat
+
+    buffer = io.BytesIO()
+    savemat(buffer, contents, **kwargs)
+    return buffer.getvalue()
+
+
+def _edit(data: bytes, offset: int, new: bytes) -> bytes:
+    return data[:offset] + new + data[offset + len(new) :]
+
+
+# Byte edits of a one-array savemat file ("a", 3 x 2 doubles; the array starts at byte 128,
+# its flags at 144, its data tag at 176). Each crashed scipy's loadmat (segmentation fault)
+# in a replay of the mutation test below.
+_MAT_EDITS = {
+    "complex flag, no imaginary part": (145, b"\xb9"),
+    "data of an unknown type (75)": (176, b"\x4b"),
+    "data of type 0": (176, b"\x00"),
+    "data of a reserved type (8)": (176, b"\x08"),
+    "array longer than the file": (132, b"\x00\x01"),
+    "data longer than the array": (180, b"\x40"),
+    "data shorter than its shape": (180, b"\x28"),
+    "flags of the wrong type": (136, b"\x05"),
+    "small element holding 9 bytes": (168, b"\x01\x00\x09\x00"),
+}
+
+
+@pytest.mark.parametrize("edit", sorted(_MAT_EDITS))
+def test_a_mat_file_with_a_damaged_array_is_an_input_error(tmp_path, edit):
+    seed = _savemat_bytes({"a": np.arange(6.0).reshape(3, 2)})
+    assert seed[176:178] == b"\x09\x00" and seed[180] == 48  # the layout the edits assume
+    path = tmp_path / "damaged.mat"
+    path.write_bytes(_edit(seed, *_MAT_EDITS[edit]))
+    with pytest.raises(InputError, match=r"damaged.mat: not a readable .mat file \(byte 1\d\d"):
+        read_points(path)
+
+
+def test_a_mat_file_whose_compressed_array_is_damaged_is_an_input_error(tmp_path):
+    import zlib
+
+    plain = _savemat_bytes({"a": np.arange(6.0).reshape(3, 2)})
+    inner = _edit(plain[128:], 17, b"\xb9")  # the complex flag again, inside the compressed block
+    packed = zlib.compress(inner)
+    path = tmp_path / "z.mat"
+    path.write_bytes(plain[:128] + np.array([15, len(packed)], "<u4").tobytes() + packed)
+    with pytest.raises(InputError, match="z.mat: not a readable .mat file .*compressed byte"):
+        read_points(path)
+    path.write_bytes(plain[:128] + np.array([15, len(packed)], "<u4").tobytes() + packed[:-5] + b"\x00" * 5)
+    with pytest.raises(InputError, match="z.mat: not a readable .mat file .*compressed data"):
+        read_points(path)
+
+
 @pytest.mark.parametrize("line", [b"property", b"property list"])
 def test_a_ply_property_line_without_its_type_is_an_input_error(tmp_path, line):
     # found by the mutation test below: the header check indexed the missing words

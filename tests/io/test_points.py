@@ -141,6 +141,98 @@ def test_mat_written_by_scipy_with_a_named_variable(tmp_path):
         read_points(tmp_path / "two.mat", variable="Z")
 
 
+# Level-5 MAT files are parsed by centrality-vision itself (scipy's loadmat can crash on a
+# damaged file), so each array must come back exactly as loadmat reads it.
+_MAT_DTYPES = ["f8", "f4", "i1", "u1", "i2", "u2", "i4", "u4", "i8", "u8", "bool"]
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    data=st.data(),
+    dtype=st.sampled_from(_MAT_DTYPES),
+    n_rows=st.integers(1, 9),
+    n_dims=st.sampled_from([2, 3]),
+    compressed=st.booleans(),
+)
+def test_mat_arrays_of_every_type_read_as_loadmat_reads_them(tmp_path_factory, data, dtype, n_rows, n_dims, compressed):
+    from scipy.io import loadmat, savemat
+
+    info = np.iinfo(dtype) if dtype[0] in "iu" else None
+    elements = (
+        st.integers(int(info.min), int(info.max))
+        if info
+        else st.booleans()
+        if dtype == "bool"
+        else st.floats(width=32 if dtype == "f4" else 64, allow_nan=False, allow_infinity=False)
+    )
+    points = data.draw(arrays(np.dtype(dtype), (n_rows, n_dims), elements=elements))
+    others = {"note": "fish", "cell": np.array([np.ones(2), "ab"], dtype=object), "st": {"x": np.ones((2, 2))}}
+    others |= {"cube": np.ones((2, 2, 2)), "z": np.array([[1 + 2j]])}  # not 2D real: not candidates
+    path = tmp_path_factory.mktemp("mat") / "p.mat"
+    savemat(path, {"P": points, **others}, do_compression=compressed)
+    assert np.array_equal(read_points(path), np.asarray(loadmat(path)["P"], dtype=np.float64))
+    assert np.array_equal(read_points(path), points.astype(np.float64))
+
+
+@pytest.mark.parametrize(
+    ("variable", "what"),
+    [
+        ("note", "a MATLAB char array"),
+        ("cell", "a MATLAB cell array of shape \\(1, 2\\)"),
+        ("st", "a MATLAB struct of shape \\(1, 1\\)"),
+        ("cube", "a MATLAB double array of shape \\(2, 2, 2\\)"),
+        ("z", "a MATLAB complex double array of shape \\(1, 1\\)"),
+    ],
+)
+def test_a_mat_variable_that_is_not_a_2d_real_array_is_named_in_the_error(tmp_path, variable, what):
+    from scipy.io import savemat
+
+    contents = {"P": FLAT, "note": "fish", "cell": np.array([np.ones(2), "ab"], dtype=object)}
+    contents |= {"st": {"x": np.ones((2, 2))}, "cube": np.ones((2, 2, 2)), "z": np.array([[1 + 2j]])}
+    savemat(tmp_path / "p.mat", contents)
+    with pytest.raises(InputError, match=f"variable '{variable}' must be a 2D real numeric array; got {what}"):
+        read_points(tmp_path / "p.mat", variable=variable)
+
+
+def test_mat_files_written_by_matlab_read_as_loadmat_reads_them():
+    # scipy ships about a hundred MAT files written by MATLAB 4 to 8 on several platforms
+    # (big- and little-endian, compressed, with cells, structs, objects, function handles)
+    import warnings
+    from pathlib import Path
+
+    import scipy.io
+    from scipy.io import loadmat
+    from scipy.io.matlab import matfile_version
+
+    from centrality_vision.io._points import _Mat5
+
+    folder = Path(scipy.io.__file__).parent / "matlab" / "tests" / "data"
+    files = sorted(folder.glob("*.mat"))
+    if not files:
+        pytest.skip("this scipy was installed without its test data")
+    checked = 0
+    for path in files:
+        try:
+            if matfile_version(path)[0] != 1:
+                continue
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                reference = loadmat(path)
+        except Exception:  # a file scipy's own tests expect to fail
+            continue
+        ours = {v.name: v.values for v in _Mat5(path, path.read_bytes()).variables() if v.name}
+        assert set(ours) == {key for key in reference if not key.startswith("__")}, path.name
+        for name, values in ours.items():
+            ref = reference[name]
+            readable = isinstance(ref, np.ndarray) and ref.ndim == 2 and not np.iscomplexobj(ref)
+            readable = readable and (np.issubdtype(ref.dtype, np.number) or ref.dtype == bool)
+            assert readable == (values is not None), (path.name, name)
+            if readable:
+                assert np.array_equal(values.astype(np.float64), ref.astype(np.float64)), (path.name, name)
+        checked += 1
+    assert checked > 50
+
+
 def test_xyz_and_txt_written_by_numpy(tmp_path):
     np.savetxt(tmp_path / "cloud.xyz", CLOUD)
     np.savetxt(tmp_path / "tabs.txt", FLAT, delimiter="\t", header="some comment")

@@ -79,9 +79,11 @@ def read_points(
         A 2D numeric array saved with :func:`numpy.save` (no pickles). The header's shape
         is checked against the file size before anything is loaded.
     ``.mat``
-        A MATLAB file (up to v7; v7.3 is HDF5 and refused) read by
-        :func:`scipy.io.loadmat`; ``variable`` names the array, needed only when the file
-        holds more than one 2D numeric array.
+        A MATLAB file up to v7 (v7.3 is HDF5 and refused). Level-5 files (MATLAB 5 to
+        7) are parsed here, every byte count checked, because :func:`scipy.io.loadmat`
+        can crash the interpreter on a damaged one; level-4 files are read by
+        :func:`scipy.io.loadmat`. Real numeric and logical 2D arrays are candidates;
+        ``variable`` names the array, needed only when the file holds more than one.
     ``.ply``
         The vertex element of an ASCII PLY file (parsed here) or a binary one (decoded
         by ``meshio``); its scalar properties (``x``, ``y``, ``z``, ``intensity``, ...)
@@ -384,50 +386,189 @@ def _read_npy(path: Path) -> _Table:
 # ------------------------------------------------------------------------------- .mat
 
 
-def _read_mat(path: Path, variable: str | None) -> _Table:
-    from scipy.io import loadmat, whosmat
+# Level-5 MAT files (MATLAB 5 to 7.0) are read here rather than by scipy's loadmat: its
+# compiled reader trusts the byte counts and flags of a file, so a damaged one (a complex
+# flag with no imaginary part, an unknown data type, a count past the end) crashes the
+# interpreter; about one in 300 random byte edits of a small file did. This reader takes
+# what read_points needs (real numeric and logical arrays), names every other variable,
+# and checks every count against the bytes there are. Level 4 files go to loadmat, whose
+# level-4 reader is plain Python.
 
-    # The variables' headers first: scipy's loadmat can crash the interpreter on a damaged
-    # file whose data run past its end, while whosmat reads the headers and raises.
+# data types (MAT-File Format, table 1-1) -> numpy type codes; 14 is miMATRIX, 15 miCOMPRESSED
+_MI_NUMERIC = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 9: "f8", 12: "i8", 13: "u8"}
+_MI_TYPES = frozenset(_MI_NUMERIC) | {14, 15, 16, 17, 18}
+_MI_MATRIX, _MI_COMPRESSED = 14, 15
+# array classes (table 1-3); 6 to 15 are numeric
+_MX_CLASSES = {
+    1: "cell array",
+    2: "struct",
+    3: "object",
+    4: "char array",
+    5: "sparse matrix",
+    **{k: f"{name} array" for k, name in enumerate(("double", "single", "int8", "uint8", "int16"), start=6)},
+    **{k: f"{name} array" for k, name in enumerate(("uint16", "int32", "uint32", "int64", "uint64"), start=11)},
+    16: "function handle",
+    17: "opaque object",
+}
+_MX_LOGICAL, _MX_COMPLEX = 0x200, 0x800
+
+
+@dataclass
+class _MatVariable:
+    name: str
+    what: str  # "a MATLAB double array of shape (3, 2)"
+    values: np.ndarray | None  # set for 2D real numeric and logical arrays only
+
+
+class _Mat5:
+    """One pass over a level-5 MAT file's variables; InputError on any damage."""
+
+    def __init__(self, path: Path, data: bytes):
+        self.path = path
+        if data[126:128] not in (b"IM", b"MI"):
+            raise self.error(126, f"the byte-order mark is {data[126:128]!r}, not b'IM' or b'MI'")
+        self.order = "<" if data[126:128] == b"IM" else ">"
+        self.data = data
+
+    def error(self, at, what: str) -> InputError:
+        return InputError(f"{self.path}: not a readable .mat file (byte {at}: {what}).")
+
+    def elements(self, buffer: bytes, start: int, end: int, where: str):
+        """(type, body start, body length, where) of each data element in buffer[start:end]."""
+        import struct
+
+        offset = start
+        while offset < end:
+            at = f"{where}{offset}"
+            if offset + 8 > end:
+                raise self.error(at, f"a data element needs 8 bytes, {end - offset} left")
+            kind, nbytes = struct.unpack_from(self.order + "II", buffer, offset)
+            if kind >> 16:  # small data element: type and count share the first 4 bytes
+                kind, nbytes = kind & 0xFFFF, kind >> 16
+                if nbytes > 4 or kind not in _MI_NUMERIC and kind not in (16, 17, 18):
+                    raise self.error(at, f"a small data element of type {kind} holding {nbytes} bytes")
+                yield kind, offset + 4, nbytes, at
+                offset += 8
+                continue
+            if kind not in _MI_TYPES:
+                raise self.error(at, f"unknown data type {kind}")
+            if nbytes > end - offset - 8:
+                raise self.error(at, f"{nbytes} bytes declared, {end - offset - 8} left")
+            yield kind, offset + 8, nbytes, at
+            offset += 8 + nbytes + (0 if kind == _MI_COMPRESSED else -nbytes % 8)
+
+    def variables(self):
+        import zlib
+
+        for kind, body, nbytes, at in self.elements(self.data, 128, len(self.data), ""):
+            if kind == _MI_COMPRESSED:
+                inflater = zlib.decompressobj()
+                try:
+                    # zlib compresses at most ~1032:1; a stream that expands more is damaged
+                    inner = inflater.decompress(self.data[body : body + nbytes], 1032 * nbytes + 1024)
+                except zlib.error as exc:
+                    raise self.error(at, f"compressed data: {exc}") from None
+                if inflater.unconsumed_tail:
+                    raise self.error(at, f"{nbytes} compressed bytes expand more than zlib can")
+                for inner_kind, inner_body, inner_nbytes, inner_at in self.elements(
+                    inner, 0, len(inner), f"{at}, compressed byte "
+                ):
+                    if inner_kind == _MI_MATRIX:
+                        yield self.variable(inner, inner_body, inner_nbytes, inner_at)
+            elif kind == _MI_MATRIX:
+                yield self.variable(self.data, body, nbytes, at)
+
+    def variable(self, buffer: bytes, body: int, nbytes: int, at: str) -> _MatVariable:
+        parts = iter(self.elements(buffer, body, body + nbytes, at + ", array byte "))
+
+        def next_part(what: str):
+            part = next(parts, None)
+            if part is None:
+                raise self.error(at, f"the array ends before its {what}")
+            return part
+
+        kind, start, size, where = next_part("flags")
+        if kind != 6 or size != 8:
+            raise self.error(where, "an array must start with 8 bytes of miUINT32 flags")
+        flags = int(np.frombuffer(buffer, self.order + "u4", 1, start)[0])
+        mx_class = flags & 0xFF
+        if mx_class not in _MX_CLASSES:
+            raise self.error(where, f"unknown array class {mx_class}")
+        what = "a MATLAB " + _MX_CLASSES[mx_class]
+        if mx_class == 17:  # no dimensions in an opaque object
+            return _MatVariable(self.name(buffer, *next_part("name")), what, None)
+        kind, start, size, where = next_part("dimensions")
+        if kind not in (5, 6) or size < 8 or size % 4:  # some writers use miUINT32
+            raise self.error(where, "an array's dimensions must be two or more 32-bit integers")
+        shape = tuple(int(d) for d in np.frombuffer(buffer, self.order + "i4", size // 4, start))
+        if min(shape) < 0:
+            raise self.error(where, f"negative dimensions {shape}")
+        name = self.name(buffer, *next_part("name"))
+        if mx_class in (5, 16) or mx_class < 4:
+            return _MatVariable(name, f"{what} of shape {shape}", None)
+        complex_ = bool(flags & _MX_COMPLEX)
+        logical = bool(flags & _MX_LOGICAL)
+        if complex_ or logical:
+            what = "a MATLAB complex " + _MX_CLASSES[mx_class] if complex_ else "a MATLAB logical array"
+        what += f" of shape {shape}"
+        if mx_class == 4:
+            return _MatVariable(name, what, None)
+        n_values = math.prod(shape)
+        for part in ("real part", "imaginary part") if complex_ else ("data",):
+            kind, start, size, where = next_part(part)
+            if kind not in _MI_NUMERIC:
+                raise self.error(where, f"the {part} of an array in data type {kind}")
+            if size != n_values * int(_MI_NUMERIC[kind][1]):
+                raise self.error(
+                    where, f"{what} needs {n_values} values; its {part} holds {size} bytes of {_MI_NUMERIC[kind]}"
+                )
+            if part == "data" and len(shape) == 2:
+                values = np.frombuffer(buffer, self.order + _MI_NUMERIC[kind], n_values, start).reshape(
+                    shape, order="F"
+                )
+                return _MatVariable(name, what, values != 0 if logical else values.astype(np.float64))
+        return _MatVariable(name, what, None)
+
+    def name(self, buffer: bytes, kind: int, start: int, size: int, where: str) -> str:
+        if kind not in (1, 2, 16):
+            raise self.error(where, f"an array name of data type {kind}")
+        try:
+            return bytes(buffer[start : start + size]).decode("utf-8")
+        except UnicodeDecodeError:
+            raise self.error(where, "an array name that is not text") from None
+
+
+def _read_mat(path: Path, variable: str | None) -> _Table:
+    from scipy.io import loadmat
+    from scipy.io.matlab import matfile_version
+
     try:
-        variables = whosmat(path)
-    except NotImplementedError:
-        raise InputError(
-            f"{path}: MATLAB v7.3 (HDF5) files are not supported; save with -v7 (or read it with h5py)."
-        ) from None
-    except Exception as exc:  # scipy raises ValueError, TypeError, OSError, MatReadError, ...
+        major, _ = matfile_version(path)
+    except Exception as exc:  # scipy raises MatReadError, ValueError, ...
         raise InputError(f"{path}: not a readable .mat file ({type(exc).__name__}: {_first_line(exc)}).") from None
-    size = path.stat().st_size
-    for name, shape, _ in variables:
-        # zlib compresses at most ~1032:1, so no real file holds more than this
-        if math.prod(shape) > 1032 * size + 1_000_000:
-            raise InputError(
-                f"{path}: variable {name!r} declares shape {shape}, more than a file of {size} bytes can hold."
-            )
-    try:
-        contents = loadmat(path)
-    except NotImplementedError:
-        raise InputError(
-            f"{path}: MATLAB v7.3 (HDF5) files are not supported; save with -v7 (or read it with h5py)."
-        ) from None
-    except Exception as exc:  # scipy raises ValueError, TypeError, MatReadError, ...
-        raise InputError(f"{path}: not a readable .mat file ({type(exc).__name__}: {_first_line(exc)}).") from None
-    arrays = {
-        key: value
-        for key, value in contents.items()
-        if not key.startswith("__")
-        and isinstance(value, np.ndarray)
-        and value.ndim == 2
-        and (np.issubdtype(value.dtype, np.number) or value.dtype == bool)
-        and not np.iscomplexobj(value)
-    }
+    if major == 2:
+        raise InputError(f"{path}: MATLAB v7.3 (HDF5) files are not supported; save with -v7 (or read it with h5py).")
+    if major == 1:
+        found = {v.name: v for v in _Mat5(path, path.read_bytes()).variables() if v.name}
+    else:  # level 4
+        try:
+            contents = loadmat(path)
+        except Exception as exc:  # scipy raises ValueError, TypeError, MatReadError, ...
+            raise InputError(f"{path}: not a readable .mat file ({type(exc).__name__}: {_first_line(exc)}).") from None
+        found = {}
+        for key, value in contents.items():
+            if not key.startswith("__"):
+                readable = isinstance(value, np.ndarray) and value.ndim == 2 and not np.iscomplexobj(value)
+                readable = readable and (np.issubdtype(value.dtype, np.number) or value.dtype == bool)
+                found[key] = _MatVariable(key, _describe(value), value if readable else None)
+    arrays = {name: v.values for name, v in found.items() if v.values is not None}
     if variable is not None:
-        if variable not in contents or variable.startswith("__"):
-            names = ", ".join(sorted(key for key in contents if not key.startswith("__"))) or "none"
+        if variable not in found:
+            names = ", ".join(sorted(found)) or "none"
             raise InputError(f"{path}: no variable {variable!r} (variables: {names}).")
         if variable not in arrays:
             raise InputError(
-                f"{path}: variable {variable!r} must be a 2D real numeric array; got {_describe(contents[variable])}."
+                f"{path}: variable {variable!r} must be a 2D real numeric array; got {found[variable].what}."
             )
         return _Table(arrays[variable].astype(np.float64))
     if len(arrays) != 1:
