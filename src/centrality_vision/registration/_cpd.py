@@ -821,17 +821,21 @@ class _CPD(BaseEstimator):
 
     def _collapse(self, moving_n, fixed, moving_t, w, post) -> str | None:
         radius_y, radius_x, radius_t = rms_radius(moving_n), rms_radius(fixed), rms_radius(moving_t)
+        # (normalize=True is suggested only where it is off: the command line always has it on)
+        advice = (
+            "Try " + ("normalize=True, " if not self.normalize else "") + "a smaller `w`, or a starting pose (`init`)."
+        )
         if min(radius_y, radius_x) > 0 and radius_t < _COLLAPSE_RADIUS * min(radius_y, radius_x):
             return (
                 f"the transformed moving set collapsed (RMS radius {radius_t / radius_y:.3g} of the moving set's); "
-                "the result is not a registration. Try normalize=True, a smaller `w`, or `init=`."
+                f"the result is not a registration. {advice}"
             )
         expected = (1.0 - w) * min(moving_n.shape[0], fixed.shape[0])
         if post.n_p < _COLLAPSE_MATCHED * expected:
             return (
                 f"only {post.n_p:.3g} of {fixed.shape[0]} fixed points were matched at the end (the rest taken as "
                 f"outliers; about {expected:.3g} expected with w={w:.3g}); the result is not a registration. "
-                "Try normalize=True, a smaller `w`, or `init=`."
+                f"{advice}"
             )
         return None
 
