@@ -101,7 +101,6 @@ def test_a_damaged_ply_header_is_an_input_error_not_an_exit(tmp_path):
 
 
 def _seeds() -> dict:
-    from scipy.io import savemat
 
     seeds = {
         ".csv": b"x,y,z\n1,2,3\n4,5,6\n",
@@ -115,9 +114,7 @@ def _seeds() -> dict:
     buffer = io.BytesIO()
     np.save(buffer, np.arange(6.0).reshape(3, 2))
     seeds[".npy"] = buffer.getvalue()
-    buffer = io.BytesIO()
-    savemat(buffer, {"a": np.arange(6.0).reshape(3, 2)})
-    seeds[".mat"] = buffer.getvalue()
+    seeds[".mat"] = _savemat_bytes({"a": np.arange(6.0).reshape(3, 2)})
     image = np.full((8, 8), 255, np.uint8)
     image[2:5, 2:6] = 0
     for suffix in (".png", ".bmp", ".gif"):

@@ -170,8 +170,9 @@ def test_mat_arrays_of_every_type_read_as_loadmat_reads_them(tmp_path_factory, d
     others |= {"cube": np.ones((2, 2, 2)), "z": np.array([[1 + 2j]])}  # not 2D real: not candidates
     path = tmp_path_factory.mktemp("mat") / "p.mat"
     savemat(path, {"P": points, **others}, do_compression=compressed)
-    assert np.array_equal(read_points(path), np.asarray(loadmat(path)["P"], dtype=np.float64))
-    assert np.array_equal(read_points(path), points.astype(np.float64))
+    read = read_points(path)
+    assert np.array_equal(read, np.asarray(loadmat(path)["P"], dtype=np.float64))
+    assert np.array_equal(read, points.astype(np.float64))
 
 
 @pytest.mark.parametrize(

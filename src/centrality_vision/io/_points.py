@@ -11,6 +11,8 @@ from __future__ import annotations
 import csv
 import math
 import re
+import struct
+import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -405,8 +407,12 @@ _MX_CLASSES = {
     3: "object",
     4: "char array",
     5: "sparse matrix",
-    **{k: f"{name} array" for k, name in enumerate(("double", "single", "int8", "uint8", "int16"), start=6)},
-    **{k: f"{name} array" for k, name in enumerate(("uint16", "int32", "uint32", "int64", "uint64"), start=11)},
+    **{
+        k: f"{name} array"
+        for k, name in enumerate(
+            ("double", "single", "int8", "uint8", "int16", "uint16", "int32", "uint32", "int64", "uint64"), start=6
+        )
+    },
     16: "function handle",
     17: "opaque object",
 }
@@ -435,8 +441,6 @@ class _Mat5:
 
     def elements(self, buffer: bytes, start: int, end: int, where: str):
         """(type, body start, body length, where) of each data element in buffer[start:end]."""
-        import struct
-
         offset = start
         while offset < end:
             at = f"{where}{offset}"
@@ -445,7 +449,7 @@ class _Mat5:
             kind, nbytes = struct.unpack_from(self.order + "II", buffer, offset)
             if kind >> 16:  # small data element: type and count share the first 4 bytes
                 kind, nbytes = kind & 0xFFFF, kind >> 16
-                if nbytes > 4 or kind not in _MI_NUMERIC and kind not in (16, 17, 18):
+                if nbytes > 4 or kind not in _MI_TYPES or kind in (_MI_MATRIX, _MI_COMPRESSED):
                     raise self.error(at, f"a small data element of type {kind} holding {nbytes} bytes")
                 yield kind, offset + 4, nbytes, at
                 offset += 8
@@ -458,8 +462,6 @@ class _Mat5:
             offset += 8 + nbytes + (0 if kind == _MI_COMPRESSED else -nbytes % 8)
 
     def variables(self):
-        import zlib
-
         for kind, body, nbytes, at in self.elements(self.data, 128, len(self.data), ""):
             if kind == _MI_COMPRESSED:
                 inflater = zlib.decompressobj()

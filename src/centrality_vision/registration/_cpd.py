@@ -1161,8 +1161,6 @@ class AffineCPD(_CPD):
         centred = moving - moving.mean(axis=0)
         rank = int(np.linalg.matrix_rank(centred / max(float(np.abs(centred).max()), np.finfo(float).tiny)))
         if rank < dim:
-            import warnings
-
             warnings.warn(
                 f"`moving` spans {rank} of {dim} dimensions ({moving.shape[0]} points): an affine transform is not "
                 f"determined by it (it takes at least {dim + 1} points, not all on one "
