@@ -46,12 +46,17 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--out .json/.npz: the transform, the aligned moving set, iterations, convergence, the\n"
         "history of objective/sigma2/error, the correspondences and every parameter. A nonrigid\n"
         "transform maps z to u + sum_m coefficients[m] exp(-|u - control_points[m]|^2 / (2 beta^2)),\n"
-        "u = linear z + translation.\n"
+        "u = linear z + translation. With --w auto the record holds the estimated outlier weight\n"
+        "(w); with --landmarks, the pairs and their distances after the fit.\n"
         f"--out a point-set file ({', '.join(POINT_OUTPUTS)}): the aligned moving set, and all the\n"
-        "rest in NAME.json beside it.",
+        "rest in NAME.json beside it.\n"
+        "Far from the answer (beyond about 70 degrees) CPD ends in a wrong pose: --init global\n"
+        "searches the rotations first, or --landmarks pins a few known pairs. With clutter or\n"
+        "missing parts, --w auto (or 0.1-0.3); --n-neighbors 10 when the sets start roughly aligned.",
         example="centrality-vision register fish_moving.txt fish_fixed.txt --method gpd --transform nonrigid \\\n"
         "    --centrality closeness --out aligned.csv --plot aligned.png\n"
-        "centrality-vision register scan.ply model.ply --method cpd --transform rigid --out aligned.ply",
+        "centrality-vision register scan.ply model.ply --method cpd --transform rigid --init global \\\n"
+        "    --w auto --out aligned.ply",
     )
     parser.add_argument("moving", metavar="MOVING", help="point set to move")
     parser.add_argument("fixed", metavar="FIXED", help="point set to align onto")
@@ -88,9 +93,54 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--w",
-        type=number(float, low=0, high=1, high_open=True),
+        type=_outlier_weight,
         default=0.0,
-        help="CPD/GPD: weight of the outlier component, in [0, 1) (default: %(default)s)",
+        help="CPD/GPD: weight of the outlier component, in [0, 1), or auto: estimated during the fit "
+        "(default: %(default)s)",
+    )
+    parser.add_argument(
+        "--init",
+        choices=("none", "global"),
+        default="none",
+        help="CPD/GPD: starting pose; none = the centroids aligned (the files' own pose with "
+        "--n-neighbors), global = a search over every rotation first, for sets in any pose "
+        "(default: %(default)s)",
+    )
+    parser.add_argument(
+        "--seed",
+        type=number(int, low=0, high=2**32 - 1),
+        default=0,
+        help="seed of --init global's search (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--n-neighbors",
+        type=number(int, low=1),
+        metavar="K",
+        help="CPD/GPD: each moving point explains only its K nearest fixed points (robust to clutter "
+        "and missing parts when the sets start roughly aligned; e.g. 10) (default: every fixed point)",
+    )
+    parser.add_argument(
+        "--landmarks",
+        metavar="FILE",
+        help="CPD/GPD: pairs of 0-based rows 'i j', one per line (text or CSV, a header allowed), "
+        "pinning moving point i to fixed point j",
+    )
+    parser.add_argument(
+        "--max-distance",
+        type=number(float, low=0, low_open=True),
+        help="ICP only: pairs farther apart than this, in the files' units, are ignored (default: none)",
+    )
+    parser.add_argument(
+        "--trim",
+        type=number(float, low=0, high=1, high_open=True),
+        help="ICP only: fraction of the farthest pairs ignored at each iteration, about the share of "
+        "moving points with no partner (default: 0)",
+    )
+    parser.add_argument(
+        "--metric",
+        choices=("point_to_point", "point_to_plane"),
+        help="ICP only: point_to_plane uses normals from the fixed set's local PCA (point to line in 2D) "
+        "(default: point_to_point)",
     )
     parser.add_argument(
         "--max-iter", type=number(int, low=1), default=150, help="most iterations (default: %(default)s)"
@@ -125,18 +175,62 @@ def add_parser(sub) -> argparse.ArgumentParser:
     return parser
 
 
+def _outlier_weight(text: str):
+    """--w: a number in [0, 1) or 'auto'."""
+    if text.strip().lower() == "auto":
+        return "auto"
+    try:
+        return number(float, low=0, high=1, high_open=True)(text)
+    except argparse.ArgumentTypeError:
+        raise argparse.ArgumentTypeError(f"must be a number in [0, 1) or auto; got {text!r}") from None
+
+
+# the options of one family of methods, and their values when not given
+_ICP_ONLY = {"max_distance": None, "trim": None, "metric": None}
+_CPD_ONLY = {"init": "none", "n_neighbors": None, "landmarks": None}
+
+
 def _estimator(args: argparse.Namespace, callback):
     from ..exceptions import InputError
     from ..registration import GPD, ICP, AffineCPD, NonRigidCPD, RigidCPD
 
+    # an option the method does not have is refused, not ignored (a run without the
+    # landmarks or the global search the user asked for would look like a success)
+    others = _CPD_ONLY if args.method == "icp" else _ICP_ONLY
+    for dest, unset in others.items():
+        if getattr(args, dest) != unset:
+            option = "--" + dest.replace("_", "-")
+            wanted = "--method cpd or gpd" if args.method == "icp" else "--method icp"
+            raise InputError(f"{option} is an option of {wanted}; got --method {args.method}.")
     if args.method == "icp":
         if args.transform not in ("rigid", "similarity"):
             raise InputError(
                 f"ICP fits rigid or similarity transforms only; got --transform {args.transform}. "
                 "Use --method cpd or gpd for affine and nonrigid."
             )
-        return ICP(scale=args.transform == "similarity", max_iter=args.max_iter, tol=args.tol, callback=callback)
-    common = {"w": args.w, "max_iter": args.max_iter, "tol": args.tol, "callback": callback}
+        if args.metric == "point_to_plane" and args.transform != "rigid":
+            raise InputError(
+                f"--metric point_to_plane fits a rigid motion; got --transform {args.transform}. "
+                "Use --transform rigid with it."
+            )
+        return ICP(
+            scale=args.transform == "similarity",
+            max_iter=args.max_iter,
+            tol=args.tol,
+            max_distance=args.max_distance,
+            trim=0.0 if args.trim is None else args.trim,
+            metric=args.metric or "point_to_point",
+            callback=callback,
+        )
+    common = {
+        "w": args.w,
+        "max_iter": args.max_iter,
+        "tol": args.tol,
+        "init": "global" if args.init == "global" else None,
+        "random_state": args.seed,
+        "n_neighbors": args.n_neighbors,
+        "callback": callback,
+    }
     if args.transform in ("rigid", "similarity"):
         base = RigidCPD(scale=args.transform == "similarity", **common)
     elif args.transform == "affine":
@@ -181,6 +275,30 @@ class _Watch:
             self.bar.close()
 
 
+def _read_landmarks(path):
+    """The (L, 2) integer rows of a --landmarks file (the library checks the ranges)."""
+    import numpy as np
+
+    from ..exceptions import InputError
+    from ..io import read_points
+
+    try:
+        pairs = read_points(path)
+    except InputError as exc:
+        raise InputError(f"--landmarks: {exc}") from None
+    if pairs.shape[1] != 2:
+        raise InputError(
+            f"--landmarks {path}: expected two columns, a moving row and a fixed row per line; "
+            f"got {pairs.shape[1]} columns."
+        )
+    fraction = pairs[pairs != np.round(pairs)]
+    if fraction.size:
+        raise InputError(f"--landmarks {path}: the rows must be whole numbers; got {fraction[0]:g}.")
+    if np.abs(pairs).max() >= 2**62:
+        raise InputError(f"--landmarks {path}: a row number must be below 2^62; got {np.abs(pairs).max():g}.")
+    return pairs.astype(np.int64)
+
+
 def _fixed_to_moving(estimator):
     """For each fixed point its moving point (``fixed_to_moving_``; ``correspondence_`` before the rename)."""
     found = getattr(estimator, "fixed_to_moving_", None)
@@ -212,6 +330,7 @@ def run(args: argparse.Namespace) -> int:
         raise InputError(
             f"--out {args.out}: {suffix(args.out)} files hold 3D points; got 2D sets (write .csv, .txt, .npy or .mat)."
         )
+    landmarks = None if args.landmarks is None else _read_landmarks(args.landmarks)
     true_moving = None
     if args.true_moving is not None:
         true_moving = read_point_file(args.true_moving, args, nan_rows=True)
@@ -232,7 +351,10 @@ def run(args: argparse.Namespace) -> int:
     watch = _Watch(total=args.max_iter, label=label, show=progress_on(args), true_moving=true_moving)
     estimator = _estimator(args, watch)
     try:
-        estimator.fit(moving, fixed)
+        if landmarks is None:
+            estimator.fit(moving, fixed)
+        else:
+            estimator.fit(moving, fixed, landmarks=landmarks)
     finally:
         watch.close()
     seconds = time.perf_counter() - started
@@ -249,7 +371,7 @@ def run(args: argparse.Namespace) -> int:
     transform = transform_record(estimator.transform_)
     record = {
         "command": NAME,
-        "parameters": parameters_block(options(args)),
+        "parameters": parameters_block(options(args), seed=args.seed),
         "estimator": " ".join(repr(estimator).split()),
         "transform": transform,
         "n_iter": int(estimator.n_iter_),
@@ -264,6 +386,13 @@ def run(args: argparse.Namespace) -> int:
         "warnings": list(getattr(args, "_warnings", [])),
         "seconds": round(seconds, 3),
     }
+    w_fitted = getattr(estimator, "w_", None)
+    if w_fitted is not None:
+        record["w"] = float(w_fitted)
+    if landmarks is not None:
+        pinned = estimator.moving_transformed_[landmarks[:, 0]] - fixed[landmarks[:, 1]]
+        record["landmarks"] = landmarks
+        record["landmark_distances"] = np.sqrt(np.sum(pinned**2, axis=1))
     if args.method == "gpd":
         record["moving_centrality"] = estimator.moving_centrality_
         record["fixed_centrality"] = estimator.fixed_centrality_

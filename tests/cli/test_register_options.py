@@ -1,0 +1,182 @@
+"""``centrality-vision register``'s pose, outlier, landmark and ICP options reach the estimators."""
+
+import json
+
+import numpy as np
+import pytest
+
+from centrality_vision.cli import main
+
+
+def _rotation(angle):
+    return np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+
+
+@pytest.fixture(scope="module")
+def fish():
+    from centrality_vision.datasets import load_fish
+
+    return load_fish().fixed
+
+
+def _error_line(capsys):
+    err = capsys.readouterr().err
+    lines = [line for line in err.strip().splitlines() if "error:" in line]
+    assert "Traceback" not in err and len(lines) == 1, err
+    return lines[0]
+
+
+def _register(tmp_path, moving, fixed, *options, name="r.json"):
+    np.save(tmp_path / "m.npy", moving)
+    np.save(tmp_path / "f.npy", fixed)
+    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), *options, "--out", str(tmp_path / name)]
+    assert main(argv) == 0
+    return json.loads((tmp_path / name).read_text())
+
+
+def _angle_error(record, angle):
+    rotation = np.asarray(record["transform"]["rotation"])
+    found = np.arctan2(rotation[1, 0], rotation[0, 0])
+    return abs((found - angle + np.pi) % (2 * np.pi) - np.pi)
+
+
+def test_init_global_recovers_a_pose_that_plain_cpd_misses(tmp_path, fish):
+    angle = np.deg2rad(150)
+    fixed = 1.3 * fish @ _rotation(angle).T + np.array([2.0, -1.0])
+    plain = _register(tmp_path, fish, fixed, "--tol", "1e-9", name="plain.json")
+    found = _register(tmp_path, fish, fixed, "--tol", "1e-9", "--init", "global", "--seed", "3", name="global.json")
+    assert _angle_error(plain, angle) > np.deg2rad(30)  # a wrong basin from the centroids-aligned start
+    assert _angle_error(found, angle) < 1e-6 and abs(found["transform"]["scale"] - 1.3) < 1e-6
+    assert "init='global'" in found["estimator"] and "random_state=3" in found["estimator"]
+    assert found["parameters"]["init"] == "global" and found["parameters"]["seed"] == 3
+
+
+def test_landmarks_file_pins_pairs_and_escapes_the_wrong_basin(tmp_path, fish):
+    angle = np.deg2rad(150)
+    fixed = fish @ _rotation(angle).T
+    # a header line and commas: the same reader as the point files
+    (tmp_path / "pairs.csv").write_text("moving,fixed\n0,0\n30,30\n60,60\n")
+    record = _register(tmp_path, fish, fixed, "--transform", "rigid", "--landmarks", str(tmp_path / "pairs.csv"))
+    assert record["landmarks"] == [[0, 0], [30, 30], [60, 60]]
+    assert max(record["landmark_distances"]) < 1e-3
+    assert _angle_error(record, angle) < 1e-6
+
+
+def test_w_auto_estimates_the_clutter_share(tmp_path, fish):
+    rng = np.random.default_rng(1)
+    rotated = fish @ _rotation(0.2).T
+    clutter = rng.uniform(rotated.min(axis=0) - 0.2, rotated.max(axis=0) + 0.2, size=(30, 2))
+    fixed = np.vstack([rotated, clutter])
+    record = _register(tmp_path, fish, fixed, "--transform", "rigid", "--w", "auto", "--tol", "1e-9")
+    assert record["parameters"]["w"] == "auto"
+    assert abs(record["w"] - 30 / 121) < 0.02  # the true share of clutter
+    assert _angle_error(record, 0.2) < 1e-9
+    fixed_w = _register(tmp_path, fish, fixed, "--transform", "rigid", "--w", "0.1", name="w.json")
+    assert fixed_w["w"] == 0.1
+
+
+def test_n_neighbors_reaches_the_estimator(tmp_path, fish):
+    fixed = fish @ _rotation(0.1).T + 0.05
+    record = _register(tmp_path, fish, fixed, "--transform", "nonrigid", "--n-neighbors", "10", "--tol", "1e-8")
+    assert "n_neighbors=10" in record["estimator"]
+    assert np.allclose(record["moving_transformed"], fixed, atol=1e-3)
+    gpd = _register(tmp_path, fish, fixed, "--method", "gpd", "--n-neighbors", "10", name="gpd.json")
+    assert "n_neighbors=10" in gpd["estimator"]
+
+
+def test_icp_trim_ignores_the_moving_points_without_partner(tmp_path, fish):
+    # the fixed set lacks the last 21 of the fish's 91 points
+    fixed = fish[:70] @ _rotation(0.2).T + np.array([0.1, -0.05])
+    options = ("--method", "icp", "--transform", "rigid", "--tol", "1e-10", "--max-iter", "200")
+    plain = _register(tmp_path, fish, fixed, *options, name="plain.json")
+    trimmed = _register(tmp_path, fish, fixed, *options, "--trim", "0.25", name="trim.json")
+    assert _angle_error(plain, 0.2) > 1e-3
+    assert _angle_error(trimmed, 0.2) < 1e-9
+    assert "trim=0.25" in trimmed["estimator"]
+    within = _register(tmp_path, fish, fixed, *options, "--max-distance", "0.5", name="within.json")
+    assert "max_distance=0.5" in within["estimator"]
+
+
+def test_icp_max_distance_that_leaves_no_pair_is_a_one_line_error(tmp_path, capsys, fish):
+    np.save(tmp_path / "m.npy", fish)
+    np.save(tmp_path / "f.npy", fish + 0.1)
+    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--method", "icp"]
+    assert main([*argv, "--max-distance", "1e-9", "--out", str(tmp_path / "r.json")]) == 2
+    assert "ICP found only 0 pairs within --max-distance=1e-09" in _error_line(capsys)
+
+
+def test_icp_point_to_plane_in_3d(tmp_path):
+    rng = np.random.default_rng(4)
+    u, v = rng.uniform(-1, 1, size=(2, 400))
+    moving = np.column_stack([u, v, 0.3 * np.sin(2 * u) * np.cos(2 * v)])  # a smooth bumpy sheet
+    c, s = np.cos(0.05), np.sin(0.05)
+    rotation = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+    fixed = moving @ rotation.T + np.array([0.02, 0.0, 0.01])
+    options = ("--method", "icp", "--transform", "rigid", "--metric", "point_to_plane", "--tol", "1e-12")
+    record = _register(tmp_path, moving, fixed, *options, "--max-iter", "200")
+    assert "metric='point_to_plane'" in record["estimator"]
+    np.testing.assert_allclose(record["transform"]["rotation"], rotation, atol=1e-6)
+
+
+@pytest.mark.parametrize(
+    ("options", "message"),
+    [
+        (["--method", "icp", "--init", "global"], "--init is an option of --method cpd or gpd; got --method icp"),
+        (["--method", "icp", "--n-neighbors", "5"], "--n-neighbors is an option of --method cpd or gpd"),
+        (["--method", "icp", "--landmarks", "x.csv"], "--landmarks is an option of --method cpd or gpd"),
+        (["--trim", "0.1"], "--trim is an option of --method icp; got --method cpd"),
+        (["--method", "gpd", "--max-distance", "1"], "--max-distance is an option of --method icp; got --method gpd"),
+        (["--method", "icp", "--metric", "point_to_plane"], "--metric point_to_plane fits a rigid motion"),
+    ],
+)
+def test_options_of_another_method_are_refused_before_reading(tmp_path, capsys, options, message):
+    # the files do not exist: the combination is refused first
+    argv = ["register", str(tmp_path / "no-m.npy"), str(tmp_path / "no-f.npy"), *options]
+    assert main([*argv, "--out", str(tmp_path / "r.json")]) == 2
+    assert message in _error_line(capsys)
+    assert not (tmp_path / "r.json").exists()
+
+
+@pytest.mark.parametrize("value", ["1", "1.5", "-0.1", "nan", "autox", ""])
+def test_bad_w_is_a_usage_error(tmp_path, capsys, value):
+    np.save(tmp_path / "m.npy", np.random.default_rng(0).random((12, 2)))
+    with pytest.raises(SystemExit) as info:
+        main(["register", str(tmp_path / "m.npy"), str(tmp_path / "m.npy"), "--w", value])
+    assert info.value.code == 2
+    assert f"argument --w: must be a number in [0, 1) or auto; got {value!r}" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("0 0 1\n", "expected two columns, a moving row and a fixed row per line; got 3 columns"),
+        ("0.5 0\n", "the rows must be whole numbers; got 0.5"),
+        ("0 0\n1 500\n", "--landmarks fixed indices must be in [0, 40); got 500"),
+        ("0 0\n-1 3\n", "--landmarks moving indices must be in [0, 40); got -1"),
+        ("0 0\n0 3\n", "--landmarks must pin each moving point at most once"),
+        ("1e300 0\n", "a row number must be below 2^62"),
+        (None, "no such file"),
+    ],
+)
+def test_bad_landmark_files_are_one_line_errors(tmp_path, capsys, content, message):
+    points = np.random.default_rng(0).random((40, 2))
+    np.save(tmp_path / "m.npy", points)
+    if content is not None:
+        (tmp_path / "pairs.txt").write_text(content)
+    argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "m.npy"), "--landmarks", str(tmp_path / "pairs.txt")]
+    assert main([*argv, "--out", str(tmp_path / "r.json")]) == 2
+    line = _error_line(capsys)
+    assert message in line and "--landmarks" in line
+    assert not (tmp_path / "r.json").exists()
+
+
+def test_the_library_advice_names_the_init_option():
+    # CPD's collapse warning ends "or a starting pose (`init`)": on the command line, --init
+    import argparse
+
+    from centrality_vision.cli import _in_cli_words
+    from centrality_vision.cli.register import add_parser
+
+    parser = add_parser(argparse.ArgumentParser().add_subparsers())
+    said = _in_cli_words("Try a smaller `w`, or a starting pose (`init`).", parser)
+    assert said == "Try a smaller --w, or a starting pose (--init)."
