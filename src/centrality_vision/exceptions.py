@@ -1,6 +1,6 @@
 """Exceptions and warnings raised by centrality-vision."""
 
-__all__ = ["CentralityVisionError", "InputError", "ConvergenceWarning", "CollapseWarning"]
+__all__ = ["CentralityVisionError", "InputError", "ConvergenceWarning", "CollapseWarning", "MatchingWarning"]
 
 
 class CentralityVisionError(Exception):
@@ -21,3 +21,8 @@ class ConvergenceWarning(UserWarning):
 class CollapseWarning(ConvergenceWarning):
     """A registration ended degenerate: the moving set shrank to a blob, or sigma2 reached
     zero while too few points were matched. The estimator's ``converged_`` is then False."""
+
+
+class MatchingWarning(UserWarning):
+    """A matching disagrees with its own fitted transform: some matched pairs are not nearest
+    neighbours once the transform is applied, so the correspondences are not trustworthy."""

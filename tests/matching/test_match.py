@@ -1,10 +1,13 @@
 """match(): recovery of known similarity transforms, partial sets, outliers, errors, extreme scales."""
 
+import warnings
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from centrality_vision.exceptions import MatchingWarning
 from centrality_vision.matching import METHODS, MatchResult, match, mwme_match
 
 
@@ -129,11 +132,16 @@ def test_mwme_match_3d_huge_coordinate_answers_or_refuses(exponent, seed):
     fixed[0, 0] = 10.0**exponent
     perm = rng.permutation(8)
     try:
-        correspondence, transform = mwme_match(fixed[perm] + 1.0, fixed)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", MatchingWarning)
+            correspondence, transform = mwme_match(fixed[perm] + 1.0, fixed)
     except ValueError as exc:
         assert "dynamic range" in str(exc) or "float64" in str(exc)
     else:
         assert correspondence.shape == (8,) and np.all(np.isfinite(transform.translation))
+        # far beyond the extent the degrees can resolve: right, or said to be unreliable
+        warned = any(issubclass(w.category, MatchingWarning) for w in caught)
+        assert warned or np.array_equal(correspondence, perm)
 
 
 def test_mwme_match_1e155_is_matched():

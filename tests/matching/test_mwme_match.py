@@ -1,8 +1,10 @@
+import warnings
+
 import numpy as np
 import pytest
 
 from centrality_vision.datasets import contour_points, load_kimia99
-from centrality_vision.exceptions import InputError
+from centrality_vision.exceptions import InputError, MatchingWarning
 from centrality_vision.matching import match, mwme_match
 from centrality_vision.transforms import SimilarityTransform, fit_similarity
 
@@ -143,3 +145,47 @@ def test_every_option_is_checked_whatever_the_method(method, options, error):
     points = np.random.default_rng(2).random((8, 2))
     with pytest.raises(error, match=f"`{next(iter(options))}`"):
         match(points, points, method=method, **options)
+
+
+def _grid_trials():
+    """A 3 x 4 integer grid (tied MWME optima), permuted and rotated: seeded trials."""
+    grid = np.array([(i, j) for i in range(3) for j in range(4)], dtype=float)
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        perm, angle = rng.permutation(len(grid)), rng.uniform(0, 2 * np.pi)
+        rotation = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+        yield grid[perm] @ rotation.T + 1.0, grid
+
+
+@pytest.mark.parametrize("method", ["exact", "local", "greedy"])
+def test_a_matching_its_own_transform_contradicts_is_a_warning_not_silent(method):
+    # tied optima on a grid: the degrees paired unrelated points, with an RMS residual of
+    # about the grid's spacing, and nothing said so
+    outcomes = []
+    for moving, fixed in _grid_trials():
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            correspondence, transform = mwme_match(moving, fixed, method=method)
+        moved = transform(moving)
+        nearest = np.argmin(((moved[:, None, :] - fixed[None, :, :]) ** 2).sum(axis=2), axis=1)
+        wrong = int(np.count_nonzero(nearest != correspondence))
+        said = [str(w.message) for w in caught if issubclass(w.category, MatchingWarning)]
+        assert len(caught) == len(said)
+        if wrong:
+            assert said == [said[0]] and said[0].startswith(f"mwme_match: {wrong} of 12 matched pairs")
+        else:  # the right matching, or one of the grid's symmetries: a right match too
+            assert not said and np.sqrt(np.mean(np.sum((moved - fixed[correspondence]) ** 2, axis=1))) < 1e-9
+        outcomes.append(bool(wrong))
+    assert any(outcomes)  # the case happens on these trials
+
+
+def test_noise_that_changes_the_graphs_is_said():
+    fixed = contour_points(load_kimia99().image("cow1"), 50)
+    rng = np.random.default_rng(5)
+    perm = rng.permutation(50)
+    spacing = float(np.min(np.linalg.norm(np.diff(fixed, axis=0), axis=1)))
+    noisy = fixed[perm] + rng.normal(0.0, 2.0 * spacing, size=fixed.shape)
+    with pytest.warns(MatchingWarning, match=r"mwme_match: \d+ of 50 matched pairs are not nearest neighbours"):
+        mwme_match(noisy, fixed)
+    with pytest.warns(MatchingWarning):  # through match() too
+        match(noisy, fixed, method="mwme")

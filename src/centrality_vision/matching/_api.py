@@ -69,7 +69,7 @@ def match(
         :mod:`centrality_vision.matching._robust`).
         ``"mwme"``: the thesis' global MWME matching (:func:`mwme_match`): exact under
         similarity transforms of the same points, but needs sets of equal size and breaks
-        under noise or resampling.
+        under noise or resampling (a ``MatchingWarning`` then says so).
         ``"shape-context"``: the baseline: Belongie et al.'s log-polar shape contexts
         (angles from each point's tangent), chi-squared costs and a one-to-one Hungarian
         assignment (:func:`scipy.optimize.linear_sum_assignment`) with dummy partners

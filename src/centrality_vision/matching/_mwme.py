@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import warnings
+
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .._validation import as_points
-from ..exceptions import InputError
+from ..exceptions import InputError, MatchingWarning
 from ..graphs import mwme_graph
 from ..transforms import SimilarityTransform
 from ._common import check_rigid_extents, fit_pairs, normalise, similarity_to_units
@@ -24,8 +27,8 @@ def mwme_match(
     assignment whose fitted similarity transform leaves the smaller residual wins. The
     matching is exact under similarity transforms whenever both graphs are the same
     optimum: for the exact solver when the optimum is unique (sets with tied optima,
-    common on integer grids, can pair the wrong points, whatever the solver: check the
-    transform's residual), and in general position for the deterministic greedy and
+    common on integer grids, can pair the wrong points, whatever the solver), and in
+    general position for the deterministic greedy and
     local solvers too (they see only distances, up to scale), as long as the set's
     extent stays within about 1e10 times its smallest spacing (beyond, float64 sums
     cannot tell its orders apart).
@@ -35,6 +38,12 @@ def mwme_match(
     This is the global method: every point moves every degree, so a little noise or a
     resampled outline changes the graphs (see :func:`~centrality_vision.matching.match`
     with ``method="robust"`` for sets with noise, outliers or missing parts).
+
+    When the two graphs are not the same optimum the degrees pair unrelated points. The
+    result is then checked against its own transform: a
+    :class:`~centrality_vision.exceptions.MatchingWarning` says how many matched pairs are
+    not nearest neighbours once the fitted transform is applied (none on a similar copy
+    matched right; a symmetric set matched through one of its symmetries is a right match).
 
     Parameters
     ----------
@@ -99,5 +108,20 @@ def mwme_match(
         moved = s * norm_m.points @ rotation.T + translation
         residual = float(np.sum((moved - norm_f.points[trial]) ** 2))
         if best is None or residual < best[0]:
-            best = (residual, trial, (rotation, translation, s))
-    return best[1], similarity_to_units(*best[2], norm_m, norm_f)
+            best = (residual, trial, moved, (rotation, translation, s))
+    _, chosen, moved, fit = best
+    # the matching is the canonical one only if the two graphs are the same optimum; when they
+    # differ (noise, sets that are not similar copies, tied optima) the degrees pair unrelated
+    # points, which the fitted transform then contradicts
+    nearest = cKDTree(norm_f.points).query(moved)[1]
+    disagree = int(np.count_nonzero(nearest != chosen))
+    if disagree:
+        warnings.warn(
+            f"mwme_match: {disagree} of {n} matched pairs are not nearest neighbours under the fitted "
+            "transform, so the two MWME graphs differ (noise, sets that are not similar copies, or "
+            "tied optima on regular grids) and the correspondences are not reliable. "
+            "match(method='robust') handles noise and missing parts.",
+            MatchingWarning,
+            stacklevel=2,
+        )
+    return chosen, similarity_to_units(*fit, norm_m, norm_f)
