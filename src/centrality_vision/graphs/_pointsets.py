@@ -9,6 +9,7 @@ from scipy.spatial.distance import pdist, squareform
 
 from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import InputError
+from ._predicates import delaunay_violations
 
 __all__ = ["delaunay_graph", "gabriel_graph", "emst_graph", "knn_graph", "complete_graph", "edges_to_graph"]
 
@@ -140,7 +141,19 @@ def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
 
 
 def _delaunay_edges(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    indptr, indices = _triangulation(_centred(_unit_scale(points)[0])).vertex_neighbor_vertices
+    unit = _unit_scale(points)[0]
+    tri = _triangulation(_centred(unit))
+    # Qhull's floating-point in-circle tests can return a triangulation that is not Delaunay
+    # for a tight cluster beside distant points (about 1e-7 of the extent): checked exactly
+    failed = delaunay_violations(unit, tri.simplices, tri.neighbors)
+    if failed:
+        raise InputError(
+            f"`points` could not be triangulated reliably: Qhull's Delaunay triangulation fails the "
+            f"empty-{'circle' if points.shape[1] == 2 else 'sphere'} test at {failed} facet(s), which "
+            "happens when some points are very close together relative to the set's extent (about "
+            "1e-7 of it). Merge near-duplicate points, or build the graph of each part separately."
+        )
+    indptr, indices = tri.vertex_neighbor_vertices
     rows = np.repeat(np.arange(points.shape[0]), np.diff(indptr))
     upper = rows < indices
     return rows[upper], indices[upper].astype(np.int64)
@@ -179,24 +192,29 @@ def delaunay_graph(points, /) -> sparse.csr_array:
 def _gabriel_mask(points: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     """True for the edges whose closed diametral ball holds no other point."""
     points, _ = _unit_scale(points)
-    midpoints = 0.5 * (points[rows] + points[cols])
     radius2 = 0.25 * np.sum((points[rows] - points[cols]) ** 2, axis=1)
-    k = min(3, points.shape[0])
-    dist, idx = cKDTree(points).query(midpoints, k=k)
-    # The 3 nearest points to a midpoint include at least one point other than the edge's
-    # two end points, and that one is the nearest such point.
+    k = min(5, points.shape[0])
+    _, idx = cKDTree(points).query(0.5 * (points[rows] + points[cols]), k=k)
+    # The nearest points to a midpoint include at least one point other than the edge's two
+    # end points, and the nearest such point decides. Point r lies at squared distance
+    # (p - r).(q - r) + radius^2 from the midpoint of p and q: from differences, which keep
+    # their digits where the midpoint itself would round away those of a tight cluster.
     other = (idx != rows[:, None]) & (idx != cols[:, None])
-    nearest_other2 = np.where(other, dist**2, np.inf).min(axis=1)
-    return nearest_other2 > radius2 * (1.0 + 1e-12)
+    to_p = points[rows][:, None, :] - points[idx]
+    to_q = points[cols][:, None, :] - points[idx]
+    excess = np.where(other, np.sum(to_p * to_q, axis=2), np.inf).min(axis=1)
+    return excess > 1e-12 * radius2
 
 
 def gabriel_graph(points, /) -> sparse.csr_array:
     """Gabriel graph: the Delaunay edges whose closed diametral circle (sphere) is empty.
 
     Edge ``(i, j)`` is kept when no other point lies inside or on the circle that has
-    the segment ``i-j`` as a diameter. With this closed-ball rule the result does not
-    depend on how Qhull triangulates co-circular points, and it is a subgraph of every
-    Delaunay triangulation and a supergraph of every Euclidean minimum spanning tree.
+    the segment ``i-j`` as a diameter ("on" to within 1e-12 of the squared radius, so that
+    the co-circular points of a grid count as on it whatever their rounding). With this
+    closed-ball rule the result does not depend on how Qhull triangulates co-circular
+    points, and it is a subgraph of every Delaunay triangulation and a supergraph of every
+    Euclidean minimum spanning tree.
 
     Parameters
     ----------
