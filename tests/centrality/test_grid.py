@@ -234,3 +234,26 @@ def test_matches_mask_agrees_with_rebuilding_the_graph(mask, full, spacing, edit
         else:
             graph.spacing = None if spacing else np.full(mask.ndim, 1.5)
     assert graph.matches_mask() == _rebuilt_equal(graph)
+
+
+@pytest.mark.parametrize(
+    ("spacing", "mask"),
+    [
+        ((1e-200, 0.5), np.ones((2, 3), dtype=bool)),
+        ((0.5, 1e-200), np.ones((3, 3), dtype=bool)),
+        ((3.0, 1e-160), np.array([[0, 0], [1, 1], [0, 0]], dtype=bool)),
+        ((1e200, 1e-3), np.eye(3, dtype=bool)),
+        ((1e-3, 1e200), np.eye(4, dtype=bool)),
+    ],
+)
+def test_extreme_spacings_give_the_adjacency_lists_values(spacing, mask):
+    # the grid squared the spacing itself: at 1e-200 every step length was 0 (betweenness
+    # raised a TypeError), at 1e-160 closeness was 5.6e-6 off, at 1e200 lengths overflowed
+    graph, _ = pixel_graph(mask, spacing=spacing)
+    plain = _plain(graph)
+    for measure in (cen.closeness, cen.harmonic, cen.eccentricity):
+        _close(measure(graph, weights=True), measure(plain, weights=True))
+    _close(cen.closeness(graph, weights=True, normalized=False), cen.closeness(plain, weights=True, normalized=False))
+    _close(cen.betweenness(graph), cen.betweenness(plain))
+    if min(spacing) / max(spacing) > 1e-180:  # (edges of 1e-200 against 0.5 tie like zero-length ones)
+        _close(cen.betweenness(graph, weights=True), cen.betweenness(plain, weights=True))
