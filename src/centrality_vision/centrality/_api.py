@@ -85,7 +85,7 @@ class _Prepared:
         self.adjacency = adjacency
         self.indptr = adjacency.indptr.astype(np.int64, copy=False)
         self.indices = adjacency.indices.astype(np.int32, copy=False)
-        self.data = adjacency.data.astype(np.float64, copy=False)
+        self.data, self.length_scale = _searchable_lengths(adjacency.data.astype(np.float64, copy=False))
         self._classes = False
 
     def transposed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -94,7 +94,7 @@ class _Prepared:
             return self.indptr, self.indices, self.data
         t = sparse.csr_array(self.adjacency.T)
         t.sort_indices()
-        return t.indptr.astype(np.int64), t.indices.astype(np.int32), t.data.astype(np.float64)
+        return t.indptr.astype(np.int64), t.indices.astype(np.int32), t.data.astype(np.float64) / self.length_scale
 
     def classes(self, data=None):
         """``(kind, lengths)`` for the FIFO-queue search when the graph has few distinct
@@ -108,6 +108,28 @@ class _Prepared:
         out = np.empty_like(values)
         out[self.perm] = values
         return out
+
+
+def _searchable_lengths(data: np.ndarray) -> tuple[np.ndarray, float]:
+    """Edge lengths the searches can sum, and the power of two they were divided by.
+
+    Sums of lengths near float64's top overflow (three edges of 1e308: inf, and every
+    distance tied) and subnormal lengths have lost digits (1 / d overflows): where the
+    largest length is outside [2^-500, 2^500], the lengths are divided by the power of two
+    that puts it in [1, 2), exactly, and the searches' distances are scaled back.
+    """
+    positive = data[data > 0]
+    peak = float(positive.max()) if positive.size else 0.0
+    if peak == 0.0 or not math.isfinite(peak) or 2.0**-500 <= peak <= 2.0**500:
+        return data, 1.0
+    scale = math.ldexp(1.0, math.frexp(peak)[1] - 1)
+    scaled = data / scale
+    if np.any(scaled[data > 0] == 0):
+        raise InputError(
+            "`graph` must have edge lengths within float64's range of one another (a ratio of about "
+            f"1e-308 at most); got lengths from {float(positive.min()):.3g} to {peak:.3g}."
+        )
+    return scaled, scale
 
 
 def _on_pixel_grid(graph) -> bool:
@@ -204,7 +226,8 @@ def _length_stats(indptr, indices, data, progress: bool, desc: str):
 def _distance_stats(
     prep: _Prepared, weights: bool, progress: bool, desc: str, inward: bool, grid_graph=None, need_inverse=True
 ):
-    """Per node: sum of distances, sum of inverse distances, eccentricity, nodes reached.
+    """Per node: sum of distances, sum of inverse distances, eccentricity, nodes reached, and
+    the unit of the distances (true distance = returned distance x unit).
 
     ``inward``: distances to the node (closeness, harmonic); else from it (eccentricity).
     The two coincide on undirected graphs. With lengths, ``grid_graph`` (the same graph,
@@ -215,7 +238,8 @@ def _distance_stats(
     if weights and grid_graph is not None:
         from ._grid import grid_length_stats
 
-        return grid_length_stats(grid_graph, progress, desc, need_inverse)  # node order of the graph itself
+        # node order of the graph itself, lengths in its units
+        return [*grid_length_stats(grid_graph, progress, desc, need_inverse), 1.0]
     if weights:
         # Per-source searches give distances from the source: reverse the arcs for inward.
         indptr, indices, data = prep.transposed() if inward else (prep.indptr, prep.indices, prep.data)
@@ -224,7 +248,7 @@ def _distance_stats(
         # The bit-parallel search collects, at each node, distances to it.
         indptr, indices, _ = (prep.indptr, prep.indices, prep.data) if inward else prep.transposed()
         stats = _hop_stats(indptr, indices, progress, desc)
-    return [prep.unpermute(v) for v in stats]
+    return [*(prep.unpermute(v) for v in stats), prep.length_scale if weights else 1.0]
 
 
 def _check_epsilon(epsilon, delta):
@@ -275,7 +299,15 @@ def degree(graph, /, *, strengths: bool = False, normalized: bool = False, as_di
     normalized = _check_flag(normalized, "normalized")
     adjacency = info.adjacency
     if strengths:
-        values = np.asarray(adjacency.sum(axis=1), dtype=np.float64).ravel()
+        # summed at a power-of-two scale, exactly, so that a sum beyond float64 is an error
+        # instead of an overflow warning and inf
+        _, unit = _searchable_lengths(np.abs(adjacency.data.astype(np.float64, copy=False)))
+        with np.errstate(over="ignore"):
+            values = np.asarray((adjacency / unit).sum(axis=1), dtype=np.float64).ravel() * unit
+        if not np.all(np.isfinite(values)):
+            raise InputError(
+                "`graph` has node strengths beyond float64's largest number (about 1.8e308); rescale its values."
+            )
     else:
         values = np.diff(adjacency.indptr).astype(np.float64)
     if normalized:
@@ -609,21 +641,34 @@ def closeness(
     array([0.66666667, 1.        , 0.66666667])
     """
     normalized = _check_flag(normalized, "normalized")
-    n, total, _, _, reached, info = _inward_sums(graph, weights, epsilon, delta, seed, progress, "closeness", False)
+    n, total, _, _, reached, unit, info = _inward_sums(
+        graph, weights, epsilon, delta, seed, progress, "closeness", False
+    )
     values = np.zeros(n)
     ok = total > 0
-    if normalized:
-        r = reached[ok] - 1.0
-        values[ok] = (r / total[ok]) * (r / (n - 1))
-    else:
-        values[ok] = 1.0 / total[ok]
+    with np.errstate(over="ignore"):
+        if normalized:
+            r = reached[ok] - 1.0
+            values[ok] = (r / total[ok]) * (r / (n - 1)) / unit
+        else:
+            values[ok] = 1.0 / total[ok] / unit
+    _check_inverse(values)
     out = _finish(values, info.pop("labels"), as_dict)
     return (out, info) if _check_flag(return_info, "return_info") else out
 
 
+def _check_inverse(values: np.ndarray) -> None:
+    """Refuse inverse distances beyond float64 (edge lengths near its smallest numbers)."""
+    if np.any(np.isinf(values)):
+        raise InputError(
+            "`graph` has inverse distances beyond float64's largest number (about 1.8e308) with these "
+            "edge lengths (near 1e-308); rescale them."
+        )
+
+
 def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc, need_inverse=True):
-    """(n, sum of distances, sum of inverse distances, largest, reached, info) to each node
-    (the inverse sums may be zeros unless ``need_inverse``)."""
+    """(n, sum of distances, sum of inverse distances, largest, reached, unit, info) to each
+    node (the inverse sums may be zeros unless ``need_inverse``; distances in ``unit``)."""
     weights = _check_flag(weights, "weights")
     on_grid = weights and epsilon is None and _on_pixel_grid(graph)
     prep = _prepare(graph, reorder=not on_grid)  # the grid search walks the mask, not these lists
@@ -635,7 +680,7 @@ def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc, need_inve
 
         epsilon, delta = _check_epsilon(epsilon, delta)
         total, inverse, largest, reached, info = sample_sources(prep, epsilon, delta, seed, progress, desc)
-        stats = [prep.unpermute(v) for v in (total, inverse, largest, reached)]
+        stats = [*(prep.unpermute(v) for v in (total, inverse, largest, reached)), 1.0]
     else:
         grid_graph = graph if on_grid else None
         stats = _distance_stats(prep, weights, progress, desc, True, grid_graph, need_inverse)
@@ -701,7 +746,10 @@ def harmonic(
     array([1.5, 2. , 1.5])
     """
     normalized = _check_flag(normalized, "normalized")
-    n, _, inverse, _, _, info = _inward_sums(graph, weights, epsilon, delta, seed, progress, "harmonic")
+    n, _, inverse, _, _, unit, info = _inward_sums(graph, weights, epsilon, delta, seed, progress, "harmonic")
+    with np.errstate(over="ignore"):
+        inverse = inverse / unit
+    _check_inverse(inverse)
     values = (inverse / (n - 1) if n > 1 else np.zeros(n)) if normalized else inverse
     out = _finish(values, info.pop("labels"), as_dict)
     return (out, info) if _check_flag(return_info, "return_info") else out
@@ -798,12 +846,21 @@ def eccentricity(
         elif method == "auto" and _octile_grid(graph):
             budget = prep.n // 16
         largest, searches = _eccentricity_bounds(prep, weights, budget)
+        unit = prep.length_scale if weights else 1.0
         if largest is not None:
             largest = prep.unpermute(largest)
     if largest is None:
         grid_graph = graph if weights and _on_pixel_grid(graph) else None
-        largest = _distance_stats(prep, weights, progress, "eccentricity", False, grid_graph, need_inverse=False)[2]
+        *stats, unit = _distance_stats(prep, weights, progress, "eccentricity", False, grid_graph, need_inverse=False)
+        largest = stats[2]
         searches += prep.n if weights else int(math.ceil(prep.n / 64))
+    with np.errstate(over="ignore"):
+        largest = largest * unit
+    if np.any(np.isinf(largest)):
+        raise InputError(
+            "`graph` has distances beyond float64's largest number (about 1.8e308) with these edge "
+            "lengths; rescale them."
+        )
     if normalized:
         top = largest.max()
         largest = largest / top if top > 0 else np.zeros_like(largest)

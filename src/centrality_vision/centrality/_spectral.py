@@ -7,6 +7,8 @@ so pass ``1 / graph`` (on the stored entries) for affinities.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy import sparse
 
@@ -221,6 +223,13 @@ def pagerank(
     tol = check_float(tol, name="tol", low=0.0)
     max_iter = check_int(max_iter, name="max_iter", low=1)
     n = adjacency.shape[0]
+    # the transitions do not depend on the values' scale: divided by the power of two that
+    # puts the largest in [1, 2), sums of values near 1e308 do not overflow, nor inverses of
+    # subnormal ones
+    peak = float(np.abs(adjacency.data).max()) if adjacency.nnz else 0.0
+    if peak > 0 and np.isfinite(peak):
+        adjacency = sparse.csr_array(adjacency, copy=True)
+        adjacency.data = adjacency.data / math.ldexp(1.0, math.frexp(peak)[1] - 1)  # (not 1 / x: 2^1063)
     out_strength = np.asarray(adjacency.sum(axis=1)).ravel()
     dangling = out_strength == 0
     inv = np.zeros(n)
@@ -301,14 +310,20 @@ def katz(
     if beta == 0.0:
         raise InputError("`beta` must be positive; got 0.0.")
     normalized = _check_flag(normalized, "normalized")
-    if n and alpha * min(rows.max(), cols.max()) >= 1.0 and alpha * _spectral_radius(adjacency) >= 1.0 - 1e-12:
+    with np.errstate(over="ignore"):  # a huge alpha is refused here, not warned about
+        too_large = n and alpha * min(rows.max(), cols.max()) >= 1.0
+        too_large = too_large and alpha * _spectral_radius(adjacency) >= 1.0 - 1e-12
+    if too_large:
         raise InputError(
             f"`alpha` must be below 1 / (largest eigenvalue of the adjacency) = "
             f"{1.0 / _spectral_radius(adjacency):.6g} for Katz centrality; got {alpha!r}."
         )
-    system = sparse.csc_matrix(sparse.identity(n, format="csc") - alpha * sparse.csc_matrix(adjacency.T))
+    with np.errstate(over="ignore"):
+        system = sparse.csc_matrix(sparse.identity(n, format="csc") - alpha * sparse.csc_matrix(adjacency.T))
     try:
-        x = splu(system).solve(np.full(n, beta))
+        # x is linear in beta: solved for beta = 1 and scaled after, so that a large beta
+        # neither overflows the solve nor (normalised) changes the result
+        x = splu(system).solve(np.ones(n))
     except RuntimeError:  # exactly singular: alpha = 1 / an eigenvalue
         x = np.full(n, -1.0)
     if not np.all(np.isfinite(x)) or x.min() <= 0:
@@ -316,5 +331,14 @@ def katz(
             f"`alpha` must be below 1 / (largest eigenvalue of the adjacency) for Katz centrality; got {alpha!r}."
         )
     if normalized:
+        x = x / x.max()
         x = x / np.linalg.norm(x)
+    else:
+        with np.errstate(over="ignore"):
+            x = x * beta
+        if not np.all(np.isfinite(x)):
+            raise InputError(
+                f"`beta` = {beta!r} puts Katz centralities beyond float64's largest number (about 1.8e308); "
+                "take a smaller one, or normalized=True."
+            )
     return _finish(x, info.labels, as_dict)

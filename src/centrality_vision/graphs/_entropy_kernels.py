@@ -246,13 +246,16 @@ def _move_degrees(degree, counts, a, b, step):
 
 
 @njit(cache=True, nogil=True)
-def mstme_greedy(weight, lam):
+def mstme_greedy(weight, lam, key):
     """Algorithm 7.1: n-1 times add the cycle-free edge minimising w_e - lam H(T + e).
 
     The entropy change depends only on the degrees of the edge's two ends, so it is
     tabulated once per step for every pair of degrees; components are kept as labels
-    (union by relabelling the smaller one). Ties go to the first edge (u, v), u < v, in
-    row order. Returns the edge list (n-1, 2).
+    (union by relabelling the smaller one). Ties (to ``_TIE`` relative) go to the edge
+    of smaller ``key[u] + key[v]`` (an invariant key per node), so that the result
+    depends on the row order only where both tie; then to the first edge (u, v), u < v,
+    in row order. Returns the
+    edge list (n-1, 2).
     """
     n = weight.shape[0]
     degree = np.zeros(n, dtype=np.int64)
@@ -272,6 +275,7 @@ def mstme_greedy(weight, lam):
                 else:
                     table[a, b] = 0.0
         best = np.inf
+        best_key = np.inf
         bu = -1
         bv = -1
         for u in range(n):
@@ -282,8 +286,10 @@ def mstme_greedy(weight, lam):
                 if label[v] == lu:
                     continue
                 score = row[v] + table[du, degree[v]]
-                if score < best:
+                edge_key = key[u] + key[v]
+                if score < np.inf and (bu < 0 or _better(score, edge_key, best, best_key)):
                     best = score
+                    best_key = edge_key
                     bu = u
                     bv = v
         if bu < 0:
@@ -344,11 +350,12 @@ def _tree_components(n, edges, skip):
 
 
 @njit(cache=True, nogil=True)
-def mstme_exchange(weight, lam, edges, max_passes):
+def mstme_exchange(weight, lam, edges, max_passes, key):
     """Local search by edge exchange: drop a tree edge, add the best edge across the cut.
 
-    Accepts an exchange when it lowers W - lam H; stops after a pass without one.
-    Returns (edges, passes, exchanges).
+    Accepts an exchange when it lowers W - lam H (by more than 1e-12); among equally good
+    replacements the one of smaller ``key[u] + key[v]`` wins, as in :func:`mstme_greedy`.
+    Stops after a pass without one. Returns (edges, passes, exchanges).
     """
     n = weight.shape[0]
     edges = edges.copy()
@@ -370,9 +377,10 @@ def mstme_exchange(weight, lam, edges, max_passes):
             _move_degrees(degree, counts, u0, v0, -1)  # remove e
             h = _entropy(counts, n)
             base = weight[u0, v0] - lam * _entropy_after(counts, n, h, degree[u0], degree[v0])
-            best = base
-            bu = u0
-            bv = v0
+            best = np.inf
+            best_key = np.inf
+            bu = -1
+            bv = -1
             for u in range(n):
                 if label[u] != 0:
                     continue
@@ -380,10 +388,15 @@ def mstme_exchange(weight, lam, edges, max_passes):
                     if label[v] != 1:
                         continue
                     score = weight[u, v] - lam * _entropy_after(counts, n, h, degree[u], degree[v])
-                    if score < best - 1e-12:
+                    edge_key = key[u] + key[v]
+                    if score < np.inf and (bu < 0 or _better(score, edge_key, best, best_key)):
                         best = score
+                        best_key = edge_key
                         bu = u
                         bv = v
+            if not best < base - 1e-12:  # no better replacement: the edge stays
+                bu = u0
+                bv = v0
             a, b = min(bu, bv), max(bu, bv)
             if a != min(u0, v0) or b != max(u0, v0):
                 improved = True

@@ -1,0 +1,92 @@
+"""Centralities of graphs whose edge lengths sit near float64's limits: exact, or a named error.
+
+Sums of lengths of 1e308 overflowed (every distance inf, so every path tied: betweenness 0
+on a path) and subnormal lengths overflowed their inverses; the searches now run on the
+lengths divided by a power of two and scale back, and a value beyond float64 is refused.
+"""
+
+import math
+
+import networkx as nx
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy import sparse
+
+from centrality_vision import centrality as cen
+from centrality_vision.exceptions import InputError
+from centrality_vision.graphs import delaunay_graph
+
+
+def _path(n, length=1.0):
+    return sparse.csr_array(nx.to_scipy_sparse_array(nx.path_graph(n)).astype(float) * length)
+
+
+def test_a_path_of_1e308_edges():
+    unit, huge = _path(4), _path(4, 1e308)
+    np.testing.assert_array_equal(cen.betweenness(huge, weights=True), cen.betweenness(unit, weights=True))
+    np.testing.assert_array_equal(cen.edge_betweenness(huge, weights=True).data, cen.edge_betweenness(unit).data)
+    np.testing.assert_allclose(cen.closeness(huge, weights=True), cen.closeness(unit, weights=True) / 1e308)
+    with pytest.raises(InputError, match=r"`graph` has distances beyond float64"):
+        cen.eccentricity(huge, weights=True)  # 3e308
+    with pytest.raises(InputError, match=r"`graph` has node strengths beyond float64"):
+        cen.degree(huge, strengths=True)  # 2e308
+    big = _path(4, 4e307)  # 1.2e308: still a float64
+    np.testing.assert_allclose(cen.eccentricity(big, weights=True), [1.2e308, 8e307, 8e307, 1.2e308])
+    np.testing.assert_allclose(cen.eccentricity(big, weights=True, method="all"), [1.2e308, 8e307, 8e307, 1.2e308])
+    np.testing.assert_allclose(cen.degree(big, strengths=True), [4e307, 8e307, 8e307, 4e307])
+
+
+def test_subnormal_lengths():
+    points = np.random.default_rng(0).random((30, 2))
+    plain = delaunay_graph(points)
+    tiny = delaunay_graph(points * 1e-306)
+    np.testing.assert_allclose(cen.harmonic(tiny, weights=True), cen.harmonic(plain, weights=True) / 1e-306)
+    np.testing.assert_allclose(cen.closeness(tiny, weights=True), cen.closeness(plain, weights=True) / 1e-306)
+    tinier = delaunay_graph(points * 1e-310)  # inverse distances of about 1e311
+    for measure in (cen.harmonic, cen.closeness):
+        with pytest.raises(InputError, match=r"`graph` has inverse distances beyond float64"):
+            measure(tinier, weights=True)
+    # PageRank's transitions do not depend on the values' scale
+    expected = cen.pagerank(_path(4), strengths=True)
+    for length in (1e-320, 1e-300, 1e300, 1e308):
+        np.testing.assert_allclose(cen.pagerank(_path(4, length), strengths=True), expected, rtol=1e-12)
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(
+    n=st.integers(2, 25),
+    p=st.floats(0.1, 0.9),
+    seed=st.integers(0, 2**16),
+    exponent=st.integers(-1060, 1015),
+)
+def test_a_power_of_two_scales_every_length_result_exactly(n, p, seed, exponent):
+    graph = nx.gnp_random_graph(n, p, seed=seed)
+    rng = np.random.default_rng(seed)
+    for u, v in graph.edges:
+        graph[u][v]["weight"] = float(rng.integers(1, 4))  # integer lengths: plenty of ties
+    base = sparse.csr_array(nx.to_scipy_sparse_array(graph))
+    scale = math.ldexp(1.0, exponent)
+    scaled = base * scale
+    np.testing.assert_array_equal(cen.betweenness(scaled, weights=True), cen.betweenness(base, weights=True))
+    np.testing.assert_array_equal(
+        cen.edge_betweenness(scaled, weights=True).data, cen.edge_betweenness(base, weights=True).data
+    )
+    reach = cen.eccentricity(base, weights=True) * scale
+    if np.all(np.isfinite(reach)):
+        np.testing.assert_array_equal(cen.eccentricity(scaled, weights=True), reach)
+    inverse = cen.closeness(base, weights=True) / scale
+    if np.all(np.isfinite(inverse)) and np.all(inverse[inverse > 0] > 1e-300):  # no subnormal rounding
+        np.testing.assert_allclose(cen.closeness(scaled, weights=True), inverse, rtol=1e-14)
+
+
+def test_katz_with_a_large_beta():
+    path = _path(3)
+    np.testing.assert_allclose(cen.katz(path, beta=1e308), cen.katz(path))  # normalised: beta cancels
+    np.testing.assert_allclose(cen.katz(path, beta=1e300, normalized=False), 1e300 * cen.katz(path, normalized=False))
+    complete = sparse.csr_array(nx.to_scipy_sparse_array(nx.complete_graph(5)).astype(float))
+    with pytest.raises(InputError, match=r"`beta` = 1e\+308 puts Katz centralities beyond float64"):
+        cen.katz(complete, alpha=0.2, beta=1e308, normalized=False)  # 5e308
+    with pytest.raises(InputError, match=r"`alpha` must be below"):
+        cen.katz(path, alpha=1e308)  # (a RuntimeWarning first)
