@@ -7,6 +7,7 @@ Nothing here modifies its input: arrays are copied when they would be changed.
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Iterable
 from typing import NamedTuple
@@ -321,7 +322,7 @@ def as_binary_image(
         raise InputError(f"`{name}` must be finite; got NaN or inf values.")
     if threshold is not None and (isinstance(threshold, bool) or not isinstance(threshold, numbers.Real)):
         raise TypeError(f"`threshold` must be a finite real number or None; got {threshold!r}.")
-    if threshold is not None and not np.isfinite(threshold):
+    if threshold is not None and not _finite_real(threshold):
         raise InputError(f"`threshold` must be a finite real number or None; got {threshold!r}.")
     is_mask = arr.dtype == bool or (threshold is None and bool(np.all((arr == 0) | (arr == 1))))
     if is_mask:
@@ -360,6 +361,22 @@ def as_binary_image(
     return mask
 
 
+def _finite_real(value) -> bool:
+    """Whether a real number is finite (a Python int beyond float64 is not; numpy's isfinite
+    raised a TypeError on ints beyond int64)."""
+    try:
+        return math.isfinite(float(value))
+    except OverflowError:
+        return False
+
+
+def check_bool(value, *, name: str) -> bool:
+    """Check that ``value`` is True or False (numpy's bools too; not any truthy value) and return it."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"`{name}` must be True or False; got {value!r}.")
+    return bool(value)
+
+
 def check_choice(value, choices: Iterable[str], *, name: str) -> str:
     """Check that ``value`` is one of ``choices`` (strings) and return it."""
     choices = tuple(choices)
@@ -368,14 +385,21 @@ def check_choice(value, choices: Iterable[str], *, name: str) -> str:
     return value
 
 
+# check_int's bound when none is given: counts, sizes and passes beyond it mean nothing,
+# and the compiled kernels take int64 (10**20 raised numba's TypingError or OverflowError)
+INT_LIMIT = 2**62
+
+
 def check_int(value, *, name: str, low: int | None = None, high: int | None = None) -> int:
-    """Check that ``value`` is an integer in [low, high] and return it as ``int``."""
+    """Check that ``value`` is an integer in [low, high] (high: ``INT_LIMIT`` if None) and
+    return it as ``int``."""
     if isinstance(value, bool) or not isinstance(value, numbers.Integral):
         raise TypeError(f"`{name}` must be an int; got {value!r} of type {type(value).__name__}.")
     value = int(value)
-    if (low is not None and value < low) or (high is not None and value > high):
+    high = INT_LIMIT if high is None else high
+    if (low is not None and value < low) or value > high:
         lo = "-inf" if low is None else low
-        hi = "inf" if high is None else high
+        hi = "2^62" if high == INT_LIMIT else high
         raise InputError(f"`{name}` must be an int in [{lo}, {hi}]; got {value}.")
     return value
 

@@ -33,7 +33,7 @@ import numpy as np
 from scipy import sparse
 
 from .._parallel import run_chunks
-from .._validation import GraphInput, as_any_graph, check_choice, check_float
+from .._validation import GraphInput, as_any_graph, check_bool, check_choice, check_float
 from ..exceptions import InputError
 from . import _kernels
 
@@ -153,9 +153,7 @@ def _prepare(graph, *, reorder: bool = True, allow_directed: bool = True) -> _Pr
 
 
 def _check_flag(value, name: str) -> bool:
-    if not isinstance(value, (bool, np.bool_)):
-        raise TypeError(f"`{name}` must be True or False; got {value!r}.")
-    return bool(value)
+    return check_bool(value, name=name)
 
 
 def _finish(values: np.ndarray, labels, as_dict: bool):

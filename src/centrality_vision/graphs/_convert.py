@@ -35,6 +35,8 @@ def to_networkx(graph, /, points=None, *, weight: str = "weight"):
     import networkx as nx
 
     adjacency = as_graph(graph, name="graph")
+    if not isinstance(weight, str):  # (a networkx attribute name: any hashable, but ours say str)
+        raise TypeError(f"`weight` must be a str, the edge attribute's name; got {weight!r}.")
     n = adjacency.shape[0]
     out = nx.Graph()
     out.add_nodes_from(range(n))

@@ -23,7 +23,7 @@ from scipy import sparse
 from scipy.spatial.distance import pdist, squareform
 
 from .._parallel import run_chunks
-from .._validation import ANY_DIMS, as_points, check_choice, check_float, check_int
+from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import InputError
 from . import _entropy_kernels as _k
 from ._pointsets import edges_to_graph
@@ -59,6 +59,7 @@ def nhdd_joining(n: int, *, connected: bool = True) -> np.ndarray:
     [False, True, False, True, False]
     """
     n = check_int(n, name="n", low=2)
+    connected = check_bool(connected, name="connected")
     k = np.arange(n)
     joining = ((n - 1 - k) % 2 == 0) if connected else ((n - 1 - k) % 2 == 1)
     joining[0] = False  # the first node has nobody to join
@@ -93,7 +94,7 @@ def nhdd_graph(n: int, /, *, connected: bool = True) -> sparse.csr_array:
     [2, 2, 3, 1, 4]
     """
     n = check_int(n, name="n", low=3)
-    joining = nhdd_joining(n, connected=bool(connected))
+    joining = nhdd_joining(n, connected=check_bool(connected, name="connected"))
     cols = np.repeat(np.flatnonzero(joining), np.flatnonzero(joining))
     rows = np.concatenate([np.arange(j) for j in np.flatnonzero(joining)]) if joining.any() else np.array([], int)
     return edges_to_graph(n, rows, cols, lengths=1.0)
@@ -270,6 +271,7 @@ def mwme_graph(
     True
     """
     method = check_choice(method, ("local", "greedy", "exact"), name="method")
+    progress = check_bool(progress, name="progress")
     max_passes = check_int(max_passes, name="max_passes", low=1)
     metric = check_choice(metric, ("euclidean", "precomputed"), name="metric")
     distances = _precomputed(points) if metric == "precomputed" else _distance_matrix(points)
@@ -337,7 +339,7 @@ def mwme_degrees(point_sets, /) -> np.ndarray:
             "`point_sets` must be one array of shape (n_sets, n_points, n_dims): sets of one size; "
             "got sets of different sizes."
         ) from None
-    if arr.ndim != 3 or not 3 <= arr.shape[1] <= MAX_EXACT:
+    if arr.ndim != 3 or not 3 <= arr.shape[1] <= MAX_EXACT or arr.shape[2] < 1:
         raise InputError(
             f"`point_sets` must have shape (n_sets, n_points, n_dims) with 3 <= n_points <= {MAX_EXACT}; "
             f"got shape {arr.shape}."
@@ -350,7 +352,10 @@ def mwme_degrees(point_sets, /) -> np.ndarray:
     position_degree = later + np.where(joining, np.arange(n), 0)
     out = np.empty((n_sets, n), dtype=np.int64)
     for b in range(n_sets):
-        dist = _distance_matrix(flat[b]).scaled
+        try:
+            dist = _distance_matrix(flat[b]).scaled
+        except InputError as exc:  # (its message names `points`: here, one of the sets)
+            raise InputError(str(exc).replace("`points`", f"`point_sets[{b}]`", 1)) from None
         order, _ = _k.mwme_exact(dist, joining)
         out[b, order] = position_degree
     return out

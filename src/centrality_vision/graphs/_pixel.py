@@ -204,7 +204,7 @@ def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, thre
     allowed = _CONNECTIVITY[mask.ndim]
     if connectivity is None:
         connectivity = max(allowed)
-    if isinstance(connectivity, bool) or connectivity not in allowed:
+    if isinstance(connectivity, bool) or not isinstance(connectivity, (int, np.integer)) or connectivity not in allowed:
         choices = " or ".join(str(c) for c in sorted(allowed, reverse=True))
         raise InputError(f"`connectivity` must be {choices} for a {mask.ndim}D image; got {connectivity!r}.")
     if spacing is not None:
@@ -277,7 +277,7 @@ def pixel_coordinates(nodes, shape) -> np.ndarray:
     nodes = np.asarray(nodes)
     if nodes.ndim != 1 or not np.issubdtype(nodes.dtype, np.integer):
         raise InputError(f"`nodes` must be a 1D integer array; got shape {nodes.shape} and dtype {nodes.dtype}.")
-    if isinstance(shape, (str, bytes)) or not hasattr(shape, "__iter__"):
+    if isinstance(shape, (str, bytes)) or not hasattr(shape, "__iter__") or getattr(shape, "ndim", 1) != 1:
         raise TypeError(f"`shape` must be (n_rows, n_cols) or (n_planes, n_rows, n_cols); got {shape!r}.")
     if any(isinstance(s, (bool, np.bool_)) or not isinstance(s, (int, np.integer)) for s in shape):
         raise TypeError(f"`shape` must hold ints; got {tuple(shape)!r}.")

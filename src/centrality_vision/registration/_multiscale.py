@@ -173,7 +173,7 @@ class MultiscaleCPD(BaseEstimator):
         if not sizes or sorted(sizes) != sizes or len(set(sizes)) != len(sizes):
             raise InputError(f"`MultiscaleCPD.sizes` must be non-empty and strictly increasing; got {self.sizes!r}.")
         check_int(self.refine_iter, name="MultiscaleCPD.refine_iter", low=1)
-        check_int(self.random_state, name="MultiscaleCPD.random_state", low=0)
+        check_int(self.random_state, name="MultiscaleCPD.random_state", low=0, high=2**128)
         return sizes, isinstance(self.estimator, NonRigidCPD)
 
     def fit(self, moving, fixed):

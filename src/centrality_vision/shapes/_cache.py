@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import as_binary_image, check_choice, check_int
-from ..centrality import compute
+from .._validation import as_binary_image, check_bool, check_choice, check_int
+from ..centrality import CENTRALITIES, compute
 from ..exceptions import InputError
 from ..graphs import pixel_graph
 
@@ -70,7 +70,7 @@ def as_shape_images(
             f"`{name}` must be a sequence of 2D images (a list, or an array of shape (n_images, rows, cols)); "
             f"got a single 2D array of shape {images.shape}. Wrap one image in a list."
         )
-    if isinstance(images, (str, bytes)) or not hasattr(images, "__len__"):
+    if isinstance(images, (str, bytes)) or not hasattr(images, "__len__") or getattr(images, "ndim", 1) == 0:
         raise TypeError(f"`{name}` must be a sequence of 2D binary images; got {type(images).__name__}.")
     if len(images) == 0:
         raise InputError(f"`{name}` must hold at least one image; got an empty sequence.")
@@ -327,15 +327,28 @@ class CentralityCache:
                 return found
 
     def put(self, mask: np.ndarray, name: str, values: np.ndarray, *, connectivity: int = 8, weights: bool = False):
-        """Store values computed elsewhere (e.g. by a worker) under ``mask``'s key."""
+        """Store values computed elsewhere (e.g. by a worker) under ``mask``'s key.
+
+        They are checked as :meth:`get` would compute them: a known centrality, a pixel
+        connectivity, one finite value per foreground pixel (a NaN stored here was served
+        to every later lookup).
+        """
         mask = _as_mask(mask)
-        key = _key(mask, connectivity, weights)
-        values = np.array(values, dtype=np.float64)
+        name = check_choice(name, CENTRALITIES, name="name")
+        if isinstance(connectivity, bool) or connectivity not in (4, 8):
+            raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
+        key = _key(mask, int(connectivity), check_bool(weights, name="weights"))
+        try:
+            values = np.array(values, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise TypeError(f"`values` must be an array of numbers; got {type(values).__name__}.") from None
         if values.shape != (int(np.count_nonzero(mask)),):
             raise InputError(
                 f"`values` must hold one value per foreground pixel ({int(np.count_nonzero(mask))}); "
                 f"got shape {values.shape}."
             )
+        if not np.all(np.isfinite(values)):
+            raise InputError(f"`values` must be finite; got {int(np.count_nonzero(~np.isfinite(values)))} NaN or inf.")
         if self.directory is not None and not self._path(key, name).exists():
             self._save(key, name, values)
         with self._lock:
@@ -490,7 +503,6 @@ def shape_centralities(
            [5., 8., 5.],
            [3., 5., 3.]])
     """
-    from ..centrality import CENTRALITIES
 
     masks = as_shape_images(images, foreground=foreground, threshold=threshold)
     if isinstance(names, str):  # one name, not its letters
@@ -499,7 +511,7 @@ def shape_centralities(
         names = list(names)
     except TypeError:
         raise TypeError(f"`names` must be a centrality name or a sequence of names; got {names!r}.") from None
-    names = [check_choice(n, CENTRALITIES, name="centrality") for n in names]
+    names = [check_choice(n, CENTRALITIES, name="names") for n in names]
     if not is_connectivity(connectivity):
         raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
     connectivity = int(connectivity)

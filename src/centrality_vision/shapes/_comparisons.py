@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numbers
+
 import numpy as np
 from scipy import ndimage
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
@@ -166,7 +168,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         Centralities to compare (``"all"``: the four of the thesis); each comparison
         uses one of them, drawn at random.
     n_comparisons : int, default=2000
-    extent : float, default=2.0
+    extent : float in (0, 1e6], default=2.0
         Largest offset, in units of the shape's RMS radius.
     reference : {"centroid", "graph-centre"}, default="centroid"
     orientation : {"image", "principal"}, default="image"
@@ -238,7 +240,8 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         """Draw the comparisons (the images are only checked)."""
         names = resolve_centralities(self.centrality)
         n = check_int(self.n_comparisons, name="n_comparisons", low=1)
-        extent = check_float(self.extent, name="extent", low=0.0, low_open=True)
+        # (at most 1e6 radii: beyond, pixel positions leave int64)
+        extent = check_float(self.extent, name="extent", low=0.0, low_open=True, high=1e6)
         check_choice(self.reference, ("centroid", "graph-centre"), name="reference")
         check_choice(self.orientation, ("image", "principal"), name="orientation")
         self._masks(X)
@@ -396,6 +399,11 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         if y.ndim != 1 or y.shape[0] != len(masks):
             raise InputError(f"`y` must have one label per image ({len(masks)}); got shape {y.shape}.")
         check_int(self.n_estimators, name="n_estimators", low=1)
+        # (scikit-learn checks the rest, but passes ints beyond C's range to an OverflowError)
+        if self.max_depth is not None:
+            check_int(self.max_depth, name="max_depth", low=1)
+        if isinstance(self.max_features, numbers.Integral) and not isinstance(self.max_features, bool):
+            check_int(self.max_features, name="max_features", low=1)
         comparison_seed, forest_seed = self._seeds()
         self.comparisons_ = CentralityComparisons(
             centrality=self.centrality,

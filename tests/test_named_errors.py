@@ -1,0 +1,81 @@
+"""Bad arguments found by fuzzing the graph, centrality and shape APIs: each is a ValueError or
+TypeError naming the parameter (before: unhashable-type, numba typing, overflow and reshape
+errors from deep inside, a wrong parameter named, truthy strings taken as True, NaN cached)."""
+
+import numpy as np
+import pytest
+
+from centrality_vision import graphs
+from centrality_vision.graphs import mwme_degrees, mwme_graph, nhdd_graph, pixel_coordinates, pixel_graph, to_networkx
+from centrality_vision.shapes import (
+    CentralityCache,
+    CentralityComparisonForest,
+    CentralityComparisons,
+    as_shape_images,
+    bullseye_score,
+    shape_centralities,
+)
+
+POINTS = np.random.default_rng(0).random((6, 2))
+SQUARE = np.pad(np.ones((3, 3), dtype=bool), 1)
+
+
+def _masks():
+    out = []
+    for i in range(6):
+        mask = np.zeros((12, 12), dtype=bool)
+        mask[2 : 6 + i % 3, 2:9] = True
+        out.append(mask)
+    return out
+
+
+CASES = [
+    (lambda: pixel_graph(np.ones((3, 3), dtype=bool), connectivity=[8]), "`connectivity` must be 8 or 4"),
+    (lambda: pixel_graph(np.arange(16.0).reshape(4, 4), threshold=10**400), "`threshold` must be a finite real"),
+    (lambda: mwme_graph(POINTS, max_passes=10**20), "`max_passes` must be an int in [1, 2^62]"),
+    (lambda: mwme_graph(POINTS, progress="no"), "`progress` must be True or False"),
+    (lambda: nhdd_graph(10**20), "`n` must be an int in [3, 2^62]"),
+    (lambda: nhdd_graph(5, connected="no"), "`connected` must be True or False"),
+    (lambda: mwme_degrees([[[0, 0], [0, 0], [1, 1]]]), "`point_sets[0]` must not contain duplicate points"),
+    (lambda: mwme_degrees(np.zeros((1, 3, 0))), "`point_sets` must have shape (n_sets, n_points, n_dims)"),
+    (lambda: shape_centralities([SQUARE], ["bogus"]), "`names` must be one of"),
+    (lambda: as_shape_images(np.array(2)), "must be a sequence of 2D binary images"),
+    (lambda: pixel_coordinates([0], np.array(2)), "`shape` must be (n_rows, n_cols)"),
+    (lambda: to_networkx(graphs.delaunay_graph(POINTS), weight=[]), "`weight` must be a str"),
+    (
+        lambda: bullseye_score(np.abs(np.subtract.outer([0.0, 1, 2, 3], [0.0, 1, 2, 3])), list("aabb"), top=10**20),
+        "`top` must be an int in [1, 2^62]",
+    ),
+    (lambda: CentralityComparisons(n_comparisons=10**20).fit(_masks()), "`n_comparisons` must be an int in [1, 2^62]"),
+    (lambda: CentralityComparisons(extent=1e20).fit(_masks()), "`extent` must be a finite number in (0.0, 1000000.0]"),
+    (
+        lambda: CentralityComparisonForest(n_estimators=3, n_comparisons=20, max_depth=10**20).fit(
+            _masks(), [0, 1] * 3
+        ),
+        "`max_depth` must be an int in [1, 2^62]",
+    ),
+    (
+        lambda: CentralityComparisonForest(n_estimators=3, n_comparisons=20, max_features=10**20).fit(
+            _masks(), [0, 1] * 3
+        ),
+        "`max_features` must be an int in [1, 2^62]",
+    ),
+    (lambda: CentralityCache().put(SQUARE, "closeness", np.full(9, np.nan)), "`values` must be finite"),
+    (lambda: CentralityCache().put(SQUARE, "bogus", np.ones(9)), "`name` must be one of"),
+    (lambda: CentralityCache().put(SQUARE, "closeness", np.ones(9), connectivity=5), "`connectivity` must be 4 or 8"),
+]
+
+
+@pytest.mark.parametrize(("call", "message"), CASES, ids=[message for _, message in CASES])
+def test_a_bad_argument_is_a_named_error(call, message):
+    with pytest.raises((ValueError, TypeError)) as info:
+        call()
+    assert message in str(info.value)
+
+
+def test_a_nan_put_is_not_served_later():
+    cache = CentralityCache()
+    with pytest.raises(ValueError):
+        cache.put(SQUARE, "closeness", np.full(9, np.nan))
+    values = shape_centralities([SQUARE], ["closeness"], cache=cache)[0]["closeness"]
+    assert np.all(np.isfinite(values))
