@@ -79,3 +79,12 @@ def test_a_nan_put_is_not_served_later():
         cache.put(SQUARE, "closeness", np.full(9, np.nan))
     values = shape_centralities([SQUARE], ["closeness"], cache=cache)[0]["closeness"]
     assert np.all(np.isfinite(values))
+
+
+def test_job_counts_and_resolutions_beyond_c_and_memory_are_named():
+    from centrality_vision.shapes import normalize_shape, pairwise_shape_distances
+
+    with pytest.raises(ValueError, match=r"`n_jobs` must be None, a positive int"):
+        pairwise_shape_distances([SQUARE, SQUARE], n_points=8, resolution=8, n_jobs=10**20)  # OverflowError
+    with pytest.raises(ValueError, match=r"`resolution` must be an int in \[1, 32768\]"):
+        normalize_shape(SQUARE, resolution=10**12)  # numpy's "array is too big"

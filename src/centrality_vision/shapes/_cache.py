@@ -441,8 +441,13 @@ def _worker(masks, names, connectivity, weights, cache, threads, parent):
 def _effective_jobs(n_jobs) -> int:
     from joblib import effective_n_jobs
 
-    if n_jobs is not None and (isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or n_jobs == 0):
-        raise InputError(f"`n_jobs` must be None, a positive int or a negative int (-1: all cores); got {n_jobs!r}.")
+    if n_jobs is not None and (
+        isinstance(n_jobs, bool) or not isinstance(n_jobs, (int, np.integer)) or n_jobs == 0 or abs(n_jobs) > 2**31 - 1
+    ):  # (joblib passes it to C: beyond a C int, an OverflowError)
+        raise InputError(
+            f"`n_jobs` must be None, a positive int or a negative int (-1: all cores), at most 2^31 - 1 in size; "
+            f"got {n_jobs!r}."
+        )
     return effective_n_jobs(n_jobs)
 
 

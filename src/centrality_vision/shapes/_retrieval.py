@@ -63,6 +63,8 @@ FEATURE_SCALES = (
     + (0.33, 0.34, 0.36, 0.36, 0.35, 0.34, 0.33, 0.31, 0.27, 0.2)  # inner-angle quantiles
 )
 METHODS = ("profile", "chi2", "emd")
+# the largest side of a normalised shape image: 2^15 pixels (about 8 GiB of float64 at that side)
+MAX_RESOLUTION = 2**15
 
 
 def _largest_component(mask: np.ndarray) -> np.ndarray:
@@ -87,7 +89,7 @@ def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
         A boolean or 0/1 mask (True/1: the shape), with at least one foreground pixel; a
         grey image is split as in :func:`centrality_vision.shapes.as_shape_images`. Not
         modified.
-    resolution : int >= 1, default=48
+    resolution : int in [1, 32768], default=48
         The square root of the result's foreground area, in pixels.
 
     Examples
@@ -101,7 +103,7 @@ def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
     from skimage.measure import block_reduce
     from skimage.transform import resize
 
-    resolution = check_int(resolution, name="resolution", low=1)
+    resolution = check_int(resolution, name="resolution", low=1, high=MAX_RESOLUTION)
     mask = as_binary_image(mask, name="mask")  # (refuses an empty mask, by name)
     mask = _largest_component(mask)
     rows, cols = np.nonzero(mask)
@@ -238,7 +240,7 @@ def outline_profiles(
     image : 2D array
         A mask or grey image (see :func:`as_shape_images`).
     n_points : int, default=100
-    resolution : int, default=48
+    resolution : int in [8, 32768], default=48
         Square root of the shape's area after resizing.
     foreground, threshold :
         How grey images become masks (see :func:`as_shape_images`).
@@ -261,7 +263,7 @@ def outline_profiles(
     True
     """
     n_points = check_int(n_points, name="n_points", low=8)
-    resolution = check_int(resolution, name="resolution", low=8)
+    resolution = check_int(resolution, name="resolution", low=8, high=MAX_RESOLUTION)
     try:
         (mask,) = as_shape_images([image], name="image", foreground=foreground, threshold=threshold)
     except (InputError, TypeError) as exc:  # one image, not a sequence: no index in the name
@@ -421,7 +423,7 @@ def pairwise_shape_distances(
     """
     check_choice(method, METHODS, name="method")
     n_points = check_int(n_points, name="n_points", low=8)
-    resolution = check_int(resolution, name="resolution", low=8)
+    resolution = check_int(resolution, name="resolution", low=8, high=MAX_RESOLUTION)
     n_candidates = check_int(n_candidates, name="n_candidates", low=0)
     band = check_int(band, name="band", low=0)
     from ._cache import _effective_jobs
