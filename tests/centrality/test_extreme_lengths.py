@@ -48,6 +48,7 @@ def test_subnormal_lengths():
     for measure in (cen.harmonic, cen.closeness):
         with pytest.raises(InputError, match=r"`graph` has inverse distances beyond float64"):
             measure(tinier, weights=True)
+    np.testing.assert_array_equal(cen.degree(_path(4, 1e-320), strengths=True), [1e-320, 2e-320, 2e-320, 1e-320])
     # PageRank's transitions do not depend on the values' scale
     expected = cen.pagerank(_path(4), strengths=True)
     for length in (1e-320, 1e-300, 1e300, 1e308):

@@ -299,9 +299,10 @@ def degree(graph, /, *, strengths: bool = False, normalized: bool = False, as_di
     if strengths:
         # summed at a power-of-two scale, exactly, so that a sum beyond float64 is an error
         # instead of an overflow warning and inf
-        _, unit = _searchable_lengths(np.abs(adjacency.data.astype(np.float64, copy=False)))
+        scaled, unit = _searchable_lengths(adjacency.data.astype(np.float64, copy=False))  # (non-negative)
+        scaled = sparse.csr_array((scaled, adjacency.indices, adjacency.indptr), shape=adjacency.shape)
         with np.errstate(over="ignore"):
-            values = np.asarray((adjacency / unit).sum(axis=1), dtype=np.float64).ravel() * unit
+            values = np.asarray(scaled.sum(axis=1), dtype=np.float64).ravel() * unit
         if not np.all(np.isfinite(values)):
             raise InputError(
                 "`graph` has node strengths beyond float64's largest number (about 1.8e308); rescale its values."

@@ -20,6 +20,7 @@ __all__ = [
     "add_out",
     "add_plot",
     "add_progress",
+    "add_seed",
     "add_point_options",
     "progress_on",
     "quiet_progress",
@@ -158,6 +159,16 @@ def add_progress(parser: argparse.ArgumentParser) -> None:
         action=argparse.BooleanOptionalAction,
         default=None,
         help="show progress bars on stderr (default: only when stderr is a terminal)",
+    )
+
+
+def add_seed(parser: argparse.ArgumentParser, what: str) -> None:
+    """--seed: a numpy seed in [0, 2^32 - 1], default 0; ``what`` it seeds, for the help."""
+    parser.add_argument(
+        "--seed",
+        type=number(int, low=0, high=2**32 - 1),
+        default=0,
+        help=f"seed of {what} (default: %(default)s)",
     )
 
 

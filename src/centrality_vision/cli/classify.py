@@ -13,6 +13,7 @@ from ._common import (
     add_out,
     add_plot,
     add_progress,
+    add_seed,
     number,
     options,
     progress_on,
@@ -71,12 +72,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     parser.add_argument(
         "--folds", type=number(int, low=2), default=5, help="cross-validation folds (default: %(default)s)"
     )
-    parser.add_argument(
-        "--seed",
-        type=number(int, low=0, high=2**32 - 1),
-        default=0,
-        help="seed of the fold shuffling and of the forest (default: %(default)s)",
-    )
+    add_seed(parser, "the fold shuffling and of the forest")
     parser.add_argument(
         "--foreground",
         choices=("auto", "dark", "light"),

@@ -15,6 +15,7 @@ from ._common import (
     add_plot,
     add_point_options,
     add_progress,
+    add_seed,
     number,
     options,
     progress_on,
@@ -106,12 +107,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--n-neighbors), global = a search over every rotation first, for sets in any pose "
         "(default: %(default)s)",
     )
-    parser.add_argument(
-        "--seed",
-        type=number(int, low=0, high=2**32 - 1),
-        default=0,
-        help="seed of --init global's search (default: %(default)s)",
-    )
+    add_seed(parser, "--init global's search")
     parser.add_argument(
         "--n-neighbors",
         type=number(int, low=1),
