@@ -176,7 +176,12 @@ def delaunay_graph(points, /) -> sparse.csr_array:
     Notes
     -----
     Computed with Qhull through :class:`scipy.spatial.Delaunay`. For co-circular
-    (co-spherical) points the triangulation is not unique and Qhull picks one.
+    (co-spherical) points the triangulation is not unique and Qhull picks one. Qhull's
+    floating-point tests can fail on points very close together relative to the set's
+    extent (a cluster about 1e-7 of it): every facet of its triangulation is checked with
+    in-sphere tests of certain sign (``graphs._predicates``), and a triangulation that is
+    not Delaunay is refused with an :class:`~centrality_vision.exceptions.InputError`
+    instead of being returned (so are :func:`gabriel_graph` and :func:`emst_graph`).
 
     Examples
     --------
