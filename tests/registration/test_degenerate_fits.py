@@ -50,9 +50,18 @@ def test_forced_fgt_at_a_sigma2_too_fine_for_its_grid_falls_back_to_the_truncate
     a = 0.3
     rotation = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
     fixed = moving @ rotation.T
-    with pytest.warns(RuntimeWarning, match="truncated path"):
-        reg = RigidCPD(method="fgt", tol=0.0, max_iter=80).fit(moving, fixed)
+    # (silently: the truncated path is exact, and the history says which path each E-step took;
+    # the RuntimeWarning it raised was undocumented)
+    reg = RigidCPD(method="fgt", tol=0.0, max_iter=80).fit(moving, fixed)
     np.testing.assert_allclose(reg.moving_transformed_, fixed, atol=1e-6)
+    assert set(reg.history_["method"]) == {"fgt", "truncated"}
+
+
+def test_forced_fgt_refuses_more_than_three_dimensions():
+    # its work grows as p^D: 300 4D points ran for minutes
+    points = np.random.default_rng(0).random((300, 4))
+    with pytest.raises(ValueError, match=r"`method` 'fgt' is for 2D and 3D sets; got 4D points"):
+        RigidCPD(method="fgt").fit(points, points + 0.01)
 
 
 def test_fgt_outlier_constant_beyond_exp_range_is_finite():

@@ -126,7 +126,9 @@ def test_nonrigid_m_step_leaks_no_conditioning_warning():
         warnings.simplefilter("ignore", ConvergenceWarning)  # (max_iter=5 is meant to stop early)
         reg = NonRigidCPD(max_iter=30).fit(y, y * 1e-300)
         assert np.isfinite(reg.sigma2_) and np.all(np.isfinite(reg.moving_transformed_))
-        assert np.isfinite(NonRigidCPD(sigma2=1e308, max_iter=5).fit(y, y + 0.05).sigma2_)
+        assert np.isfinite(NonRigidCPD(sigma2=1e9, max_iter=5).fit(y, y + 0.05).sigma2_)
+        with pytest.raises(InputError, match="sigma2"):  # (far beyond the data: refused since)
+            NonRigidCPD(sigma2=1e308, max_iter=5).fit(y, y + 0.05)
 
 
 def test_helpers_beyond_float64_are_named_or_exact(pair):

@@ -11,6 +11,7 @@ exact conventions.
 
 from ._api import (
     CENTRALITIES,
+    PATH_CENTRALITIES,
     betweenness,
     closeness,
     compute,
@@ -24,6 +25,7 @@ from ._spectral import eigenvector, katz, pagerank
 
 __all__ = [
     "CENTRALITIES",
+    "PATH_CENTRALITIES",
     "degree",
     "betweenness",
     "edge_betweenness",

@@ -39,6 +39,7 @@ from . import _kernels
 
 __all__ = [
     "CENTRALITIES",
+    "PATH_CENTRALITIES",
     "degree",
     "betweenness",
     "edge_betweenness",
@@ -48,6 +49,10 @@ __all__ = [
     "compute",
     "degree_entropy",
 ]
+
+#: The centralities built on shortest paths: the ones ``weights=True`` (paths by edge
+#: length) changes.
+PATH_CENTRALITIES = ("betweenness", "closeness", "harmonic", "eccentricity")
 
 CENTRALITIES = (
     "degree",

@@ -77,6 +77,13 @@ _COLLAPSE_RADIUS = 0.05
 _COLLAPSE_MATCHED = 0.25
 # accelerate: an extrapolated sigma2 stays within this factor of the plain step's.
 _SIGMA_JUMP = 0.25
+# A given sigma2 may be at most this many times the sets' own spread (beyond, every posterior
+# is already uniform, and its products overflow).
+_SIGMA2_MAX = 1e10
+# The largest landmark_weight: the pinned pairs' residual grows about as the weight times
+# float64's rounding (1e-11 of the extent at 1e6; 2e-5 at 1e12, and 1e100 gave a
+# scale of 3.6e16 reported as converged).
+_LANDMARK_WEIGHT_MAX = 1e6
 # w="auto": start and bounds of the estimated outlier fraction.
 _AUTO_W_START, _AUTO_W_MAX = 0.1, 0.9
 # ... and the most the E-step's w may take from it (odds of 1e12 to 1)
@@ -434,7 +441,9 @@ class _CPD(BaseEstimator):
         check_float(self.tol, name=f"{name}.tol", low=0.0)
         if self.sigma2 is not None:
             check_float(self.sigma2, name=f"{name}.sigma2", low=0.0, low_open=True)
-        check_float(self.landmark_weight, name=f"{name}.landmark_weight", low=0.0, low_open=True)
+        check_float(
+            self.landmark_weight, name=f"{name}.landmark_weight", low=0.0, low_open=True, high=_LANDMARK_WEIGHT_MAX
+        )
         check_choice(self.method, E_STEP_METHODS, name=f"{name}.method")
         check_choice(self.precision, PRECISIONS, name=f"{name}.precision")
         if not isinstance(self.accelerate, (bool, np.bool_)):
@@ -591,6 +600,12 @@ class _CPD(BaseEstimator):
         state = self._init_state(moving_n, fixed, start)
         moving_t = self._apply(state, self._work)
         sigma2 = _initial_sigma2(moving_t, fixed) if self.sigma2 is None else float(self.sigma2)
+        if self.sigma2 is not None and not sigma2 <= _SIGMA2_MAX * spread:  # (1e300 overflowed)
+            unit = "" if frame.scale == 1.0 else " in the normalised frame"
+            raise InputError(
+                f"`{type(self).__name__}.sigma2` must be at most {_SIGMA2_MAX:g} times the sets' own "
+                f"spread ({_SIGMA2_MAX * spread:.3g}{unit}); got {self.sigma2!r}."
+            )
         sigma2 = max(sigma2, floor)
         sigma2_start = sigma2
         auto_w = isinstance(self.w, str)
@@ -917,7 +932,8 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         Tolerance on the relative change of the objective.
     sigma2 : float, optional
         Initial variance (in the normalised frame under ``normalize=True``); by default
-        ``sum |x_n - T0(y_m)|^2 / (D M N)`` for the starting pose T0.
+        ``sum |x_n - T0(y_m)|^2 / (D M N)`` for the starting pose T0. At most 1e10 times
+        the sets' own spread (their larger ``sum |x_i - x_j|^2 / (D N^2)``).
     normalize : bool, default=True
         Run EM on both sets centred and divided by their common RMS radius (see the module
         notes; the moving set's radius alone under ``n_neighbors``); results are
@@ -927,7 +943,7 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         The starting pose: None (centroids aligned under ``normalize``, else the identity),
         a transform in the caller's units, or 'global' (a rotation search over the whole
         sphere, ``registration._pose.global_pose_search``, seeded by ``random_state``).
-    landmark_weight : float, default=10.0
+    landmark_weight : float in (0, 1e6], default=10.0
         Mass of the ``landmarks`` given to :meth:`fit`: together they weigh this many times
         the data's posterior mass. The default pins landmarks the data agree with (on the
         fish, true pairs end within 1e-3 of each other); pairs the data pull elsewhere are
@@ -940,7 +956,8 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         above exp(-36.8)/M of the row's largest); for each fixed point only the moving
         points whose term is above that ('truncated', a cell grid); both equal every term's
         sum to rounding; a fast Gauss transform ('fgt', about 1e-8 of the total weight; CPD only,
-        not GPD). 'auto' takes the fastest by timing the paths during the fit
+        not GPD; 2D and 3D; an E-step whose sigma2 is too small for its grid takes the exact
+        truncated path, as ``history_["method"]`` records). 'auto' takes the fastest by timing the paths during the fit
         (``registration._estep.EStepPlanner``; always dense below 2^20 pairs). Timing
         decides, so above 2^20 pairs two fits of one problem may take different paths and
         differ at rounding level (measured: 1e-12 at 2,000 points; up to the FGT's 1e-8 where
@@ -1158,7 +1175,8 @@ class AffineCPD(_CPD):
     def _validate(self, moving, fixed, true_moving):
         moving, fixed, true_moving = super()._validate(moving, fixed, true_moving)
         dim = moving.shape[1]
-        centred = moving - moving.mean(axis=0)
+        unit = moving / power_of_two_scale(moving)  # (the mean of coordinates near 1e308 overflowed)
+        centred = unit - unit.mean(axis=0)
         rank = int(np.linalg.matrix_rank(centred / max(float(np.abs(centred).max()), np.finfo(float).tiny)))
         if rank < dim:
             warnings.warn(

@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 import threading
 import time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -876,13 +875,8 @@ def _run(method, moving_t, fixed, sigma2, w, prior, tau, eps, cached, single=Fal
             p1, px, pt1, log_den, best = _fgt(moving_t, fixed, sigma2, log_c, eps, cached.get("nearest"))
         except FGTGridTooLarge:
             # method='fgt' asked for at a sigma2 far below the sets' extent: the exact truncated
-            # path instead (its grid is sized by the points, not by h)
-            warnings.warn(
-                "method='fgt': the fast Gauss transform's grid is too fine at this sigma2; "
-                "this E-step took the exact truncated path instead.",
-                RuntimeWarning,
-                stacklevel=2,
-            )
+            # path instead (its grid is sized by the points, not by h); the posterior's
+            # ``method`` (a fit's ``history_["method"]``) says so
             method = "truncated"
     if method == "truncated":
         p1, px, pt1, log_den, best = _truncated(
@@ -1190,6 +1184,10 @@ def _e_step(
         cached = {}
     if method == "fgt" and log_prior is not None and log_prior.scale != 0:
         raise InputError("`method` 'fgt' computes CPD's posterior only; GPD's prior needs 'dense' or 'truncated'.")
+    if method == "fgt" and moving_t.shape[1] > 3:  # (its work grows as p^D: 300 4D points ran for minutes)
+        raise InputError(
+            f"`method` 'fgt' is for 2D and 3D sets; got {moving_t.shape[1]}D points (use 'dense' or 'truncated')."
+        )
     return _run(method, moving_t, fixed, sigma2, w, log_prior, tau, eps, cached, _single(precision), want_best, memo)
 
 

@@ -11,7 +11,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .. import graphs as _graphs
 from .._validation import ANY_DIMS, as_graph, as_points, as_real_array, check_choice, check_float, check_int
-from ..centrality import CENTRALITIES, compute
+from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
 from ..transforms import centred, power_of_two_scale
 from ._cpd import _CPD, RigidCPD
@@ -232,7 +232,8 @@ class GPD(BaseEstimator):
         sets close in); a float ``f`` keeps it while ``sigma2 >= f sigma2_0`` and then runs
         plain CPD.
     weights : bool, default=False
-        Use edge lengths in the centrality (shortest paths by length) instead of hop counts.
+        Use edge lengths in the centrality (shortest paths by length) instead of hop counts;
+        path centralities only (betweenness, closeness, harmonic, eccentricity).
     k : int, default=6
         Neighbours for ``graph='knn'``; on a set of ``n <= k`` points, ``n - 1`` (the
         complete graph).
@@ -316,6 +317,13 @@ class GPD(BaseEstimator):
             check_choice(self.graph, GRAPHS, name="graph")
         if not isinstance(self.weights, (bool, np.bool_)):
             raise TypeError(f"`weights` must be a bool; got {self.weights!r}.")
+        if self.weights and isinstance(self.centrality, str) and self.centrality not in PATH_CENTRALITIES:
+            # (degree, eigenvector, PageRank and Katz read stored values as strengths, not
+            # lengths: GPD passed them weights=True, deprecated or unknown there)
+            raise InputError(
+                f"`weights=True` (shortest paths by edge length) applies to {', '.join(PATH_CENTRALITIES)}; "
+                f"got centrality={self.centrality!r}."
+            )
         check_int(self.k, name="k", low=1)
         _check_prior_options(self.bins, self.phi, self.kappa)
         schedule = self.prior_schedule

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import as_binary_image, check_bool, check_choice, check_int
-from ..centrality import CENTRALITIES, compute
+from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
 from ..graphs import pixel_graph
 
@@ -38,8 +38,6 @@ __all__ = [
 
 #: The four centralities of the thesis' shape experiments, in the order "all" concatenates them.
 SHAPE_CENTRALITIES = ("betweenness", "closeness", "eigenvector", "degree")
-#: The centralities built on shortest paths: the ones ``weights=True`` changes.
-PATH_CENTRALITIES = ("betweenness", "closeness", "harmonic", "eccentricity")
 
 _STALE_LOCK_SECONDS = 600.0  # a lock this old (or whose process is gone) is taken over
 _POLL_SECONDS = 0.05
