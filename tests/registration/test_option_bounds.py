@@ -83,3 +83,19 @@ def test_the_dense_kernel_keeps_its_digits_far_from_the_origin_and_at_tiny_beta(
     np.testing.assert_allclose(fit.transform_(points + 1e8), fit.moving_transformed_, rtol=0, atol=1e-6)
     tiny = NonRigidCPD(beta=1e-8, low_rank=None).fit(points, points + 0.01)
     np.testing.assert_allclose(tiny.transform_(points), tiny.moving_transformed_, rtol=0, atol=1e-12)
+
+
+def test_a_one_point_moving_set_has_no_scale_or_linear_part_under_the_knn_frame():
+    # the k-NN frame centres the moving set on the fixed set's mean: its spread about its own
+    # weighted mean was rounding noise, and the M-step divided by it (scale 8.3e15, affine
+    # linear part 1.6e7 at an offset of -1e8)
+    moving = np.repeat([[0.2063360661024647, 0.8318022863330304]], 5, axis=0)
+    fixed = np.random.default_rng(3).random((5, 2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # (AffineCPD: the moving set spans 0 dimensions)
+        rigid = RigidCPD(w="auto", n_neighbors=5).fit(moving, fixed)
+        affine = AffineCPD(n_neighbors=5).fit(moving - 1e8, fixed - 1e8)
+    assert rigid.transform_.scale == 1.0
+    np.testing.assert_array_equal(affine.transform_.linear, 0.0)
+    for fit, start in ((rigid, moving), (affine, moving - 1e8)):
+        np.testing.assert_allclose(fit.transform_(start), fit.moving_transformed_, rtol=0, atol=1e-6)

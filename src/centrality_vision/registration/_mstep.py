@@ -78,6 +78,14 @@ def _moments(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
     return post.n_p, mu_x, mu_y, a, x_px, y_py
 
 
+def _spread_floor(moving: np.ndarray, n_p: float) -> float:
+    """The weighted spread ``Yh^T d(P1) Yh`` that rounding alone gives a set of one repeated
+    point: its deviations from the weighted mean are a few ulps of its coordinates. A spread
+    at or below it is none (a one-point moving set away from the origin, as the k-NN
+    frame leaves it, made the similarity's scale 8e15 and the affine map 1.6e7)."""
+    return n_p * (8.0 * np.finfo(np.float64).eps * float(np.max(np.abs(moving), initial=0.0))) ** 2
+
+
 def rigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, scale: bool = True):
     """Rigid (``scale=False``) or similarity M-step: ``(transform, sigma2)``.
 
@@ -88,7 +96,7 @@ def rigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, sca
     n_dims = moving.shape[1]
     rotation, tr_ar = proper_rotation(a)
     y_py = float(np.trace(y_py))
-    s = tr_ar / y_py if scale and y_py > 0 and tr_ar > 0 else 1.0
+    s = tr_ar / y_py if scale and y_py > n_dims * _spread_floor(moving, n_p) and tr_ar > 0 else 1.0
     sigma2 = (x_px - 2 * s * tr_ar + s * s * y_py) / (n_p * n_dims)
     translation = mu_x - s * rotation @ mu_y
     kind = SimilarityTransform if scale else RigidTransform
@@ -102,7 +110,13 @@ def affine_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
     """
     n_p, mu_x, mu_y, a, x_px, y_py = _moments(post, moving, fixed)
     n_dims = moving.shape[1]
-    linear = np.linalg.lstsq(y_py.T, a.T, rcond=None)[0].T
+    top = float(np.linalg.norm(y_py, 2))
+    floor = _spread_floor(moving, n_p)
+    if top <= floor:  # no spread beyond rounding in any direction: the least-norm map is 0
+        linear = np.zeros((n_dims, n_dims))
+    else:  # (directions of rounding-level spread cut like exactly singular ones)
+        rcond = max(floor / top, n_dims * np.finfo(np.float64).eps)
+        linear = np.linalg.lstsq(y_py.T, a.T, rcond=rcond)[0].T
     sigma2 = (x_px - float(np.sum(a * linear))) / (n_p * n_dims)
     return AffineTransform(linear, mu_x - linear @ mu_y), float(sigma2)
 
