@@ -144,7 +144,7 @@ def _delaunay_edges(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     unit = _unit_scale(points)[0]
     tri = _triangulation(_centred(unit))
     # Qhull's floating-point in-circle tests can return a triangulation that is not Delaunay
-    # for a tight cluster beside distant points (about 1e-7 of the extent): checked exactly
+    # for a tight cluster beside distant points (about 1e-7 of the extent): every facet checked
     failed = delaunay_violations(unit, tri.simplices, tri.neighbors)
     if failed:
         raise InputError(

@@ -957,8 +957,9 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         points whose term is above that ('truncated', a cell grid); both equal every term's
         sum to rounding; a fast Gauss transform ('fgt', about 1e-8 of the total weight; CPD only,
         not GPD; 2D and 3D; an E-step whose sigma2 is too small for its grid takes the exact
-        truncated path, as ``history_["method"]`` records). 'auto' takes the fastest by timing the paths during the fit
-        (``registration._estep.EStepPlanner``; always dense below 2^20 pairs). Timing
+        truncated path, as ``history_["method"]`` records). 'auto' takes the fastest by
+        timing the paths during the fit (``registration._estep.EStepPlanner``; always dense
+        below 2^20 pairs). Timing
         decides, so above 2^20 pairs two fits of one problem may take different paths and
         differ at rounding level (measured: 1e-12 at 2,000 points; up to the FGT's 1e-8 where
         it is chosen); pass 'dense' or 'truncated' for results bit-identical across runs and

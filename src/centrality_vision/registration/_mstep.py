@@ -126,9 +126,9 @@ def gaussian_kernel(a: np.ndarray, b: np.ndarray, beta: float) -> np.ndarray:
 
     The squared distances are summed from the differences (scipy's ``cdist``), not as
     ``|a|^2 + |b|^2 - 2 a.b``, which cancels where the coordinates are large against the
-    distances: at an offset of 1e8 (``normalize=False``) the fit ended 3.4 off, and with
-    ``beta=1e-8`` the kernel's diagonal came out exp(-0.5) instead of 1. (Also 5-7x faster
-    in 2D at 2,000-5,000 points.)
+    distances: at an offset of 1e8 (``normalize=False``) the fitted ``transform_`` and
+    ``moving_transformed_`` disagreed by 3.2, and with ``beta=1e-8`` the kernel's diagonal
+    came out exp(-0.5) instead of 1. (Also 5-7x faster in 2D at 2,000-5,000 points.)
     """
     from scipy.spatial.distance import cdist
 
