@@ -165,3 +165,15 @@ def test_a_pcd_count_line_without_an_integer_is_an_input_error(tmp_path, line, v
     path.write_bytes(b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n" + body + b"DATA ascii\n1 2 3\n4 5 6\n")
     with pytest.raises(InputError, match="POINTS, WIDTH or HEIGHT line without an integer"):
         read_points(path)
+
+
+def test_a_pcd_count_beyond_the_file_is_an_input_error_not_an_out_of_memory_kill(tmp_path):
+    # found by the mutation test above in a CI run: COUNT 9999999999991 built that many column
+    # names and the kernel killed the test process (24 GB)
+    path = tmp_path / "count.pcd"
+    path.write_bytes(
+        b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 9999999999991 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
+        b"DATA ascii\n1 2 3\n4 5 6\n"
+    )
+    with pytest.raises(InputError, match=r"COUNT line declares 9999999999993 values per point, more than the file's 108 bytes"):
+        read_points(path)

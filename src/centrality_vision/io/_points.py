@@ -792,6 +792,13 @@ def _read_pcd(path: Path) -> _Table:
         ) from None
     if not (len(sizes) == len(types) == len(counts) == n) or min(counts) < 1:
         raise InputError(f"{path}: the PCD header's FIELDS, SIZE, TYPE and COUNT lines do not match.")
+    if sum(counts) > len(data):
+        # (a point's values take a byte each at least, and their header a byte per count: a
+        # damaged COUNT of 1e13 built that many names and ran the machine out of memory)
+        raise InputError(
+            f"{path}: the PCD header's COUNT line declares {sum(counts)} values per point, more than the "
+            f"file's {len(data)} bytes."
+        )
     names = []
     for field, count in zip(fields, counts):
         names += [field] if count == 1 else [f"{field}_{k}" for k in range(count)]
