@@ -175,5 +175,6 @@ def test_a_pcd_count_beyond_the_file_is_an_input_error_not_an_out_of_memory_kill
         b"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 9999999999991 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\n"
         b"DATA ascii\n1 2 3\n4 5 6\n"
     )
-    with pytest.raises(InputError, match=r"COUNT line declares 9999999999993 values per point, more than the file's 108 bytes"):
+    declared = r"COUNT line declares 9999999999993 values per point, more than the file's 108 bytes"
+    with pytest.raises(InputError, match=declared):
         read_points(path)
