@@ -129,14 +129,11 @@ class _Grid:
         self.offs = np.array([int(np.dot(d, strides)) for d in self.steps], dtype=np.int64)
         spacing = np.ones(mask.ndim) if graph.spacing is None else np.asarray(graph.spacing, dtype=np.float64)
         self.spacing = spacing
-        # Edge lengths as pixel_graph computes them (each step over the largest spacing before
-        # squaring: squared spacings of 1e-200 or 1e200 leave float64), in classes as the
-        # adjacency kernels take them.
-        top = float(spacing.max())
-        scaled = np.abs(np.array(self.steps, dtype=np.float64)) * (spacing / top)
-        peak = scaled.max(axis=1)
-        step_lengths = peak * np.sqrt(np.sum((scaled / peak[:, None]) ** 2, axis=1)) * top
-        self.kind, self.lengths = _kernels.length_classes(step_lengths, max_classes=len(self.steps))
+        # Edge lengths as pixel_graph computes them, in classes as the adjacency kernels take them.
+        from ..graphs._pixel import step_lengths
+
+        lengths = step_lengths(np.array(self.steps, dtype=np.float64), spacing)
+        self.kind, self.lengths = _kernels.length_classes(lengths, max_classes=len(self.steps))
 
     def image(self, raster_values: np.ndarray) -> np.ndarray:
         """Values on the padded raster -> an image of the crop."""

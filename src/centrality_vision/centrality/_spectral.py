@@ -7,14 +7,12 @@ so pass ``1 / graph`` (on the stored entries) for affinities.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from scipy import sparse
 
 from .._validation import as_any_graph, check_float, check_int
 from ..exceptions import InputError
-from ._api import _check_flag, _finish, _strengths_option
+from ._api import _check_flag, _finish, _searchable_lengths, _strengths_option
 
 __all__ = ["eigenvector", "pagerank", "katz"]
 
@@ -223,13 +221,11 @@ def pagerank(
     tol = check_float(tol, name="tol", low=0.0)
     max_iter = check_int(max_iter, name="max_iter", low=1)
     n = adjacency.shape[0]
-    # the transitions do not depend on the values' scale: divided by the power of two that
-    # puts the largest in [1, 2), sums of values near 1e308 do not overflow, nor inverses of
-    # subnormal ones
-    peak = float(np.abs(adjacency.data).max()) if adjacency.nnz else 0.0
-    if peak > 0 and np.isfinite(peak):
-        adjacency = sparse.csr_array(adjacency, copy=True)
-        adjacency.data = adjacency.data / math.ldexp(1.0, math.frexp(peak)[1] - 1)  # (not 1 / x: 2^1063)
+    # the transitions do not depend on the values' scale: at the searches' power-of-two scale,
+    # sums of values near 1e308 do not overflow, nor inverses of subnormal ones
+    scaled, unit = _searchable_lengths(adjacency.data.astype(np.float64, copy=False))  # (non-negative)
+    if unit != 1.0:
+        adjacency = sparse.csr_array((scaled, adjacency.indices, adjacency.indptr), shape=adjacency.shape)
     out_strength = np.asarray(adjacency.sum(axis=1)).ravel()
     dangling = out_strength == 0
     inv = np.zeros(n)

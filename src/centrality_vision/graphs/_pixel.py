@@ -259,8 +259,15 @@ def _spaced_lengths(graph, nodes: np.ndarray, shape: tuple, spacing: np.ndarray)
         np.stack(np.unravel_index(nodes[rows], shape), axis=1)
         - np.stack(np.unravel_index(nodes[graph.indices], shape), axis=1)
     )
+    return step_lengths(steps, spacing)
+
+
+def step_lengths(steps: np.ndarray, spacing: np.ndarray) -> np.ndarray:
+    """Lengths of pixel steps (rows of per-axis offsets) with ``spacing``: each step over the
+    largest spacing before squaring, so that spacings of 1e-200 or 1e200 neither underflow
+    nor overflow (a length beyond float64 comes out 0 or inf)."""
     top = float(spacing.max())
-    return _robust_norms(steps * (spacing / top)) * top
+    return _robust_norms(np.abs(steps) * (spacing / top)) * top
 
 
 def pixel_coordinates(nodes, shape) -> np.ndarray:
