@@ -204,7 +204,7 @@ class _Frame:
     def of(
         moving: np.ndarray, fixed: np.ndarray, normalize: bool, *, same_centre: bool = False, moving_scale: bool = False
     ):
-        """The frame and both sets in it (the identity frame without ``normalize``).
+        """The frame and both sets in it (without ``normalize``: a translation only, scale 1).
 
         The common scale is the RMS radius of all M + N points about their centres, or
         with ``moving_scale`` the moving set's alone (the model's: clutter or missing parts
@@ -214,7 +214,6 @@ class _Frame:
         coordinate can overflow).
         ``same_centre`` centres both sets on the fixed set's mean (a start pose unchanged).
         """
-        dim = moving.shape[1]
         if not normalize:
             with np.errstate(over="ignore", invalid="ignore"):
                 span = float(
@@ -232,12 +231,16 @@ class _Frame:
                     f"{_SCALE_RANGE[1]:g} in absolute value (their squares must fit in float64); got "
                     f"{max(span, largest):.3g}. Use normalize=True."
                 )
-            return _Frame(np.zeros(dim), np.zeros(dim), 1.0), moving, fixed
+            # Both sets are still moved by one common translation, the fixed set's mean: that
+            # keeps every parameter in the caller's units and the caller's pose as the start,
+            # but the M-step's moments then do not cancel far from the origin (the fish at an
+            # offset of 1e8: rigid CPD stopped after one iteration 3.8 off, non-rigid 0.63).
+            mu_x, xc = centred(fixed)
+            return _Frame(mu_x, mu_x, 1.0), _shifted(moving, mu_x), xc
         mu_x, xc = centred(fixed)
         if same_centre:
             mu_y = mu_x
-            unit = max(power_of_two_scale(moving), power_of_two_scale(mu_x[None, :]))
-            yc = ((moving / unit) - (mu_x / unit)) * unit
+            yc = _shifted(moving, mu_x)
         else:
             mu_y, yc = centred(moving)
         r_moving = r_fixed = 0.0
@@ -300,6 +303,12 @@ class _Frame:
         if is_similarity:
             return SimilarityTransform(transform_n.rotation, translation, transform_n.scale)
         return AffineTransform(transform_n.linear, translation)
+
+
+def _shifted(points: np.ndarray, centre: np.ndarray) -> np.ndarray:
+    """``points - centre`` computed on power-of-two-scaled values (it cannot overflow)."""
+    unit = max(power_of_two_scale(points), power_of_two_scale(centre[None, :]))
+    return ((points / unit) - (centre / unit)) * unit
 
 
 def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
@@ -937,8 +946,9 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
     normalize : bool, default=True
         Run EM on both sets centred and divided by their common RMS radius (see the module
         notes; the moving set's radius alone under ``n_neighbors``); results are
-        equivariant under translating or scaling both inputs. False runs on the raw
-        coordinates, where ``beta``, ``sigma2`` and ``w`` have units.
+        equivariant under translating or scaling both inputs. False runs in the caller's
+        units, where ``beta``, ``sigma2`` and ``w`` have units, on both sets shifted by the
+        fixed set's mean (the pose is kept; results are equivariant under translation).
     init : None, transform or 'global', default=None
         The starting pose: None (centroids aligned under ``normalize``, else the identity),
         a transform in the caller's units, or 'global' (a rotation search over the whole
