@@ -10,8 +10,16 @@ import os
 
 import numpy as np
 import pytest
+from hypothesis import settings
 
 from centrality_vision.datasets import load_face
+
+# Every hypothesis test draws the same examples on every run and every machine (derandomized),
+# so that a test run is reproducible; `HYPOTHESIS_PROFILE=fuzz` draws new examples on each run,
+# for dedicated fuzz runs that look for new failures.
+settings.register_profile("reproducible", derandomize=True, print_blob=True)
+settings.register_profile("fuzz", derandomize=False, print_blob=True)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "reproducible"))
 
 #: Set (to "1") while the session runs on the stand-in surface instead of the CPD face.
 STAND_IN = "CENTRALITY_VISION_TEST_FACE_STAND_IN"

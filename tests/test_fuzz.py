@@ -13,6 +13,7 @@ ones; images with and without a shape) and checks the one contract of the librar
 
 from __future__ import annotations
 
+import os
 import re
 import warnings
 
@@ -31,7 +32,6 @@ from centrality_vision.transforms import fit_similarity
 FUZZ = settings(
     max_examples=25,
     deadline=5000,
-    derandomize=True,  # the same examples on every run and every machine
     suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large],
 )
 
@@ -367,3 +367,11 @@ def test_plotting(points, data):
     )
     errors = {"a": data.draw(st.lists(st.floats(0, 1e300), min_size=0, max_size=6)), "b": [1.0, 0.0, -0.0]}
     honest(lambda e: plotting.plot_alignment_errors(e, ax=Figure().add_subplot()) and None, errors)
+
+
+def test_hypothesis_examples_are_the_same_on_every_run():
+    """Settings made in a test module inherit the session's profile: derandomized unless a fuzz
+    run asks for new examples (`HYPOTHESIS_PROFILE=fuzz`)."""
+    expected = os.environ.get("HYPOTHESIS_PROFILE", "reproducible") != "fuzz"
+    assert FUZZ.derandomize is expected
+    assert settings(max_examples=3).derandomize is expected

@@ -215,7 +215,7 @@ def test_fifo_kernel_property_random_masks():
 
     from tests.centrality.test_centrality import _exact_weighted_betweenness
 
-    @settings(max_examples=10, deadline=None, derandomize=True)
+    @settings(max_examples=10, deadline=None)
     @given(arrays(np.bool_, (7, 8), elements=st.booleans()))
     def check(image):
         if image.sum() < 2:

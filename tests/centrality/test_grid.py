@@ -28,7 +28,7 @@ def _close(a, b):
     np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12 * max(1.0, float(np.max(b))))
 
 
-@settings(max_examples=40, deadline=None, derandomize=True)
+@settings(max_examples=40, deadline=None)
 @given(
     mask=arrays(bool, st.tuples(st.integers(1, 9), st.integers(1, 9))),
     connectivity=st.sampled_from([4, 8]),
@@ -207,7 +207,7 @@ def _rebuilt_equal(graph):
     )
 
 
-@settings(max_examples=60, deadline=None, derandomize=True)
+@settings(max_examples=60, deadline=None)
 @given(
     mask=arrays(bool, st.one_of(st.tuples(st.integers(1, 7), st.integers(1, 7)), st.tuples(*[st.integers(1, 4)] * 3))),
     full=st.booleans(),

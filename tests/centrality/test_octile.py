@@ -70,7 +70,7 @@ def test_convex_mask_needs_no_search_and_matches_octile_distances():
     np.testing.assert_allclose(fast[2], octile.max(axis=1), rtol=1e-15)
 
 
-@settings(max_examples=60, deadline=None, derandomize=True)
+@settings(max_examples=60, deadline=None)
 @given(
     mask=arrays(bool, st.tuples(st.integers(1, 12), st.integers(1, 12))),
     spacing=st.sampled_from([None, (2.5, 2.5), (0.3, 0.3), (1.0, 1.5), (0.7, 0.2), (2.0, 1.0)]),

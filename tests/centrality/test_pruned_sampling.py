@@ -64,7 +64,7 @@ def _draw(setup, pairs, seed=11, reach=None, counting=True):
     return scratch[8][grid.raster], work, retries, counted
 
 
-@settings(max_examples=60, deadline=None, derandomize=True)
+@settings(max_examples=60, deadline=None)
 @given(
     mask=arrays(bool, st.tuples(st.integers(2, 12), st.integers(2, 12)), elements=st.booleans()),
     connectivity=st.sampled_from([4, 8]),
@@ -75,7 +75,7 @@ def test_each_drawn_path_is_a_shortest_path(mask, connectivity, landmarks, data)
     _check_drawn_path(mask, connectivity, landmarks, data)
 
 
-@settings(max_examples=40, deadline=None, derandomize=True)
+@settings(max_examples=40, deadline=None)
 @given(
     mask=arrays(bool, st.tuples(st.integers(2, 6), st.integers(2, 6), st.integers(2, 6)), elements=st.booleans()),
     connectivity=st.sampled_from([6, 18, 26]),
