@@ -373,7 +373,7 @@ def _finite_real(value) -> bool:
 def check_bool(value, *, name: str) -> bool:
     """Check that ``value`` is True or False (numpy's bools too; not any truthy value) and return it."""
     if not isinstance(value, (bool, np.bool_)):
-        raise TypeError(f"`{name}` must be True or False; got {value!r}.")
+        raise TypeError(f"`{name}` must be True or False; got {_describe(value)}.")
     return bool(value)
 
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._validation import as_points, as_real_array, check_float, check_int
+from ._validation import as_points, as_real_array, check_bool, check_float, check_int
 from .exceptions import InputError
 
 __all__ = [
@@ -404,8 +404,7 @@ def fit_similarity(source, target, *, scale: bool = True) -> SimilarityTransform
     >>> round(t.scale, 6), np.allclose(t.rotation, r)
     (2.0, True)
     """
-    if not isinstance(scale, (bool, np.bool_)):
-        raise TypeError(f"`scale` must be True or False; got {scale!r}.")
+    check_bool(scale, name="scale")
     source = as_points(source, name="source", n_dims=(2, 3), min_points=2)
     target = as_points(target, name="target", n_dims=(source.shape[1],), min_points=2)
     if source.shape != target.shape:

@@ -479,7 +479,7 @@ def test_read_points_checks_n_dims(tmp_path, n_dims, error, message):
     with pytest.raises(error, match=message):
         read_points(tmp_path / "p.csv", n_dims=n_dims)
     assert read_points(tmp_path / "p.csv", n_dims=2).shape == (5, 2)  # one int is one allowed count
-    with pytest.raises(TypeError, match="`nan_rows` must be a bool"):
+    with pytest.raises(TypeError, match="`nan_rows` must be True or False"):
         read_points(tmp_path / "p.csv", nan_rows="yes")
 
 

@@ -95,7 +95,7 @@ def test_a_prior_of_the_wrong_size_is_named(pair):
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [
-        ({"progress": "yes please"}, TypeError, r"`RigidCPD.progress` must be a bool"),
+        ({"progress": "yes please"}, TypeError, r"`RigidCPD.progress` must be True or False"),
         ({"random_state": "x"}, TypeError, r"`RigidCPD.random_state` must be None"),
         ({"random_state": -1.5, "init": "global"}, TypeError, r"`RigidCPD.random_state`"),
     ],

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import _describe
+from .._validation import _describe, check_bool
 from ..exceptions import InputError
 
 __all__ = ["POINT_SUFFIXES", "WRITE_SUFFIXES", "read_points", "write_points"]
@@ -142,8 +142,7 @@ def read_points(
     if variable is not None and not isinstance(variable, str):
         raise TypeError(f"`variable` must be a str or None; got {_describe(variable)}.")
     n_dims = _check_n_dims(n_dims)
-    if not isinstance(nan_rows, (bool, np.bool_)):
-        raise TypeError(f"`nan_rows` must be a bool; got {_describe(nan_rows)}.")
+    check_bool(nan_rows, name="nan_rows")
     path = _existing_file(path)
     suffix = path.suffix.lower()
     if suffix not in POINT_SUFFIXES:

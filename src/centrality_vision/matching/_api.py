@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._validation import as_points, check_choice, check_float, check_int
+from .._validation import as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import InputError
 from ..transforms import RigidTransform, SimilarityTransform
 from ._common import MatchResult, check_rigid_extents, fit_pairs, normalise, similarity_to_units
@@ -123,8 +123,7 @@ def match(
     True
     """
     method = check_choice(method, METHODS, name="method")
-    if not isinstance(scale, (bool, np.bool_)):
-        raise TypeError(f"`scale` must be True or False; got {scale!r}.")
+    check_bool(scale, name="scale")
     # every option is checked whatever the method, so a typo is caught before it matters
     mwme_method = check_choice(mwme_method, ("local", "greedy", "exact"), name="mwme_method")
     n_neighbours = check_int(n_neighbours, name="n_neighbours", low=3, high=19)

@@ -7,7 +7,7 @@ import warnings
 import numpy as np
 from scipy.spatial import cKDTree
 
-from .._validation import as_points
+from .._validation import as_points, check_bool
 from ..exceptions import InputError, MatchingWarning
 from ..graphs import mwme_graph
 from ..transforms import SimilarityTransform
@@ -78,8 +78,7 @@ def mwme_match(
         raise InputError(
             f"`moving` and `fixed` must have the same shape for MWME matching; got {moving.shape} and {fixed.shape}."
         )
-    if not isinstance(scale, (bool, np.bool_)):
-        raise TypeError(f"`scale` must be True or False; got {scale!r}.")
+    check_bool(scale, name="scale")
     n = moving.shape[0]
     norm_m, norm_f = normalise(moving), normalise(fixed)
     if not scale:  # else both candidates' residuals overflow and the first one wins, right or not

@@ -34,7 +34,7 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from .._seeding import as_generator
-from .._validation import ANY_DIMS, as_points, check_choice, check_float, check_int
+from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
 from ..transforms import (
     AffineTransform,
@@ -455,8 +455,7 @@ class _CPD(BaseEstimator):
         )
         check_choice(self.method, E_STEP_METHODS, name=f"{name}.method")
         check_choice(self.precision, PRECISIONS, name=f"{name}.precision")
-        if not isinstance(self.accelerate, (bool, np.bool_)):
-            raise TypeError(f"`{name}.accelerate` must be a bool; got {self.accelerate!r}.")
+        check_bool(self.accelerate, name=f"{name}.accelerate")
         if self.n_neighbors is not None:
             check_int(self.n_neighbors, name=f"{name}.n_neighbors", low=1)
             if self.method not in ("auto", "dense"):
@@ -466,10 +465,8 @@ class _CPD(BaseEstimator):
                 )
         if self.callback is not None and not callable(self.callback):
             raise TypeError(f"`{name}.callback` must be callable or None; got {self.callback!r}.")
-        if not isinstance(self.normalize, (bool, np.bool_)):
-            raise TypeError(f"`{name}.normalize` must be a bool; got {self.normalize!r}.")
-        if not isinstance(self.progress, (bool, np.bool_)):
-            raise TypeError(f"`{name}.progress` must be a bool; got {self.progress!r}.")
+        check_bool(self.normalize, name=f"{name}.normalize")
+        check_bool(self.progress, name=f"{name}.progress")
         if self.random_state is not None:
             as_generator(self.random_state, name=f"{name}.random_state")
         init = self.init
@@ -1116,8 +1113,7 @@ class RigidCPD(_CPD):
         self.scale = scale
 
     def _check_params(self):
-        if not isinstance(self.scale, (bool, np.bool_)):
-            raise TypeError(f"`RigidCPD.scale` must be a bool; got {self.scale!r}.")
+        check_bool(self.scale, name="RigidCPD.scale")
         if not self.scale and isinstance(self.init, SimilarityTransform) and not isinstance(self.init, RigidTransform):
             if self.init.scale != 1.0:
                 raise InputError(f"`RigidCPD.init` must have scale 1 when scale=False; got {self.init.scale!r}.")

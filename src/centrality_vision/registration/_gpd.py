@@ -10,7 +10,7 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
 from .. import graphs as _graphs
-from .._validation import ANY_DIMS, as_graph, as_points, as_real_array, check_choice, check_float, check_int
+from .._validation import ANY_DIMS, as_graph, as_points, as_real_array, check_bool, check_choice, check_float, check_int
 from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
 from ..transforms import centred, power_of_two_scale
@@ -315,8 +315,7 @@ class GPD(BaseEstimator):
             check_choice(self.centrality, CENTRALITIES, name="centrality")
         if not callable(self.graph):
             check_choice(self.graph, GRAPHS, name="graph")
-        if not isinstance(self.weights, (bool, np.bool_)):
-            raise TypeError(f"`weights` must be a bool; got {self.weights!r}.")
+        check_bool(self.weights, name="weights")
         if self.weights and isinstance(self.centrality, str) and self.centrality not in PATH_CENTRALITIES:
             # (degree, eigenvector, PageRank and Katz read stored values as strengths, not
             # lengths: GPD passed them weights=True, deprecated or unknown there)

@@ -17,7 +17,7 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from .._parallel import get_num_threads
-from .._validation import ANY_DIMS, as_points, check_choice, check_float, check_int
+from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import ConvergenceWarning, InputError
 from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity
 from ._cpd import IterationInfo, _Frame
@@ -166,8 +166,7 @@ class ICP(BaseEstimator):
         self.callback = callback
 
     def _check_params(self):
-        if not isinstance(self.scale, (bool, np.bool_)):
-            raise TypeError(f"`ICP.scale` must be a bool; got {self.scale!r}.")
+        check_bool(self.scale, name="ICP.scale")
         check_int(self.max_iter, name="ICP.max_iter", low=0)
         check_float(self.tol, name="ICP.tol", low=0.0)
         if self.max_distance is not None:

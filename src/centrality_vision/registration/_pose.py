@@ -16,7 +16,7 @@ import numpy as np
 
 from .._parallel import run_chunks
 from .._seeding import as_generator
-from .._validation import as_points, check_float, check_int
+from .._validation import as_points, check_bool, check_float, check_int
 from ..exceptions import InputError
 from ..transforms import RigidTransform, SimilarityTransform, centred, rms_radius
 from . import _kernels as K
@@ -229,8 +229,7 @@ def global_pose_search(
     """
     moving = as_points(moving, name="moving", n_dims=(2, 3), min_points=3)
     fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],), min_points=3)
-    if not isinstance(scale, (bool, np.bool_)):
-        raise TypeError(f"`scale` must be a bool; got {scale!r}.")
+    check_bool(scale, name="scale")
     w = check_float(w, name="w", low=0.0, high=1.0, high_open=True)
     n_dims = moving.shape[1]
     n_rotations = (

@@ -518,11 +518,8 @@ def shape_centralities(
     if not is_connectivity(connectivity):
         raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
     connectivity = int(connectivity)
-    if not isinstance(progress, (bool, np.bool_)):
-        raise TypeError(f"`progress` must be True or False; got {progress!r}.")
-    if not isinstance(weights, (bool, np.bool_)):
-        raise TypeError(f"`weights` must be True or False; got {weights!r}.")
-    weights = bool(weights)
+    check_bool(progress, name="progress")
+    weights = check_bool(weights, name="weights")
     cache = resolve_cache(cache)
     jobs = _effective_jobs(n_jobs)
     options = {"connectivity": connectivity, "weights": weights}

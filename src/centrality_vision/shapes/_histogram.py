@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
-from .._validation import check_choice, check_int
+from .._validation import check_bool, check_choice, check_int
 from ..centrality import CENTRALITIES
 from ..exceptions import InputError
 from ._cache import SHAPE_CENTRALITIES, as_shape_images, is_connectivity, shape_centralities
@@ -23,8 +23,7 @@ class ShapeInputMixin:
 
     def _masks(self, X):
         fill = getattr(self, "fill_holes", False)
-        if not isinstance(fill, (bool, np.bool_)):
-            raise TypeError(f"`fill_holes` must be True or False; got {fill!r}.")
+        check_bool(fill, name="fill_holes")
         masks = as_shape_images(X, foreground=self.foreground, threshold=self.threshold)
         if fill:
             from scipy.ndimage import binary_fill_holes
