@@ -160,3 +160,25 @@ def test_co_circular_grids_pass(dim, step):
     grid = np.stack(np.meshgrid(*[np.arange(side)] * dim, indexing="ij"), axis=-1).reshape(-1, dim) * step + 3.0
     tree = emst_graph(grid)
     assert tree.sum() / 2 == pytest.approx((side**dim - 1) * step, rel=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    dim=st.sampled_from([2, 3]),
+    seed=st.integers(0, 2**32 - 1),
+    step=st.floats(1e-3, 1e3),
+    offset=st.floats(-1e4, 1e4),
+)
+def test_rotated_grids_are_triangulated(dim, seed, step, offset):
+    # a rotated grid's squares are co-circular, and three points of a row collinear, only to
+    # within the rounding of the rotation: Qhull's flat or co-circular facets there passed the
+    # in-circle test on the floats as given by less than one unit in the last place, and 33 of
+    # 300 such grids were refused (among them sets of the thesis' table 5.1)
+    rng = np.random.default_rng(seed)
+    side = 12 if dim == 2 else 5
+    grid = np.stack(np.meshgrid(*[np.arange(side)] * dim, indexing="ij"), axis=-1).reshape(-1, dim) * step
+    rotation, _ = np.linalg.qr(rng.standard_normal((dim, dim)))
+    points = grid @ rotation.T + offset
+    tree = emst_graph(points)
+    assert tree.sum() / 2 == pytest.approx((side**dim - 1) * step, rel=1e-9)
+    assert delaunay_graph(points).nnz > 0

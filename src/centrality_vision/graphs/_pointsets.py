@@ -182,6 +182,8 @@ def delaunay_graph(points, /) -> sparse.csr_array:
     in-sphere tests of certain sign (``graphs._predicates``), and a triangulation that is
     not Delaunay is refused with an :class:`~centrality_vision.exceptions.InputError`
     instead of being returned (so are :func:`gabriel_graph` and :func:`emst_graph`).
+    Points co-circular, or a triangle flat, to within the data's precision (16 units in the
+    last place of the coordinates, as on a rotated grid) pass either way.
 
     Examples
     --------
