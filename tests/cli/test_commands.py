@@ -586,10 +586,22 @@ def test_reproduce_checks_its_numbers_before_running_anything(tmp_path, capsys, 
     assert not list(tmp_path.iterdir())  # nothing ran
 
 
-@pytest.mark.parametrize("scheduler", ["tcp://", "tcp://localhost:notaport", "tcp://[::1", "tcp://host:70000"])
+@pytest.mark.parametrize("scheduler", ["tcp://", "tcp://localhost:notaport", "tcp://[::1", "tcp://host:70000", "bogus"])
 def test_reproduce_refuses_a_malformed_scheduler_address(tmp_path, capsys, scheduler):
     assert main(["reproduce", "fig-5.3", "--quick", "--scheduler", scheduler, "--out", str(tmp_path)]) == 2
     assert "--scheduler must be one of" in _one_line_error(capsys, only=True)
+    assert not list(tmp_path.iterdir())  # refused before the experiment's first part ran
+
+
+@pytest.mark.parametrize("argv", [["demo"], ["reproduce", "fig-7.1"]], ids=["demo", "reproduce"])
+@pytest.mark.parametrize("out", ["", "  "])
+def test_an_empty_out_folder_is_refused(tmp_path, capsys, monkeypatch, argv, out):
+    monkeypatch.chdir(tmp_path)  # an empty --out wrote into the current folder
+    with pytest.raises(SystemExit) as info:
+        main([*argv, "--out", out])
+    assert info.value.code == 2
+    assert "argument --out: must name a folder" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize(

@@ -3,7 +3,8 @@ import os
 
 import pytest
 
-from centrality_vision.experiments._runner import Unit, load_results, run_units, unit_id
+from centrality_vision.exceptions import InputError
+from centrality_vision.experiments._runner import Unit, _checksum, _connect, load_results, run_units, unit_id
 from centrality_vision.experiments.table_5_1 import register_set
 
 
@@ -42,7 +43,7 @@ def test_a_crash_keeps_what_finished_and_a_rerun_does_the_rest(tmp_path):
 
 def test_a_torn_last_line_is_dropped(tmp_path):
     path = tmp_path / "r.jsonl"
-    path.write_text(json.dumps({"key": "a", "result": 1}) + "\n" + '{"key": "b", "res')
+    path.write_text(json.dumps({"key": "a", "result": 1, "check": _checksum("a", 1)}) + "\n" + '{"key": "b", "res')
     assert load_results(path) == {"a": 1}
     unit = Unit("b", _square, {"x": 2, "marker_dir": str(tmp_path)})
     out = run_units([unit], path, scheduler="serial", progress=False)
@@ -91,13 +92,57 @@ def test_other_parameters_in_the_same_file_are_recomputed_never_reused(tmp_path,
     assert again == first and _calls(tmp_path) == 2
 
 
-def test_unit_ids_change_with_every_parameter_and_the_version(monkeypatch):
+def test_damaged_or_edited_lines_are_recomputed_never_read(tmp_path):
+    """Lines that are not a record of this runner, or whose result was edited, were read back
+    (an edited iteration count flipped a thesis claim) or crashed the run (TypeError, KeyError,
+    UnicodeDecodeError)."""
+    unit = Unit("u", _square, {"x": 2, "marker_dir": str(tmp_path)})
+    path = tmp_path / "r.jsonl"
+    good = run_units([unit], path, scheduler="serial", progress=False)
+    line = path.read_bytes()
+    edited = line.replace(b'"square":4', b'"square":5')
+    assert edited != line
+    damaged = [b"\xff\xfe\x00garbage\x80\n", b"[1,2]\n", b"null\n", b"{}\n", b'"abc"\n', b'{"key":[1],"result":1}\n']
+    damaged += [b'{"key":"' + unit_id(unit).encode() + b'","result":null}\n', edited]
+    for text in damaged:
+        path.write_bytes(text)
+        assert load_results(path) == {}
+        before = _calls(tmp_path)
+        assert run_units([unit], path, scheduler="serial", progress=False) == good
+        assert _calls(tmp_path) == before + 1
+
+
+def test_an_address_that_is_not_a_dask_scheduler_is_an_error_not_a_hang():
+    """An HTTP server's address as --scheduler: distributed's Client waited forever for the
+    handshake (its own timeout does not cover it); another peer's reply raised MemoryError."""
+    import time
+
+    def silent(address, timeout):  # what Client() does against a listener that never answers
+        time.sleep(60)
+
+    started = time.perf_counter()
+    with pytest.raises(InputError, match="could not be reached as a Dask scheduler: no answer within 1 s"):
+        _connect(silent, "tcp://127.0.0.1:8787", seconds=1.0)
+    assert time.perf_counter() - started < 10
+
+    def garbled(address, timeout):  # a peer whose reply reads as a huge frame length
+        raise MemoryError("Unable to allocate 3.07 EiB")
+
+    with pytest.raises(InputError, match=r"tcp://127.0.0.1:9.*MemoryError: Unable to allocate"):
+        _connect(garbled, "tcp://127.0.0.1:9", seconds=5.0)
+
+
+def test_unit_ids_change_with_every_parameter_the_version_and_the_code(monkeypatch):
     import centrality_vision
+    from centrality_vision import _provenance
 
     base = unit_id(Unit("k", _square, {"x": 1, "marker_dir": "d"}))
     assert base == unit_id(Unit("k", _square, {"marker_dir": "d", "x": 1}))  # argument order is irrelevant
     assert base != unit_id(Unit("k", _square, {"x": 1, "marker_dir": "e"}))
     assert base != unit_id(Unit("k", register_set, {"x": 1, "marker_dir": "d"}))
+    monkeypatch.setattr(_provenance, "code_digest", lambda: "0" * 16)  # the same version, edited code
+    assert base != unit_id(Unit("k", _square, {"x": 1, "marker_dir": "d"}))
+    monkeypatch.undo()
     monkeypatch.setattr(centrality_vision, "__version__", "0.0.0-other")
     assert base != unit_id(Unit("k", _square, {"x": 1, "marker_dir": "d"}))
 

@@ -257,6 +257,20 @@ def test_disk_cache_is_reused_by_a_new_cache(tmp_path):
     assert not list(tmp_path.glob("*.tmp"))
 
 
+def test_disk_cache_of_other_code_is_not_read(tmp_path, monkeypatch):
+    """Files were keyed by the pixels and options only: values computed by another version of
+    the centralities were read back."""
+    from centrality_vision.shapes import _cache
+
+    image = _disk(7)
+    shape_centralities([image], ["closeness"], cache=CentralityCache(directory=tmp_path))
+    monkeypatch.setattr(_cache, "code_digest", lambda: "0" * 16)
+    later = CentralityCache(directory=tmp_path)  # a process running edited code
+    shape_centralities([image], ["closeness"], cache=later)
+    assert (later.hits, later.misses) == (0, 1)
+    assert len(list(tmp_path.glob("*-closeness.npy"))) == 2
+
+
 def test_memory_hits_are_written_to_a_directory_set_later(tmp_path):
     cache = CentralityCache()
     image = _disk(6)

@@ -105,6 +105,16 @@ def out_file(*suffixes: str):
     return check
 
 
+def out_folder(text: str) -> str:
+    """An argparse type: an output folder (an empty name wrote into the current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"must name a folder; got {text!r}")
+    return text
+
+
+out_folder.__name__ = "output folder"
+
+
 def add_out(parser: argparse.ArgumentParser, *suffixes: str, what: str = "") -> None:
     kinds = ", ".join(suffixes)
     parser.add_argument(

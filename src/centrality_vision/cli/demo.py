@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from ._common import add_progress, progress_on, pyplot, say
+from ._common import add_progress, out_folder, progress_on, pyplot, say
 from ._output import write_json
 
 NAME = "demo"
@@ -23,7 +23,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "under a similarity transform with CPD and with GPD (closeness), drawn before and after, and the "
         "per-point alignment error of CPD and of GPD with four centralities (fig. 5.3).",
     )
-    parser.add_argument("--out", default="demo-output", help="output folder (default: %(default)s)")
+    parser.add_argument("--out", default="demo-output", type=out_folder, help="output folder (default: %(default)s)")
     parser.add_argument(
         "--shape", default="cow1", help="Kimia-99 image for the pixel-graph figure (default: %(default)s)"
     )

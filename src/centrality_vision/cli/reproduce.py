@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 
 from ..experiments._common import MAX_SEED, MAX_SEEDS, int_in
-from ._common import add_progress
+from ._common import add_progress, out_folder
 
 NAME = "reproduce"
 
@@ -32,7 +32,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         default=None,
         help="how many seeds each thesis claim is checked over (default: 20, or 3 with --quick)",
     )
-    parser.add_argument("--out", default="results", help="output folder (default: %(default)s)")
+    parser.add_argument("--out", default="results", type=out_folder, help="output folder (default: %(default)s)")
     parser.add_argument(
         "--scheduler",
         default=None,
@@ -54,6 +54,10 @@ def run(args: argparse.Namespace) -> int:
     from ..exceptions import InputError
     from ..experiments import RUNNER_EXPERIMENTS, run_experiment
 
+    if args.scheduler is not None:  # before any experiment runs, not after its first part
+        from ..experiments._runner import _check_scheduler
+
+        _check_scheduler(args.scheduler)
     if args.experiment == "all":
         from ..experiments.report import run_all
 

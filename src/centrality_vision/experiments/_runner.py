@@ -10,10 +10,12 @@ Dask cluster started for the run (``"dask"``) or on a running Dask scheduler
 depends only on its arguments, so the results are identical whichever runs them.
 
 A stored result is found again by its :func:`unit_id`: the label plus a digest of the
-function's qualified name, every keyword argument (seed, sizes, methods, quick, ...) and
-the package version. A unit with any other parameter has another id, so a folder that
-holds results of another run (another seed, size or version) is never read as this one:
-those lines stay in the file, unused, and a note on stderr says how many there are.
+function's qualified name, every keyword argument (seed, sizes, methods, quick, ...), the
+package version and a digest of the package's source code. A unit with any other parameter
+has another id, so a folder that holds results of another run (another seed, size,
+version or code) is never read as this one: those lines stay in the file, unused, and a
+note on stderr says how many there are. Each line also carries a checksum of its key and
+result: a line that was damaged or edited by hand is recomputed, never used.
 
 Workers die with the process that started them: pool workers and the processes of a
 local Dask cluster poll their parent and exit when it is gone (on Linux the pool workers
@@ -52,7 +54,7 @@ class Unit:
 
 def unit_id(unit: Unit) -> str:
     """The key under which ``unit``'s result is stored: its label and a digest of everything
-    that changes the result (function, keyword arguments, package version).
+    that changes the result (function, keyword arguments, package version and source code).
 
     Examples
     --------
@@ -61,10 +63,11 @@ def unit_id(unit: Unit) -> str:
     True
     """
     from .. import __version__
+    from .._provenance import code_digest
 
     func = unit.func
     name = f"{getattr(func, '__module__', '?')}.{getattr(func, '__qualname__', repr(func))}"
-    payload = json.dumps([name, unit.kwargs, __version__], sort_keys=True, default=repr)
+    payload = json.dumps([name, unit.kwargs, __version__, code_digest()], sort_keys=True, default=repr)
     return f"{unit.key}#{hashlib.sha256(payload.encode()).hexdigest()[:16]}"
 
 
@@ -120,20 +123,32 @@ def _call(func, kwargs):
         set_num_threads(before)
 
 
+def _checksum(key: str, result) -> str:
+    text = json.dumps([key, result], sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
 def load_results(path) -> dict:
-    """``{unit id: result}`` from a results file (see :func:`unit_id`); a torn last line (a crash
-    mid-write) is ignored."""
+    """``{unit id: result}`` from a results file (see :func:`unit_id`).
+
+    Only whole lines that hold a record with a string key, a result and that record's
+    checksum are read: a torn last line (a crash mid-write), bytes that are not UTF-8 text,
+    other JSON and a record edited by hand are skipped (their units are recomputed)."""
     path = Path(path)
     out = {}
     if not path.exists():
         return out
-    with path.open("r", encoding="utf-8") as handle:
-        for line in handle:
-            if not line.endswith("\n"):
+    with path.open("rb") as handle:
+        for raw in handle:
+            if not raw.endswith(b"\n"):
                 break  # the process died while writing this line
             try:
-                record = json.loads(line)
-            except json.JSONDecodeError:
+                record = json.loads(raw.decode("utf-8"))
+            except (UnicodeDecodeError, json.JSONDecodeError):
+                continue
+            if not isinstance(record, dict) or not isinstance(record.get("key"), str) or "result" not in record:
+                continue
+            if record.get("check") != _checksum(record["key"], record["result"]):
                 continue
             out[record["key"]] = record["result"]
     return out
@@ -156,7 +171,10 @@ class _Appender:
         self.fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
 
     def add(self, key: str, result) -> None:
-        data = (json.dumps({"key": key, "result": result}, separators=(",", ":")) + "\n").encode()
+        # the checksum of the result as it will be read back (tuples become lists, int keys text)
+        stored = json.loads(json.dumps(result))
+        record = {"key": key, "result": stored, "check": _checksum(key, stored)}
+        data = (json.dumps(record, separators=(",", ":")) + "\n").encode()
         os.write(self.fd, data)
         os.fsync(self.fd)
 
@@ -187,7 +205,7 @@ def run_units(
     """Run the units missing from ``path`` and return ``{unit.key: result}`` for all of them.
 
     A stored result is used only for the unit with the same :func:`unit_id` (same label,
-    function, keyword arguments and package version); results of other runs kept in the
+    function, keyword arguments, package version and code); results of other runs kept in the
     same file are left there, unused, and counted in a note on stderr.
 
     Parameters
@@ -221,8 +239,9 @@ def run_units(
     other = len(set(stored) - set(ids.values()))
     if other:
         print(
-            f"{path}: {other} stored result(s) were computed with other parameters (another seed, size, method or "
-            f"package version); they are kept in the file and not used. Computing {len(todo)} of {len(units)} unit(s).",
+            f"{path}: {other} stored result(s) were computed with other parameters (another seed, size, method, "
+            f"package version or code); they are kept in the file and not used. "
+            f"Computing {len(todo)} of {len(units)} unit(s).",
             file=sys.stderr,
         )
     if workers is None:
@@ -288,6 +307,36 @@ def _run_pool(todo, workers, finished):
             raise
 
 
+# seconds a running scheduler has to answer: Dask's own connect timeout is 30 s, and a
+# listener that is not a Dask scheduler (it accepts the connection and never replies to the
+# handshake) made Client() wait forever
+_CONNECT_SECONDS = 45.0
+
+
+def _connect(client_class, scheduler: str, seconds: float = _CONNECT_SECONDS):
+    """A client of the scheduler at ``scheduler``, or an InputError if it does not answer as a
+    Dask scheduler within ``seconds`` (the attempt is left to a daemon thread)."""
+    box = {}
+
+    def attempt():
+        try:
+            box["client"] = client_class(scheduler, timeout=min(30.0, seconds))
+        except BaseException as exc:  # anything a wrong peer makes the handshake raise
+            box["error"] = exc
+
+    thread = threading.Thread(target=attempt, name="cv-dask-connect", daemon=True)
+    thread.start()
+    thread.join(seconds)
+    if "client" in box:
+        return box["client"]
+    if thread.is_alive():
+        reason = f"no answer within {seconds:g} s (is a Dask scheduler listening there?)"
+    else:
+        error = box["error"]
+        reason = f"{type(error).__name__}: {str(error).strip().splitlines()[0] if str(error).strip() else ''}"
+    raise InputError(f"`scheduler` {scheduler!r} could not be reached as a Dask scheduler: {reason}")
+
+
 def _run_dask(todo, scheduler, workers, finished):
     try:
         from distributed import Client, LocalCluster, as_completed
@@ -300,10 +349,7 @@ def _run_dask(todo, scheduler, workers, finished):
         cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
         client = Client(cluster)
     else:
-        try:
-            client = Client(scheduler)
-        except (OSError, TimeoutError) as exc:
-            raise InputError(f"`scheduler` {scheduler!r} could not be reached: {exc}") from None
+        client = _connect(Client, scheduler)
     try:
         if cluster is not None:  # its nannies and workers end with this process, even on SIGKILL
             client.run(_watch_pid, os.getpid(), nanny=True)

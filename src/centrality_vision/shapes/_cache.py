@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._provenance import code_digest
 from .._validation import as_binary_image, check_bool, check_choice, check_int
 from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
@@ -138,7 +139,8 @@ class CentralityCache:
         centrality); 0 keeps none (with ``directory``, the disk alone).
     directory : path, optional
         Also keep every computed centrality on disk, one ``.npy`` file per image and
-        centrality, named by a hash of the pixels and written atomically. Another
+        centrality, named by a hash of the pixels and a digest of the package's code (values
+        computed by another version are not read back), and written atomically. Another
         process (a joblib or Dask worker, or a later run) with a cache on the same
         directory reads them instead of recomputing; while one process computes an
         image it holds a ``.lock`` file there, and the others compute other images
@@ -186,8 +188,9 @@ class CentralityCache:
 
     def _path(self, key: tuple, name: str) -> Path:
         (rows, cols), connectivity, weights, digest = key
-        suffix = "-w" if weights else ""  # unweighted files keep the names of earlier versions
-        return self.directory / f"{digest}-{rows}x{cols}-c{connectivity}{suffix}-{name}.npy"
+        suffix = "-w" if weights else ""
+        # the package's code digest: values computed by other code are never read back
+        return self.directory / f"{digest}-{rows}x{cols}-c{connectivity}{suffix}-{code_digest()}-{name}.npy"
 
     def _load(self, key: tuple, name: str, n_nodes: int):
         """The stored values, or None when absent or not this image's: a file of another
