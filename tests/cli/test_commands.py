@@ -639,7 +639,8 @@ def test_a_nonrigid_record_without_an_affine_part_holds_the_identity():
     [
         ("--seed", "-1", "argument --seed: must be in [0, 4294967295]; got -1"),  # was sklearn's traceback
         ("--seed", "4294967296", "must be in [0, 4294967295]"),
-        ("--bins", "100000000", "argument --bins: must be in [1, 100000]"),  # was killed for memory
+        ("--bins", "100000000", "argument --bins: must be in [2, 100000]"),  # was killed for memory
+        ("--bins", "1", "argument --bins: must be in [2, 100000]"),  # constant features: chance accuracy, exit 0
         ("--trees", "1000000000", "argument --trees: must be in [1, 100000]"),
     ],
 )
@@ -648,6 +649,52 @@ def test_classify_bounds_its_numbers(tmp_path, capsys, option, value, message):
     with pytest.raises(SystemExit) as info:
         main(["classify", str(folder), option, value, "--out", str(tmp_path / "c.json")])
     assert info.value.code == 2 and message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("size", [1e-300, 1e300])
+def test_graph_edge_lengths_at_the_ends_of_float64(tmp_path, size):
+    # the written lengths squared the differences: every length 0 at 1e-300, null (inf) at 1e300
+    points = _points(20, seed=3) * size
+    np.savetxt(tmp_path / "p.txt", points)
+    assert main(["graph", str(tmp_path / "p.txt"), "--out", str(tmp_path / "g.json")]) == 0
+    record = json.loads((tmp_path / "g.json").read_text())
+    edges = np.array(record["edges"])
+    i, j = edges[:, 0].astype(int), edges[:, 1].astype(int)
+    truth = size * np.hypot(*(_points(20, seed=3)[i] - _points(20, seed=3)[j]).T)
+    np.testing.assert_allclose(edges[:, 2], truth, rtol=1e-12)
+    assert record["total_length"] == pytest.approx(truth.sum(), rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["centrality", "{p}", "--out", "{p}"],
+        ["graph", "{p}", "--out", "{p}"],
+        ["register", "{p}", "{q}", "--out", "{q}"],
+    ],
+    ids=["centrality", "graph", "register"],
+)
+def test_an_output_that_is_an_input_is_refused(tmp_path, capsys, argv):
+    # `centrality p.csv --out p.csv` replaced the points with the table, exit 0
+    paths = {"p": tmp_path / "p.csv", "q": tmp_path / "q.csv"}
+    np.savetxt(paths["p"], _points(12, seed=1), delimiter=",")
+    np.savetxt(paths["q"], _points(12, seed=2), delimiter=",")
+    before = {name: path.read_bytes() for name, path in paths.items() if path.exists()}
+    assert main([a.format(**{k: str(v) for k, v in paths.items()}) for a in argv]) == 2
+    assert "an input that writing it would destroy" in _one_line_error(capsys, only=True)
+    assert before == {name: path.read_bytes() for name, path in paths.items() if path.exists()}
+
+
+def test_options_of_the_other_kind_of_input_are_refused(tmp_path, capsys):
+    # --graph/--k with an image, --connectivity with points: ignored without a word, exit 0
+    image = _png(tmp_path / "rect.png", np.pad(np.full((6, 8), 255), 4))
+    np.savetxt(tmp_path / "p.txt", _points(12))
+    out = str(tmp_path / "c.json")
+    assert main(["centrality", str(image), "--graph", "knn", "--k", "100", "--out", out]) == 2
+    assert "--graph, --k apply to point sets; INPUT" in _one_line_error(capsys, only=True)
+    assert main(["centrality", str(tmp_path / "p.txt"), "--connectivity", "4", "--out", out]) == 2
+    assert "--connectivity applies to images; INPUT" in _one_line_error(capsys, only=True)
+    assert main(["centrality", str(image), "--connectivity", "4", "--out", out]) == 0
 
 
 def test_centrality_plot_of_all_measures_on_a_3d_set(tmp_path):

@@ -28,6 +28,16 @@ def test_single_and_multi_frame_gif_and_colour(tmp_path):
     assert np.array_equal(read_shape(tmp_path / "rgb.png"), SHAPE)
 
 
+@pytest.mark.parametrize("colour", [False, True])
+def test_multi_page_tiff_gives_its_first_page(tmp_path, colour):
+    # tifffile reads the pages as one (pages, rows, cols) series: it was refused as 3D
+    pages = np.stack([DARK_ON_WHITE, 255 - DARK_ON_WHITE, DARK_ON_WHITE])
+    if colour:
+        pages = np.repeat(pages[..., None], 3, axis=3)
+    iio.imwrite(tmp_path / "pages.tif", pages)
+    assert np.array_equal(read_shape(tmp_path / "pages.tif"), SHAPE)
+
+
 def test_a_silhouette_stored_as_transparency(tmp_path):
     rgba = np.zeros((12, 14, 4), dtype=np.uint8)  # black everywhere, opaque on the shape only
     rgba[..., 3] = np.where(SHAPE, 255, 0)

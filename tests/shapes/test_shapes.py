@@ -211,7 +211,8 @@ def test_bad_images(estimator, images, error, match):
     ("params", "error", "match"),
     [
         ({"centrality": "closness"}, ValueError, "`centrality` must be one of"),
-        ({"bins": 0}, ValueError, r"`bins` must be an int in \[1, 100000\]"),
+        ({"bins": 0}, ValueError, r"`bins` must be an int in \[2, 100000\]"),
+        ({"bins": 1}, ValueError, r"`bins` must be an int in \[2, 100000\]"),  # the constant feature 1
         ({"scaling": "log"}, ValueError, "`scaling`"),
         ({"connectivity": 6}, ValueError, "'connectivity' parameter"),
         ({"centrality": []}, ValueError, "at least one centrality"),

@@ -130,15 +130,33 @@ def add_plot(parser: argparse.ArgumentParser, what: str) -> None:
     )
 
 
+# the input files of the commands (argument name: how the message names it)
+_INPUT_FILES = {
+    "points": "POINTS",
+    "input": "INPUT",
+    "moving": "MOVING",
+    "fixed": "FIXED",
+    "labels": "the --labels file",
+    "landmarks": "the --landmarks file",
+    "true_moving": "the --true-moving file",
+}
+
+
 def check_output_places(args) -> None:
     """Before any work: every output file of ``args`` (``--out``, its ``.json`` sidecar,
     ``--plot``) can be written. A folder in a file's place, a file where a folder must be
-    created, or a place that refuses new files is an :class:`InputError` naming the
-    option, instead of an OS error after the computation (or after other outputs were
-    written)."""
+    created, a place that refuses new files, or an input file (which would be overwritten)
+    is an :class:`InputError` naming the option, instead of an OS error after the
+    computation (or after other outputs were written)."""
     import tempfile
 
     from ..exceptions import InputError
+
+    inputs = {}
+    for name in _INPUT_FILES:
+        value = getattr(args, name, None)
+        if isinstance(value, str) and value and Path(value).is_file():
+            inputs[Path(value).resolve()] = _INPUT_FILES[name]
 
     places = []
     if getattr(args, "_out_is_file", False) and getattr(args, "out", None):
@@ -151,6 +169,11 @@ def check_output_places(args) -> None:
     for option, path in places:
         if path.is_dir():
             raise InputError(f"{option}: {path} is a folder, not a file.")
+        if path.resolve() in inputs:
+            raise InputError(
+                f"{option}: {path} is also {inputs[path.resolve()]}, an input that writing it would destroy; "
+                "choose another output file."
+            )
         ancestor = path.parent
         while not ancestor.exists():
             ancestor = ancestor.parent
@@ -323,15 +346,31 @@ def add_graph_options(parser: argparse.ArgumentParser, flag: str, *, help_text: 
 
 
 def edge_list(points, graph):
-    """Edges ``i < j`` of a symmetric sparse graph, sorted, with their Euclidean lengths."""
+    """Edges ``i < j`` of a symmetric sparse graph, sorted, with their Euclidean lengths
+    (computed without overflow or underflow: squaring the differences gave 0 for points of
+    size 1e-300 and inf for 1e300)."""
     import numpy as np
     from scipy import sparse
+
+    from ..graphs._pointsets import _lengths
 
     upper = sparse.triu(sparse.coo_array(graph), k=1).tocoo()
     order = np.lexsort((upper.col, upper.row))
     i = upper.row[order].astype(np.int64)
     j = upper.col[order].astype(np.int64)
-    return i, j, np.linalg.norm(points[i] - points[j], axis=1)
+    return i, j, _lengths(points, i, j)
+
+
+def rms_distance(a, b) -> float:
+    """The RMS of the distances between the rows of ``a`` and ``b``, without overflow or underflow."""
+    import numpy as np
+
+    diff = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
+    with np.errstate(over="ignore", invalid="ignore"):
+        largest = float(np.max(np.abs(diff))) if diff.size else 0.0
+    if largest == 0.0 or not np.isfinite(largest):
+        return largest
+    return largest * float(np.sqrt(np.mean(np.sum((diff / largest) ** 2, axis=1))))
 
 
 def transform_record(transform) -> dict:

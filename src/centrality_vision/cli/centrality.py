@@ -100,6 +100,24 @@ def add_parser(sub) -> argparse.ArgumentParser:
     return parser
 
 
+# the options that apply to one kind of INPUT only (argument name: option)
+_POINT_OPTIONS = {"columns": "--columns", "variable": "--variable", "graph": "--graph", "k": "--k", "lam": "--lam"}
+_IMAGE_OPTIONS = {"connectivity": "--connectivity", "foreground": "--foreground", "threshold": "--threshold"}
+
+
+def _refuse_options_of_the_other_input(args: argparse.Namespace, is_image: bool) -> None:
+    """An option of point sets given with an image, or of images with a point set, is an
+    error (they were ignored without a word)."""
+    from ..exceptions import InputError
+
+    other = _POINT_OPTIONS if is_image else _IMAGE_OPTIONS
+    given = [option for name, option in other.items() if getattr(args, name) != args._parser.get_default(name)]
+    if given:
+        kinds = ("point sets", "an image") if is_image else ("images", "a point set")
+        verb = "applies" if len(given) == 1 else "apply"
+        raise InputError(f"{', '.join(given)} {verb} to {kinds[0]}; INPUT {args.input} is {kinds[1]}.")
+
+
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
@@ -116,6 +134,7 @@ def run(args: argparse.Namespace) -> int:
             f"({', '.join(POINT_SUFFIXES)}); got suffix {Path(args.input).suffix!r}."
         )
     is_image = kind in IMAGE_SUFFIXES
+    _refuse_options_of_the_other_input(args, is_image)
     if is_image:
         from ..graphs import pixel_graph
 

@@ -55,7 +55,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="centrality whose histogram is the feature; 'all' concatenates four (default: %(default)s)",
     )
     parser.add_argument(
-        "--bins", type=number(int, low=1, high=MAX_BINS), default=40, help="histogram bins (default: %(default)s)"
+        "--bins", type=number(int, low=2, high=MAX_BINS), default=40, help="histogram bins (default: %(default)s)"
     )
     parser.add_argument(
         "--classifier",

@@ -14,6 +14,7 @@ from ._common import (
     options,
     pyplot,
     read_point_file,
+    rms_distance,
     say,
     subparser,
     transform_record,
@@ -112,11 +113,7 @@ def run(args: argparse.Namespace) -> int:
     transform = result.transform
     moved = transform(moving)
     matched = correspondence >= 0
-    rms = (
-        float(np.sqrt(np.mean(np.sum((moved[matched] - fixed[correspondence[matched]]) ** 2, axis=1))))
-        if matched.any()
-        else float("nan")
-    )
+    rms = rms_distance(moved[matched], fixed[correspondence[matched]]) if matched.any() else float("nan")
     seconds = time.perf_counter() - started
     say(
         f"matched {int(matched.sum())} of {len(correspondence)} points in {seconds:.2f} s; "

@@ -21,6 +21,7 @@ from ._common import (
     progress_on,
     pyplot,
     read_point_file,
+    rms_distance,
     say,
     subparser,
     suffix,
@@ -261,8 +262,7 @@ class _Watch:
 
         moved = np.asarray(info.moving_transformed)
         if self.true_moving is not None:
-            diff = moved[self.known] - self.true_moving[self.known]
-            self.rms.append(float(np.sqrt(np.mean(np.sum(diff**2, axis=1)))))
+            self.rms.append(rms_distance(moved[self.known], self.true_moving[self.known]))
         if self.bar is not None and info.iteration > 0:
             self.bar.update(1)
 

@@ -70,6 +70,10 @@ def read_image(path, /) -> np.ndarray:
         raise InputError(f"{path}: not a readable {kind} image (pixel type {pixels.dtype}).")
     if pixels.size == 0:
         raise InputError(f"{path}: not a readable {kind} image (it decodes to no pixels, shape {pixels.shape}).")
+    stacked = pixels.ndim == 4 or (pixels.ndim == 3 and pixels.shape[2] not in (1, 2, 3, 4))
+    if kind in ("TIF", "TIFF") and stacked:
+        # tifffile reads a multi-page TIFF as one series of pages: its first page
+        pixels = pixels[0]
     if pixels.ndim == 3 and pixels.shape[2] in (2, 4):
         colour, alpha = pixels[..., :-1], pixels[..., -1]
         flat = colour.reshape(-1, colour.shape[2])

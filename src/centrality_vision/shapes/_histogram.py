@@ -96,7 +96,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
     centrality : str or list of str, default="closeness"
         A name from :data:`centrality_vision.centrality.CENTRALITIES`, ``"all"``, or a list.
     bins : int, default=40
-        Bins per centrality (the thesis uses 40), at most 100,000.
+        Bins per centrality (the thesis uses 40), from 2 to 100,000.
     connectivity : {8, 4}, default=8
         Pixel neighbourhood.
     scaling : {"max", "minmax"}, default="max"
@@ -194,7 +194,9 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
 
     def _validate_params(self) -> tuple[str, ...]:
         names = resolve_centralities(self.centrality)
-        check_int(self.bins, name="bins", low=1, high=MAX_BINS)
+        # (one bin holds every pixel: the feature is the constant 1, and a classifier fed only
+        # constant features divides by their zero variance)
+        check_int(self.bins, name="bins", low=2, high=MAX_BINS)
         check_choice(self.scaling, ("minmax", "max"), name="scaling")
         if not is_connectivity(self.connectivity):
             raise InputError(

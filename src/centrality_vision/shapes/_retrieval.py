@@ -434,7 +434,7 @@ def pairwise_shape_distances(
         from ._histogram import MAX_BINS
 
         out = _histogram_distances(
-            masks, method, centrality, check_int(bins, name="bins", low=1, high=MAX_BINS), resolution, weights, n_jobs
+            masks, method, centrality, check_int(bins, name="bins", low=2, high=MAX_BINS), resolution, weights, n_jobs
         )
     else:
         forward, backward = _descriptors(masks, n_points, resolution, jobs)
