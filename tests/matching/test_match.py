@@ -222,3 +222,33 @@ def test_shape_context_with_no_matched_pair_reports_no_mean_cost():
     assert info["mean_cost"] is None
     correspondence, info = shape_context_assignment(blob, blob[::-1])
     assert np.all(correspondence >= 0) and np.isfinite(info["mean_cost"])
+
+
+def _blob(t):
+    return np.c_[np.cos(t) * (1 + 0.3 * np.cos(3 * t)), np.sin(t) * (1 + 0.3 * np.sin(2 * t))]
+
+
+@pytest.mark.parametrize("factor", [1.1, 1.5, 0.7])
+def test_a_rigid_match_of_sets_that_differ_in_scale_warns(factor):
+    # a copy scaled 1.5 and rotated 30 degrees: 29 of 40 points matched, every pair wrong, no warning
+    moving = _blob(np.linspace(0, 2 * np.pi, 40, endpoint=False))
+    a = np.radians(30)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    fixed = factor * moving @ rot.T + [2.0, -1.0]
+    with pytest.warns(MatchingWarning, match=rf"differ in scale: a similarity transform of scale {factor:g} "):
+        match(moving, fixed, scale=False)
+    assert np.array_equal(match(moving, fixed).correspondence, np.arange(40))  # the similarity is right
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_rigid_copies_with_noise_and_missing_parts_do_not_warn(seed):
+    rng = np.random.default_rng(seed)
+    moving = _blob(np.sort(rng.uniform(0, 2 * np.pi, 60)))
+    a = rng.uniform(0, 2 * np.pi)
+    rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    kept = moving[: 40 + 3 * seed]
+    fixed = kept @ rot.T + 3.0 + rng.normal(0, 0.01, kept.shape)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MatchingWarning)
+        result = match(moving, fixed, scale=False)
+    assert result.transform.rotation == pytest.approx(rot, abs=0.05)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._validation import as_points, check_bool, check_choice, check_float, check_int
-from ..exceptions import InputError
+from ..exceptions import InputError, MatchingWarning
 from ..transforms import RigidTransform, SimilarityTransform
 from ._common import MatchResult, check_rigid_extents, fit_pairs, normalise, similarity_to_units
 
@@ -38,6 +38,25 @@ def _rigid_if_unscaled(transform, scale) -> SimilarityTransform:
 
 #: The methods :func:`match` offers.
 METHODS = ("robust", "mwme", "shape-context")
+
+
+# a similarity that explains this much more of the sets than the rigid fit, at a scale this
+# far from 1, means the sets are not congruent and the rigid pairs are unreliable
+_SCALED_CONSENSUS, _SCALED_RATIO = 1.1, 1.05
+
+
+def _warn_if_scaled(info: dict) -> None:
+    ratio, rigid, similar = info["similarity_scale"], info["refined_consensus"], info["similarity_consensus"]
+    if similar > _SCALED_CONSENSUS * rigid and max(ratio, 1 / ratio) > _SCALED_RATIO:
+        import warnings
+
+        warnings.warn(
+            f"The sets seem to differ in scale: a similarity transform of scale {ratio:.3g} brings "
+            f"{similar:.1f} points into agreement where the rigid fit brings {rigid:.1f}. A rigid "
+            "transform cannot align them and its correspondences are not reliable; use scale=True.",
+            MatchingWarning,
+            stacklevel=3,
+        )
 
 
 def match(
@@ -76,7 +95,11 @@ def match(
         of cost 0.25 for unmatched points; the transform is fitted to the pairs.
     scale : bool, default=True
         Fit a similarity (True) or a rigid transform (False; the result's ``transform`` is
-        then a :class:`~centrality_vision.transforms.RigidTransform`).
+        then a :class:`~centrality_vision.transforms.RigidTransform`). A rigid fit of sets
+        that differ in scale pairs unrelated points; ``"robust"`` then also scores the
+        similarity hypotheses and a ``MatchingWarning`` says so when one at a scale more than
+        5% from 1 brings 10% more points into agreement (measured: copies scaled by 0.7, 1.1
+        and 1.5 warn; 30 rigid copies with noise up to 0.02 and up to a third missing do not).
     n_neighbours : int in [3, 19], default=8
         ``"robust"``: neighbours in each local MWME graph. Each signature is an exact
         MWME graph of ``n_neighbours + 1`` points, whose cost doubles with every
@@ -183,4 +206,6 @@ def match(
             if pairs.sum() >= 2:
                 t = norm_f.points[correspondence[pairs]].mean(axis=0) - s * rot @ norm_m.points[pairs].mean(axis=0)
     transform = _rigid_if_unscaled(similarity_to_units(rot, t, s, norm_m, norm_f), scale)
+    if method == "robust" and not scale:
+        _warn_if_scaled(info)
     return MatchResult(correspondence, transform, method, int(np.sum(correspondence >= 0)), info)
