@@ -362,15 +362,11 @@ def edge_list(points, graph):
 
 
 def rms_distance(a, b) -> float:
-    """The RMS of the distances between the rows of ``a`` and ``b``, without overflow or underflow."""
-    import numpy as np
+    """The RMS of the distances between the rows of ``a`` and ``b`` (registration's
+    ``alignment_error`` over the root of their number: no square overflows or underflows)."""
+    from ..registration import alignment_error
 
-    diff = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
-    with np.errstate(over="ignore", invalid="ignore"):
-        largest = float(np.max(np.abs(diff))) if diff.size else 0.0
-    if largest == 0.0 or not np.isfinite(largest):
-        return largest
-    return largest * float(np.sqrt(np.mean(np.sum((diff / largest) ** 2, axis=1))))
+    return alignment_error(a, b) / math.sqrt(len(a))
 
 
 def transform_record(transform) -> dict:

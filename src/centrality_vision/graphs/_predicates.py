@@ -18,8 +18,8 @@ than certain passes: the points are co-spherical, or the simplex flat, to within
 precision of the data, and either triangulation is Delaunay as far as float64 can tell.
 Measured: every square of a rotated grid is co-circular, and three points of one of its
 rows collinear, only to within a few units in the last place; on 6 of 297 rotated grids
-Qhull returned facets that failed the test on the floats as given (all of them flat
-triangles or co-circular squares within one unit in the last place), while the facets
+Qhull returned facets that failed the test on the floats as given (in the four examined,
+every such facet a triangle flat to within one unit in the last place), while the facets
 Qhull gets wrong beside a tight cluster (1e-5 to 1e-9 of the extent) fail it by 2e4 to
 4e7 units.
 """

@@ -231,13 +231,13 @@ class _Frame:
                     f"{_SCALE_RANGE[1]:g} in absolute value (their squares must fit in float64); got "
                     f"{max(span, largest):.3g}. Use normalize=True."
                 )
+        mu_x, xc = centred(fixed)
+        if not normalize:
             # Both sets are still moved by one common translation, the fixed set's mean: that
             # keeps every parameter in the caller's units and the caller's pose as the start,
             # but the M-step's moments then do not cancel far from the origin (the fish at an
             # offset of 1e8: rigid CPD stopped after one iteration 3.8 off, non-rigid 0.63).
-            mu_x, xc = centred(fixed)
             return _Frame(mu_x, mu_x, 1.0), _shifted(moving, mu_x), xc
-        mu_x, xc = centred(fixed)
         if same_centre:
             mu_y = mu_x
             yc = _shifted(moving, mu_x)
