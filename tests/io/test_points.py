@@ -49,6 +49,27 @@ def test_ply_properties_in_any_order_and_columns_by_file_position(tmp_path, text
     assert np.allclose(read_points(path, columns=[1, 3]), np.column_stack([np.arange(7), CLOUD[:, 2]]))
 
 
+@pytest.mark.parametrize("order", ["<", ">"])
+def test_binary_ply_in_2d_and_with_an_element_before_the_vertices(tmp_path, order):
+    # meshio needs x, y and z: a binary file of x and y was refused with its internal error
+    plyfile = pytest.importorskip("plyfile")
+    vertex = np.zeros(6, dtype=[("x", order + "f4"), ("y", order + "f8"), ("label", order + "u2")])
+    vertex["x"], vertex["y"], vertex["label"] = FLAT[:, 0], FLAT[:, 1], np.arange(6)
+    camera = np.array([(1.5, 7)], dtype=[("view", order + "f8"), ("id", order + "i2")])
+    elements = [plyfile.PlyElement.describe(camera, "camera"), plyfile.PlyElement.describe(vertex, "vertex")]
+    path = tmp_path / "flat.ply"
+    endian = {"<": "little", ">": "big"}[order]
+    plyfile.PlyData(elements, text=False, byte_order=order).write(str(path))
+    assert endian in path.read_bytes()[:80].decode()
+    expected = np.column_stack([FLAT[:, 0].astype(np.float32), FLAT[:, 1]])
+    np.testing.assert_array_equal(read_points(path, n_dims=2), expected)
+    np.testing.assert_array_equal(read_points(path, columns=[2, 0]), np.column_stack([np.arange(6), expected[:, 0]]))
+    truncated = tmp_path / "truncated.ply"
+    truncated.write_bytes(path.read_bytes()[:-5])
+    with pytest.raises(InputError, match="declares 6 vertices"):
+        read_points(truncated, n_dims=2)
+
+
 def test_ascii_ply_with_another_element_before_the_vertices(tmp_path):
     path = tmp_path / "cam.ply"
     path.write_bytes(

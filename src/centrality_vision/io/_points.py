@@ -87,9 +87,10 @@ def read_points(
         :func:`scipy.io.loadmat`. Real numeric and logical 2D arrays are candidates;
         ``variable`` names the array, needed only when the file holds more than one.
     ``.ply``
-        The vertex element of an ASCII PLY file (parsed here) or a binary one (decoded
-        by ``meshio``); its scalar properties (``x``, ``y``, ``z``, ``intensity``, ...)
-        are the columns, in the file's order.
+        The vertex element of an ASCII PLY file or a binary one (both parsed here; a
+        binary file with list properties in or before its vertex element is decoded by
+        ``meshio``, which needs ``x``, ``y`` and ``z``); its scalar properties (``x``,
+        ``y``, ``z``, ``intensity``, ...) are the columns, in the file's order.
     ``.pcd``
         A Point Cloud Library file, ``DATA ascii`` or ``binary`` (``binary_compressed``
         is refused); its ``FIELDS`` are the columns.
@@ -605,7 +606,8 @@ _PLY_SIZES = {
 
 
 def _ply_header(path: Path, data: bytes):
-    """The format, the elements ``[name, count, [(property, is_list), ...]]`` and the body offset.
+    """The format, the elements ``[name, count, [(property, is_list, type), ...]]`` and the body
+    offset (``type``: a scalar's, or a list's item type).
 
     The vertex count is checked against the bytes that follow the header (a binary
     element takes at least its scalar sizes, a list at least its count's bytes).
@@ -634,7 +636,7 @@ def _ply_header(path: Path, data: bytes):
             if len(words) != (5 if is_list else 3) or not all(kind in _PLY_SIZES for kind in types):
                 raise InputError(f"{path}: not a readable PLY file (a damaged property line: {_clip(line)!r}).")
             sizes[-1] += _PLY_SIZES[types[0]]
-            elements[-1][2].append((words[-1], is_list))
+            elements[-1][2].append((words[-1], is_list, types[-1]))
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise InputError(f"{path}: not a readable PLY file (unknown format {fmt!r}).")
     vertex = [element for element in elements if element[0] == "vertex"]
@@ -654,15 +656,19 @@ def _read_ply(path: Path) -> _Table:
     """The vertex element, one column per scalar property in the file's order.
 
     ASCII files are parsed here (meshio's ASCII reader assumes the properties start
-    with x, y, z and reads other orders wrongly); binary ones are decoded by meshio.
+    with x, y, z and reads other orders wrongly), and so are binary files without list
+    properties up to the vertex element; meshio decodes the others.
     """
     data = path.read_bytes()
     fmt, elements, body_offset = _ply_header(path, data)
     vertex = next(element for element in elements if element[0] == "vertex")
     count, properties = vertex[1], vertex[2]
-    names = [name for name, is_list in properties if not is_list]
+    names = [name for name, is_list, _ in properties if not is_list]
     if fmt == "ascii":
         return _read_ply_ascii(path, data[body_offset:], elements, names)
+    before = elements[: next(k for k, element in enumerate(elements) if element[0] == "vertex")]
+    if not any(is_list for _, _, element in [*before, vertex] for _, is_list, _ in element):
+        return _read_ply_binary(path, data, body_offset, fmt, before, vertex)
     meshio = _meshio()
     try:
         # meshio's PLY reader itself: meshio.read prints and calls sys.exit(1) on a ReadError
@@ -683,6 +689,47 @@ def _read_ply(path: Path) -> _Table:
     return _Table(values.reshape(count, len(kept)), kept)
 
 
+# numpy's codes of the PLY scalar types
+_PLY_CODES = {
+    "char": "i1",
+    "int8": "i1",
+    "uchar": "u1",
+    "uint8": "u1",
+    "short": "i2",
+    "int16": "i2",
+    "ushort": "u2",
+    "uint16": "u2",
+    "int": "i4",
+    "int32": "i4",
+    "uint": "u4",
+    "uint32": "u4",
+    "float": "f4",
+    "float32": "f4",
+    "double": "f8",
+    "float64": "f8",
+}
+
+
+def _read_ply_binary(path: Path, data: bytes, body_offset: int, fmt: str, before, vertex) -> _Table:
+    """A binary vertex element of scalar properties (and only scalar elements before it),
+    decoded here in the file's property order: meshio's reader needs x, y and z, so a 2D
+    file was refused with its internal error."""
+    order = "<" if fmt == "binary_little_endian" else ">"
+    offset = body_offset + sum(count * sum(_PLY_SIZES[kind] for _, _, kind in props) for _, count, props in before)
+    count, properties = vertex[1], vertex[2]
+    dtype = np.dtype([(f"p{k}", order + _PLY_CODES[kind]) for k, (_, _, kind) in enumerate(properties)])
+    if offset + count * dtype.itemsize > len(data):
+        raise InputError(
+            f"{path}: the header declares {count} vertices of {dtype.itemsize} bytes but the file holds only "
+            f"{max(0, len(data) - offset)} bytes for them."
+        )
+    records = np.frombuffer(data, dtype=dtype, count=count, offset=offset)
+    values = np.empty((count, len(properties)))
+    for k in range(len(properties)):
+        values[:, k] = records[f"p{k}"]
+    return _Table(values, [name for name, _, _ in properties])
+
+
 def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Table:
     """An ASCII PLY body: one line per element instance, elements in header order."""
     lines = [line for line in body.decode("ascii", errors="replace").splitlines() if line.strip()]
@@ -694,7 +741,7 @@ def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Tab
         rows = lines[first : first + count]
         if len(rows) != count:
             raise InputError(f"{path}: the header declares {count} vertices but the file holds {len(rows)}.")
-        if not any(is_list for _, is_list in properties):  # the usual case, at numpy's speed
+        if not any(is_list for _, is_list, _ in properties):  # the usual case, at numpy's speed
             try:
                 values = np.array([line.split() for line in rows], dtype=np.float64).reshape(count, -1)
             except ValueError:  # ragged or not numbers: the row-by-row reading below names the row
@@ -705,7 +752,7 @@ def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Tab
         for row, line in enumerate(rows):
             words, at, out = line.split(), 0, []
             try:
-                for _, is_list in properties:
+                for _, is_list, _ in properties:
                     if is_list:  # a count, then that many items; a negative count: the row cannot match
                         length = int(words[at])
                         at = at + length + 1 if length >= 0 else len(words) + 1
