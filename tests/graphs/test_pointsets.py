@@ -129,8 +129,6 @@ def test_input_not_modified():
         ([[0, 0], [1, 1]], "at least 3 points"),
         ([[0, 0], [1, 1], [np.nan, 2]], "finite"),
         ([[0, 0], [1, 1], [1, 1], [0, 1]], "duplicate"),
-        ([[0, 0], [1, 1], [2, 2], [3, 3]], "collinear"),
-        ([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], "coplanar"),
         ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], "at least 4 points in 3D"),
         (np.zeros((5, 4)), r"shape \(n_points, 2 or 3\)"),
         (np.zeros(5), "shape"),
@@ -139,6 +137,37 @@ def test_input_not_modified():
 def test_bad_point_sets(builder, points, match):
     with pytest.raises(ValueError, match=match):
         builder(points)
+
+
+@pytest.mark.parametrize(
+    ("points", "match"),
+    [([[0, 0], [1, 1], [2, 2], [3, 3]], "collinear"), ([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], "coplanar")],
+)
+def test_a_delaunay_triangulation_needs_the_full_dimension(points, match):
+    with pytest.raises(ValueError, match=match):
+        delaunay_graph(points)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_gabriel_graph_and_emst_of_points_on_a_line_or_a_plane(seed):
+    # both graphs are defined there (a path along the line; the plane's own graphs), but
+    # needing a Delaunay triangulation of the full dimension they were refused
+    rng = np.random.default_rng(seed)
+    line = rng.permutation(np.outer(rng.random(12), rng.standard_normal(3)) + rng.standard_normal(3))
+    order = np.argsort(line[:, 0])
+    path = {tuple(sorted(pair)) for pair in zip(order[:-1].tolist(), order[1:].tolist())}
+    for points in (line, line[:, :2]):
+        for builder in (gabriel_graph, emst_graph):
+            graph = builder(points)
+            assert {(int(i), int(j)) for i, j in zip(*sparse.triu(graph).nonzero())} == path
+    flat = rng.random((30, 2))
+    rotation = np.linalg.qr(rng.standard_normal((3, 3)))[0]
+    plane = np.c_[flat, np.zeros(30)] @ rotation.T + 5.0
+    best = minimum_spanning_tree(squareform(pdist(plane))).sum()
+    assert emst_graph(plane).sum() / 2 == pytest.approx(best, rel=1e-12)
+    assert set(zip(*sparse.triu(gabriel_graph(plane)).nonzero())) == set(
+        zip(*sparse.triu(gabriel_graph(flat)).nonzero())
+    )
 
 
 def test_bad_points_type():

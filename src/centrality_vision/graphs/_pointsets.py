@@ -119,11 +119,15 @@ def _triangulable_points(points) -> np.ndarray:
     return points
 
 
+def _affine_rank(points: np.ndarray) -> int:
+    """The dimension the points span (to within 1e-12 of their extent)."""
+    centred = points - points.mean(axis=0)
+    return int(np.linalg.matrix_rank(centred / np.abs(centred).max(), tol=1e-12))
+
+
 def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
     n, dim = points.shape
-    centred = points - points.mean(axis=0)
-    scale = np.abs(centred).max()
-    if np.linalg.matrix_rank(centred / scale, tol=1e-12) < dim:
+    if _affine_rank(points) < dim:
         what = "collinear" if dim == 2 else "coplanar"
         raise InputError(f"`{name}` must span {dim} dimensions for a Delaunay triangulation; got {n} {what} points.")
     try:
@@ -226,7 +230,9 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     Parameters
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
-        As for :func:`delaunay_graph`.
+        As for :func:`delaunay_graph`, except that points on a line, or in 3D on a plane
+        (to within 1e-12 of their extent), are accepted: the graph is then the path along
+        the line, or the Gabriel graph within the plane.
 
     Returns
     -------
@@ -244,22 +250,42 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     2
     """
     points = _triangulable_points(points)
-    rows, cols = _delaunay_edges(points)
+    rows, cols = _gabriel_candidates(points)
     keep = _gabriel_mask(points, rows, cols)
     return edges_to_graph(points.shape[0], rows[keep], cols[keep], points)
+
+
+def _gabriel_candidates(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Edges that include every Gabriel edge (so every Euclidean MST): the Delaunay edges, or
+    for points on a line the path through them in order along it, and for 3D points on a
+    plane the Delaunay edges of their coordinates in that plane."""
+    unit = _unit_scale(points)[0]
+    rank = _affine_rank(unit)
+    if rank == points.shape[1]:
+        return _delaunay_edges(points)
+    centred = _centred(unit)
+    basis = np.linalg.svd(centred, full_matrices=False)[2][:rank]
+    along = centred @ basis.T
+    if rank == 1:
+        order = np.argsort(along[:, 0], kind="stable")
+        return np.minimum(order[:-1], order[1:]), np.maximum(order[:-1], order[1:])
+    return _delaunay_edges(along)
 
 
 def emst_graph(points, /) -> sparse.csr_array:
     """Euclidean minimum spanning tree of a 2D or 3D point set.
 
     Computed as the minimum spanning tree of the Delaunay graph, which contains every
-    Euclidean MST. When several spanning trees share the minimum weight (equal
-    distances) one of them is returned.
+    Euclidean MST (for points on a line or plane: of the path along it, or of the plane's
+    Delaunay graph). When several spanning trees share the minimum weight (equal distances)
+    one of them is returned.
 
     Parameters
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
-        As for :func:`delaunay_graph`.
+        As for :func:`delaunay_graph`, except that points on a line, or in 3D on a plane
+        (to within 1e-12 of their extent), are accepted: the tree is then the path along
+        the line, or the tree within the plane.
 
     Returns
     -------
@@ -274,7 +300,9 @@ def emst_graph(points, /) -> sparse.csr_array:
     """
     from scipy.sparse.csgraph import minimum_spanning_tree
 
-    graph = delaunay_graph(points)
+    points = _triangulable_points(points)
+    rows, cols = _gabriel_candidates(points)
+    graph = edges_to_graph(points.shape[0], rows, cols, points)
     tree = sparse.coo_array(minimum_spanning_tree(graph))
     return edges_to_graph(graph.shape[0], tree.row, tree.col, lengths=tree.data)
 
