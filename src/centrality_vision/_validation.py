@@ -344,6 +344,12 @@ def as_binary_image(
             else:
                 side = "light" if 2 * int(light.sum()) <= light.size else "dark"
     mask = light if side == "light" else ~light
+    if not mask.any() and threshold is not None and not is_mask:
+        # the threshold chose: name it and the image's range (the message blamed the image)
+        need = f"below {high:g}, its largest value" if side == "light" else f"at least {low:g}, its smallest value"
+        raise InputError(
+            f"`threshold` {float(threshold):g} leaves no {side} pixel (the shape) in `{name}`: it must be {need}."
+        )
     if not mask.any():
         raise InputError(f"`{name}` must have at least one foreground pixel; got none (shape {arr.shape}).")
     if check_inverted and (is_mask or foreground != "auto") and min(mask.shape) >= 8:

@@ -82,8 +82,11 @@ def test_uniform_image_and_bad_options(tmp_path):
     with pytest.raises(InputError, match="uniform"):
         read_shape(tmp_path / "u.png")
     iio.imwrite(tmp_path / "a.png", DARK_ON_WHITE)
-    with pytest.raises(InputError, match="a.png: .*at least one foreground pixel"):
+    # the threshold is named, with the bound it must respect (the message blamed the image)
+    with pytest.raises(InputError, match=r"a.png: `threshold` 0 leaves no dark pixel .* at least 10, its smallest"):
         read_shape(tmp_path / "a.png", threshold=0, foreground="dark")
+    with pytest.raises(InputError, match=r"`threshold` 255 leaves no light pixel .* below 255, its largest value"):
+        read_shape(tmp_path / "a.png", threshold=255, foreground="light")
     with pytest.raises(InputError, match="`foreground` must be"):
         read_shape(tmp_path / "a.png", foreground="black")
     with pytest.raises(ValueError, match="`threshold` must be a finite real number"):  # a value, not a type
