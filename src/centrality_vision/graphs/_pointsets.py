@@ -129,7 +129,11 @@ def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
     n, dim = points.shape
     if _affine_rank(points) < dim:
         what = "collinear" if dim == 2 else "coplanar"
-        raise InputError(f"`{name}` must span {dim} dimensions for a Delaunay triangulation; got {n} {what} points.")
+        # (to within 1e-12 of the extent: ten points in the unit square beside one at 1e300 are)
+        raise InputError(
+            f"`{name}` must span {dim} dimensions for a Delaunay triangulation; got {n} {what} points (to within "
+            "1e-12 of their extent)."
+        )
     try:
         tri = Delaunay(points)
     except QhullError as exc:  # numerically degenerate input
