@@ -585,24 +585,26 @@ def _read_mat(path: Path, variable: str | None) -> _Table:
 # ------------------------------------------------------------------------------- .ply
 
 
-_PLY_SIZES = {
-    "char": 1,
-    "uchar": 1,
-    "int8": 1,
-    "uint8": 1,
-    "short": 2,
-    "ushort": 2,
-    "int16": 2,
-    "uint16": 2,
-    "int": 4,
-    "uint": 4,
-    "int32": 4,
-    "uint32": 4,
-    "float": 4,
-    "float32": 4,
-    "double": 8,
-    "float64": 8,
+# numpy's codes of the PLY scalar types
+_PLY_CODES = {
+    "char": "i1",
+    "int8": "i1",
+    "uchar": "u1",
+    "uint8": "u1",
+    "short": "i2",
+    "int16": "i2",
+    "ushort": "u2",
+    "uint16": "u2",
+    "int": "i4",
+    "int32": "i4",
+    "uint": "u4",
+    "uint32": "u4",
+    "float": "f4",
+    "float32": "f4",
+    "double": "f8",
+    "float64": "f8",
 }
+_PLY_SIZES = {kind: np.dtype(code).itemsize for kind, code in _PLY_CODES.items()}
 
 
 def _ply_header(path: Path, data: bytes):
@@ -687,27 +689,6 @@ def _read_ply(path: Path) -> _Table:
     ]
     values = np.column_stack([columns[name].astype(np.float64) for name in kept]) if kept else np.empty((count, 0))
     return _Table(values.reshape(count, len(kept)), kept)
-
-
-# numpy's codes of the PLY scalar types
-_PLY_CODES = {
-    "char": "i1",
-    "int8": "i1",
-    "uchar": "u1",
-    "uint8": "u1",
-    "short": "i2",
-    "int16": "i2",
-    "ushort": "u2",
-    "uint16": "u2",
-    "int": "i4",
-    "int32": "i4",
-    "uint": "u4",
-    "uint32": "u4",
-    "float": "f4",
-    "float32": "f4",
-    "double": "f8",
-    "float64": "f8",
-}
 
 
 def _read_ply_binary(path: Path, data: bytes, body_offset: int, fmt: str, before, vertex) -> _Table:
