@@ -137,6 +137,16 @@ def _searchable_lengths(data: np.ndarray) -> tuple[np.ndarray, float]:
     return scaled, scale
 
 
+def _scaled_values(adjacency: sparse.csr_array) -> tuple[sparse.csr_array, float]:
+    """``adjacency`` with its (non-negative) stored values divided by the power of two of
+    :func:`_searchable_lengths`, and that power: sums of values near 1e308 do not
+    overflow there, nor inverses of subnormal ones."""
+    scaled, unit = _searchable_lengths(adjacency.data.astype(np.float64, copy=False))
+    if unit == 1.0:
+        return adjacency, 1.0
+    return sparse.csr_array((scaled, adjacency.indices, adjacency.indptr), shape=adjacency.shape), unit
+
+
 def _on_pixel_grid(graph) -> bool:
     """Whether ``graph`` is a :class:`~centrality_vision.graphs.PixelGraph` (2D or 3D) that
     is still exactly the pixel graph of its mask, so the grid kernels may walk the mask."""
@@ -157,12 +167,8 @@ def _prepare(graph, *, reorder: bool = True, allow_directed: bool = True) -> _Pr
     return _Prepared(as_any_graph(graph, name="graph", allow_directed=allow_directed), reorder=reorder)
 
 
-def _check_flag(value, name: str) -> bool:
-    return check_bool(value, name=name)
-
-
 def _finish(values: np.ndarray, labels, as_dict: bool):
-    if not _check_flag(as_dict, "as_dict"):
+    if not check_bool(as_dict, name="as_dict"):
         return values
     keys = range(values.shape[0]) if labels is None else labels
     return {key: float(v) for key, v in zip(keys, values)}
@@ -171,7 +177,7 @@ def _finish(values: np.ndarray, labels, as_dict: bool):
 def _strengths_option(strengths, weights, function: str) -> bool:
     """``strengths``, honouring the deprecated ``weights`` alias of degree-like measures."""
     if weights is not None:
-        weights = _check_flag(weights, "weights")
+        weights = check_bool(weights, name="weights")
         if weights:
             warnings.warn(
                 f"{function}(weights=True) is deprecated: `weights` means edge lengths as distances in "
@@ -180,7 +186,7 @@ def _strengths_option(strengths, weights, function: str) -> bool:
                 stacklevel=3,
             )
             return True
-    return _check_flag(strengths, "strengths")
+    return check_bool(strengths, name="strengths")
 
 
 def _hop_stats(indptr, indices, progress: bool, desc: str):
@@ -299,13 +305,12 @@ def degree(graph, /, *, strengths: bool = False, normalized: bool = False, as_di
     """
     info = as_any_graph(graph, name="graph", allow_directed=True)
     strengths = _strengths_option(strengths, weights, "degree")
-    normalized = _check_flag(normalized, "normalized")
+    normalized = check_bool(normalized, name="normalized")
     adjacency = info.adjacency
     if strengths:
         # summed at a power-of-two scale, exactly, so that a sum beyond float64 is an error
         # instead of an overflow warning and inf
-        scaled, unit = _searchable_lengths(adjacency.data.astype(np.float64, copy=False))  # (non-negative)
-        scaled = sparse.csr_array((scaled, adjacency.indices, adjacency.indptr), shape=adjacency.shape)
+        scaled, unit = _scaled_values(adjacency)
         with np.errstate(over="ignore"):
             values = np.asarray(scaled.sum(axis=1), dtype=np.float64).ravel() * unit
         if not np.all(np.isfinite(values)):
@@ -430,9 +435,9 @@ def betweenness(
     """
     on_grid = _on_pixel_grid(graph)
     prep = _prepare(graph, reorder=not on_grid)  # the grid path walks the mask, not these lists
-    weights = _check_flag(weights, "weights")
-    normalized = _check_flag(normalized, "normalized")
-    progress = _check_flag(progress, "progress")
+    weights = check_bool(weights, name="weights")
+    normalized = check_bool(normalized, name="normalized")
+    progress = check_bool(progress, name="progress")
     n = prep.n
     pairs = (n - 1) * (n - 2) / (1 if prep.directed else 2)
     if epsilon is not None:
@@ -462,7 +467,7 @@ def betweenness(
             values = values / pairs if n > 2 else np.zeros(n)
         info = {"samples": 0, "bound": 0.0, **info}
     out = _finish(values, prep.labels, as_dict)
-    return (out, info) if _check_flag(return_info, "return_info") else out
+    return (out, info) if check_bool(return_info, name="return_info") else out
 
 
 def _list_betweenness(prep: _Prepared, weights: bool, progress: bool) -> np.ndarray:
@@ -532,9 +537,9 @@ def edge_betweenness(
            [0., 2., 0.]])
     """
     prep = _prepare(graph)
-    weights = _check_flag(weights, "weights")
-    normalized = _check_flag(normalized, "normalized")
-    progress = _check_flag(progress, "progress")
+    weights = check_bool(weights, name="weights")
+    normalized = check_bool(normalized, name="normalized")
+    progress = check_bool(progress, name="progress")
     n = prep.n
     data = prep.data if weights else np.ones_like(prep.data)
 
@@ -561,7 +566,7 @@ def edge_betweenness(
         rows, cols = prep.perm[rows], prep.perm[cols]
     result = sparse.csr_array((coo.data, (rows, cols)), shape=(n, n))
     result.sort_indices()
-    if not _check_flag(as_dict, "as_dict"):
+    if not check_bool(as_dict, name="as_dict"):
         return result
     labels = list(range(n)) if prep.labels is None else prep.labels
     coo = result.tocoo()
@@ -644,7 +649,7 @@ def closeness(
     >>> closeness(path)
     array([0.66666667, 1.        , 0.66666667])
     """
-    normalized = _check_flag(normalized, "normalized")
+    normalized = check_bool(normalized, name="normalized")
     n, total, _, _, reached, unit, info = _inward_sums(
         graph, weights, epsilon, delta, seed, progress, "closeness", False
     )
@@ -658,7 +663,7 @@ def closeness(
             values[ok] = 1.0 / total[ok] / unit
     _check_inverse(values)
     out = _finish(values, info.pop("labels"), as_dict)
-    return (out, info) if _check_flag(return_info, "return_info") else out
+    return (out, info) if check_bool(return_info, name="return_info") else out
 
 
 def _check_inverse(values: np.ndarray) -> None:
@@ -673,10 +678,10 @@ def _check_inverse(values: np.ndarray) -> None:
 def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc, need_inverse=True):
     """(n, sum of distances, sum of inverse distances, largest, reached, unit, info) to each
     node (the inverse sums may be zeros unless ``need_inverse``; distances in ``unit``)."""
-    weights = _check_flag(weights, "weights")
+    weights = check_bool(weights, name="weights")
     on_grid = weights and epsilon is None and _on_pixel_grid(graph)
     prep = _prepare(graph, reorder=not on_grid)  # the grid search walks the mask, not these lists
-    progress = _check_flag(progress, "progress")
+    progress = check_bool(progress, name="progress")
     if epsilon is not None:
         if weights or prep.directed:
             raise InputError("`epsilon` (approximation) is available for hop counts on undirected graphs only.")
@@ -749,14 +754,14 @@ def harmonic(
     >>> harmonic(path)
     array([1.5, 2. , 1.5])
     """
-    normalized = _check_flag(normalized, "normalized")
+    normalized = check_bool(normalized, name="normalized")
     n, _, inverse, _, _, unit, info = _inward_sums(graph, weights, epsilon, delta, seed, progress, "harmonic")
     with np.errstate(over="ignore"):
         inverse = inverse / unit
     _check_inverse(inverse)
     values = (inverse / (n - 1) if n > 1 else np.zeros(n)) if normalized else inverse
     out = _finish(values, info.pop("labels"), as_dict)
-    return (out, info) if _check_flag(return_info, "return_info") else out
+    return (out, info) if check_bool(return_info, name="return_info") else out
 
 
 def eccentricity(
@@ -827,11 +832,11 @@ def eccentricity(
     >>> eccentricity(path, method="bounds", return_info=True)[1]["searches"] <= 3
     True
     """
-    normalized = _check_flag(normalized, "normalized")
+    normalized = check_bool(normalized, name="normalized")
     check_choice(method, ("auto", "bounds", "all"), name="method")
     prep = _prepare(graph)
-    weights = _check_flag(weights, "weights")
-    progress = _check_flag(progress, "progress")
+    weights = check_bool(weights, name="weights")
+    progress = check_bool(progress, name="progress")
     largest = None
     searches = 0
     if method == "auto" and not weights and prep.n < 4096:
@@ -869,7 +874,7 @@ def eccentricity(
         top = largest.max()
         largest = largest / top if top > 0 else np.zeros_like(largest)
     out = _finish(largest, prep.labels, as_dict)
-    return (out, {"searches": searches}) if _check_flag(return_info, "return_info") else out
+    return (out, {"searches": searches}) if check_bool(return_info, name="return_info") else out
 
 
 def _eccentricity_bounds(prep: _Prepared, weights: bool, budget: int | None = None):

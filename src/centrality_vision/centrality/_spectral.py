@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import sparse
 
-from .._validation import as_any_graph, check_float, check_int
+from .._validation import as_any_graph, check_bool, check_float, check_int
 from ..exceptions import InputError
-from ._api import _check_flag, _finish, _searchable_lengths, _strengths_option
+from ._api import _finish, _scaled_values, _strengths_option
 
 __all__ = ["eigenvector", "pagerank", "katz"]
 
@@ -120,7 +120,7 @@ def eigenvector(graph, /, *, strengths: bool = False, normalized: bool = True, a
     info = as_any_graph(graph, name="graph")
     adjacency = info.adjacency
     strengths = _strengths_option(strengths, weights, "eigenvector")
-    normalized = _check_flag(normalized, "normalized")
+    normalized = check_bool(normalized, name="normalized")
     if not strengths:
         adjacency.data[:] = 1.0  # as_any_graph returned our own copy
     else:
@@ -221,11 +221,8 @@ def pagerank(
     tol = check_float(tol, name="tol", low=0.0)
     max_iter = check_int(max_iter, name="max_iter", low=1)
     n = adjacency.shape[0]
-    # the transitions do not depend on the values' scale: at the searches' power-of-two scale,
-    # sums of values near 1e308 do not overflow, nor inverses of subnormal ones
-    scaled, unit = _searchable_lengths(adjacency.data.astype(np.float64, copy=False))  # (non-negative)
-    if unit != 1.0:
-        adjacency = sparse.csr_array((scaled, adjacency.indices, adjacency.indptr), shape=adjacency.shape)
+    # the transitions do not depend on the values' scale: computed at a power-of-two scale
+    adjacency, _ = _scaled_values(adjacency)
     out_strength = np.asarray(adjacency.sum(axis=1)).ravel()
     dangling = out_strength == 0
     inv = np.zeros(n)
@@ -305,7 +302,7 @@ def katz(
     beta = check_float(beta, name="beta", low=0.0)
     if beta == 0.0:
         raise InputError("`beta` must be positive; got 0.0.")
-    normalized = _check_flag(normalized, "normalized")
+    normalized = check_bool(normalized, name="normalized")
     with np.errstate(over="ignore"):  # a huge alpha is refused here, not warned about
         too_large = n and alpha * min(rows.max(), cols.max()) >= 1.0
         too_large = too_large and alpha * _spectral_radius(adjacency) >= 1.0 - 1e-12

@@ -509,7 +509,6 @@ def shape_centralities(
            [5., 8., 5.],
            [3., 5., 3.]])
     """
-
     masks = as_shape_images(images, foreground=foreground, threshold=threshold)
     if isinstance(names, str):  # one name, not its letters
         names = [names]
