@@ -328,6 +328,18 @@ def test_columns_by_index_and_case_insensitive_names(tmp_path):
         read_points(path, columns="x,,y")
 
 
+def test_a_header_that_repeats_a_name_is_refused_where_the_name_is_used(tmp_path):
+    # the first of two columns called x was taken, silently
+    path = tmp_path / "p.csv"
+    path.write_text("x,y,X\n1,2,3\n4,5,6\n")
+    with pytest.raises(InputError, match=r"names 2 columns 'x' \(indices 0, 2\).*0-based index"):
+        read_points(path)
+    with pytest.raises(InputError, match=r"names 2 columns 'x'"):
+        read_points(path, columns=["y", "x"])
+    assert read_points(path, columns=["y", 2]).tolist() == [[2, 3], [5, 6]]
+    assert read_points(path, columns=[2, "y"]).tolist() == [[3, 2], [6, 5]]
+
+
 def test_nan_rows_only_when_asked_and_only_whole_rows(tmp_path):
     path = tmp_path / "p.txt"
     path.write_text("0 0\nnan nan\n1 1\n")

@@ -213,6 +213,17 @@ def _check_columns(columns):
     return out
 
 
+def _named_column(path: Path, lower: list[str], name: str, shown: str) -> int:
+    """The index of the one column called ``name`` (case-insensitive); an error when the header repeats it."""
+    found = [index for index, other in enumerate(lower) if other == name.lower()]
+    if len(found) > 1:
+        raise InputError(
+            f"{path}: the header names {len(found)} columns {name!r} (indices {', '.join(map(str, found))}){shown}; "
+            "pick the coordinates by 0-based index with `columns` (--columns on the command line)."
+        )
+    return found[0]
+
+
 def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
     n_columns = table.values.shape[1]
     names = table.names
@@ -234,11 +245,11 @@ def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
             elif item.lower() not in lower:
                 raise InputError(f"{path}: `columns` names {item!r}, which is not a column of the file{shown}.")
             else:
-                picked.append(lower.index(item.lower()))
+                picked.append(_named_column(path, lower, item, shown))
     else:
         lower = [name.lower() for name in names] if names else []
         if "x" in lower and "y" in lower:
-            picked = [lower.index(axis) for axis in ("x", "y", "z") if axis in lower]
+            picked = [_named_column(path, lower, axis, shown) for axis in ("x", "y", "z") if axis in lower]
         else:
             picked = list(range(n_columns))
             if names and n_columns > 1 and lower[0] in _INDEX_NAMES:
