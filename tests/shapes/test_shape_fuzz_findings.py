@@ -110,7 +110,7 @@ def test_bad_options_of_the_shape_layer_name_the_parameter():
     import pytest
 
     from centrality_vision.exceptions import InputError
-    from centrality_vision.shapes import CentralityComparisons, outline_profiles, shape_centralities
+    from centrality_vision.shapes import CentralityCache, CentralityComparisons, outline_profiles, shape_centralities
 
     square = np.zeros((8, 8), dtype=bool)
     square[2:6, 2:6] = True
@@ -123,6 +123,12 @@ def test_bad_options_of_the_shape_layer_name_the_parameter():
         (lambda: shape_centralities([square], ["degree"], connectivity=8.0), InputError, "`connectivity` must be 4"),
         (lambda: shape_centralities([square], ["degree"], progress="x"), TypeError, "`progress` must be True"),
         (lambda: CentralityHistogram(connectivity=8.0).fit([square]), InputError, "connectivity"),
+        # the cache's three entry points accept what shape_centralities accepts (put alone refused
+        # 8.0 and lookup or get took a weights of "no" as True)
+        (lambda: CentralityCache().put(square, "degree", np.ones(16), connectivity=8.0), InputError, "must be 4"),
+        (lambda: CentralityCache().lookup(square, "degree", connectivity=8.0), InputError, "`connectivity` must be 4"),
+        (lambda: CentralityCache().get(square, "degree", connectivity=6), InputError, "`connectivity` must be 4"),
+        (lambda: CentralityCache().get(square, "degree", weights="no"), TypeError, "`weights` must be True"),
         (lambda: CentralityHistogram(fill_holes="x").fit([square]), TypeError, "`fill_holes` must be True"),
         (lambda: CentralityComparisons(random_state=-1).fit([square, square], [0, 1]), TypeError, "`random_state`"),
         (lambda: outline_profiles(np.zeros((20, 20))), InputError, r"^`image` must have at least one foreground"),

@@ -104,8 +104,13 @@ def _as_mask(mask) -> np.ndarray:
 
 
 def _key(mask: np.ndarray, connectivity: int, weights: bool = False) -> tuple:
+    """The cache key of a mask's values; ``connectivity`` and ``weights`` are checked here, once for
+    every entry point (``lookup``, ``get``, ``put``), so that each accepts exactly what the others do."""
+    if not is_connectivity(connectivity):
+        raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
+    weights = check_bool(weights, name="weights")
     digest = hashlib.blake2b(np.packbits(mask).tobytes(), digest_size=16).hexdigest()
-    return (mask.shape, connectivity, bool(weights), digest)
+    return (mask.shape, int(connectivity), weights, digest)
 
 
 def _pid_alive(pid: int) -> bool:
@@ -336,9 +341,7 @@ class CentralityCache:
         """
         mask = _as_mask(mask)
         name = check_choice(name, CENTRALITIES, name="name")
-        if isinstance(connectivity, bool) or connectivity not in (4, 8):
-            raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
-        key = _key(mask, int(connectivity), check_bool(weights, name="weights"))
+        key = _key(mask, connectivity, weights)
         try:
             values = np.array(values, dtype=np.float64)
         except (TypeError, ValueError):
