@@ -245,3 +245,34 @@ def test_bad_dataset_arguments_are_named():
         pytest.skip("MPEG-7 is not installed here")
     with pytest.raises(TypeError, match="`classes`"):
         load_mpeg7(classes=123)
+
+
+def test_load_mpeg7_folder_oddities_found_by_fuzzing(tmp_path):
+    square = np.zeros((12, 14), bool)
+    square[3:9, 4:10] = True
+    upper = tmp_path / "upper"
+    upper.mkdir()
+    _write_gif(upper / "apple-1.GIF", square)
+    _write_gif(upper / "apple-2.GIF", square)
+    # a folder of upper-case suffixes was "not found" (the folder search was case-sensitive)
+    assert load_mpeg7(upper).names.tolist() == ["apple-1", "apple-2"]
+    # a generator of classes was used up by the type check, then refused as empty
+    assert len(load_mpeg7(upper, classes=(name for name in ["apple"]))) == 2
+    (upper / "apple-3.gif").mkdir()  # a folder named like a GIF is not an image: skipped
+    assert len(load_mpeg7(upper)) == 2
+    for content in (b"", b"not a gif", (upper / "apple-1.GIF").read_bytes()[:40]):
+        damaged = tmp_path / f"damaged{len(content)}"
+        damaged.mkdir()
+        _write_gif(damaged / "apple-1.gif", square)
+        (damaged / "apple-2.gif").write_bytes(content)  # was imageio's OSError without the file's name
+        with pytest.raises(InputError, match="apple-2.gif"):
+            load_mpeg7(damaged)
+
+
+def test_a_data_set_built_from_lists_finds_its_images_by_name():
+    mask = np.eye(3, dtype=bool)
+    data = Kimia99(images=[mask], labels=["a"], names=["x"])
+    assert data.image("x") is mask  # a list of names was refused by image() as holding no "x"
+    assert isinstance(data.names, np.ndarray) and data.labels.tolist() == ["a"]
+    with pytest.raises(TypeError, match="`labels` must hold strings"):
+        Kimia99(images=[mask], labels=[1], names=["x"])

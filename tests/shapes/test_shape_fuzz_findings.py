@@ -74,12 +74,20 @@ def test_a_shape_and_its_transpose_or_mirror_image_get_the_same_histogram():
     np.testing.assert_array_equal(rows[0], rows[1])
 
 
-def test_a_stored_file_of_another_length_or_with_nan_is_recomputed_not_used(tmp_path):
+def test_a_stored_file_of_another_length_type_or_not_finite_is_recomputed_not_used(tmp_path):
     square = np.zeros((6, 6), dtype=bool)
     square[1:5, 1:5] = True
     expected, _ = CentralityCache(directory=tmp_path).get(square, "closeness")
     (path,) = tmp_path.glob("*closeness.npy")
-    for foreign in (np.ones(5), np.full(16, np.nan), np.arange(16), np.ones((4, 4))):
+    # (inf and float32 files were served: inf values turned into a numpy error in the histogram)
+    for foreign in (
+        np.ones(5),
+        np.full(16, np.nan),
+        np.full(16, np.inf),
+        np.ones(16, np.float32),
+        np.arange(16),
+        np.ones((4, 4)),
+    ):
         np.save(path, foreign)
         cache = CentralityCache(directory=tmp_path)
         values, nodes = cache.get(square, "closeness")
@@ -87,6 +95,32 @@ def test_a_stored_file_of_another_length_or_with_nan_is_recomputed_not_used(tmp_
         assert values.shape == nodes.shape == (16,) and cache.misses == 1
         features = CentralityHistogram(cache=CentralityCache(directory=tmp_path), bins=5).fit_transform([square])
         assert features[0, -1] < 1  # the ones were binned as one full last bin
+
+
+def test_cache_inputs_found_by_fuzzing_get_named_errors(tmp_path):
+    import pytest
+
+    from centrality_vision.exceptions import InputError
+
+    square = np.zeros((6, 6), dtype=bool)
+    square[1:4, 1:4] = True
+    afile = tmp_path / "afile"
+    afile.write_text("")
+    with pytest.raises(InputError, match="`directory` must be a folder"):  # FileExistsError on first use
+        CentralityCache(directory=afile)
+    with pytest.raises(TypeError, match="`values` must hold real numbers"):  # OverflowError
+        CentralityCache().put(square, "degree", [10**400] * 9)
+    with pytest.raises(TypeError, match="`values` must hold real numbers; got complex"):  # imaginary part dropped
+        CentralityCache().put(square, "degree", np.ones(9) + 1j)
+    with pytest.raises(InputError, match="`mask` must be"):  # a 3D bool mask: an unpacking ValueError
+        CentralityCache(directory=tmp_path).get(np.ones((2, 3, 3), bool), "degree")
+    cache = CentralityCache(directory=tmp_path)
+    expected, _ = cache.get(square, "degree")
+    (values,) = tmp_path.glob("*degree.npy")
+    values.unlink()
+    values.with_suffix(".lock").write_text(str(2**80))  # a lock naming no possible process: stale
+    found, _ = CentralityCache(directory=tmp_path).get(square, "degree", wait=False)  # was OverflowError
+    np.testing.assert_array_equal(found, expected)
 
 
 def test_parameters_changed_after_fit_are_checked_not_mixed_with_the_fitted_ones():

@@ -11,6 +11,7 @@ import csv
 import io
 import os
 from dataclasses import dataclass
+from fnmatch import fnmatch
 from functools import cache, lru_cache
 from importlib import resources
 from pathlib import Path
@@ -93,8 +94,9 @@ DATA_ENV = "CENTRALITY_VISION_DATA"
 
 
 def _data_root(path, what: str, sub: str, needed: str, hint: str) -> Path:
-    """The folder holding a file matching ``needed`` (a glob): ``path``, ``path/sub``, ``$DATA_ENV/sub``, or the
-    ``shared/data/sub`` folder beside a source checkout; an error naming them otherwise."""
+    """The folder holding a file matching ``needed`` (a lower-case glob, matched case-insensitively):
+    ``path``, ``path/sub``, ``$DATA_ENV/sub``, or the ``shared/data/sub`` folder beside a source
+    checkout; an error naming them otherwise."""
     tried = []
     if path is not None:
         if not isinstance(path, (str, os.PathLike)):
@@ -110,7 +112,10 @@ def _data_root(path, what: str, sub: str, needed: str, hint: str) -> Path:
             candidates.append(checkout.parent / "shared" / "data" / sub)
     for folder in candidates:
         tried.append(str(folder))
-        if folder.is_dir() and any(entry.is_file() for entry in folder.glob(needed)):
+        # (case-insensitive: a folder of .GIF files is read, as the loaders read them)
+        if folder.is_dir() and any(
+            entry.is_file() and fnmatch(entry.name.lower(), needed) for entry in folder.iterdir()
+        ):
             return folder
     where = ", ".join(tried) if tried else f"nowhere (no `path` given and ${DATA_ENV} is not set)"
     raise FileNotFoundError(
@@ -218,6 +223,13 @@ class Kimia99:
                 f"`images`, `labels` and `names` must have the same length; got {n}, "
                 f"{len(self.labels)} and {len(self.names)}."
             )
+        # arrays of str, as documented: ``image`` compares names element-wise (a list of names
+        # compared equal to no name at all)
+        for name in ("labels", "names"):
+            if not all(isinstance(item, (str, np.str_)) for item in getattr(self, name)):
+                raise TypeError(f"`{name}` must hold strings; got {getattr(self, name)!r}.")
+            object.__setattr__(self, name, np.array(list(getattr(self, name)), dtype=str))
+        object.__setattr__(self, "images", list(self.images))
 
     def __len__(self) -> int:
         return len(self.images)
@@ -325,18 +337,12 @@ class MPEG7(Kimia99):
 
 
 def _read_gif_mask(path: Path) -> np.ndarray:
-    from skimage.io import imread
-
+    """The light shape of one GIF; the package's image reader names the file when it is empty,
+    damaged, not an image or too large to decode (imageio's OSError and PIL's errors before)."""
     from .._validation import as_binary_image
+    from ..io import read_image
 
-    pixels = np.asarray(imread(path))
-    while pixels.ndim > 2 and pixels.shape[0] == 1:  # a one-frame GIF: (1, rows, cols[, channels])
-        pixels = pixels[0]
-    if pixels.ndim == 3:
-        pixels = pixels[..., :3].mean(axis=2)
-    if pixels.ndim != 2:
-        raise InputError(f"{path}: must be a 2D grey or colour image; got an array of shape {pixels.shape}.")
-    return as_binary_image(pixels, name=str(path), foreground="light")
+    return as_binary_image(read_image(path), name=str(path), foreground="light")
 
 
 def load_mpeg7(path=None, *, classes=None) -> MPEG7:
@@ -384,7 +390,7 @@ def load_mpeg7(path=None, *, classes=None) -> MPEG7:
     True
     """
     folder = _data_root(path, "MPEG-7", "mpeg7", "*.gif", "download CE-Shape-1 part B")
-    files = sorted(p for p in folder.iterdir() if p.suffix.lower() == ".gif")
+    files = sorted(p for p in folder.iterdir() if p.suffix.lower() == ".gif" and p.is_file())
     labels = []
     for file in files:
         label, sep, number = file.stem.rpartition("-")
@@ -394,9 +400,11 @@ def load_mpeg7(path=None, *, classes=None) -> MPEG7:
     if classes is not None:
         if isinstance(classes, str):
             classes = [classes]
-        if not hasattr(classes, "__iter__") or not all(isinstance(c, str) for c in classes):
+        if not hasattr(classes, "__iter__"):
             raise TypeError(f"`classes` must be a class name or a sequence of them; got {classes!r}.")
-        classes = list(classes)
+        classes = list(classes)  # once: a generator is used up by the check below
+        if not all(isinstance(c, str) for c in classes):
+            raise TypeError(f"`classes` must be a class name or a sequence of them; got {classes!r}.")
         if not classes:
             raise InputError("`classes` must name at least one class (None loads them all); got an empty list.")
         unknown = sorted(set(classes) - set(labels))

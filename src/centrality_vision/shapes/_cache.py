@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .._provenance import code_digest
-from .._validation import as_binary_image, check_bool, check_choice, check_int
+from .._validation import as_binary_image, as_real_array, check_bool, check_choice, check_int
 from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
 from ..graphs import pixel_graph
@@ -98,7 +98,7 @@ def _as_mask(mask) -> np.ndarray:
 
     The cache's key and node indices must be those of the pixels the values are computed
     from: a grey image's nonzero pixels are not its shape (pixel_graph thresholds it)."""
-    if isinstance(mask, np.ndarray) and mask.dtype == bool:
+    if isinstance(mask, np.ndarray) and mask.dtype == bool and mask.ndim == 2 and mask.any():
         return mask
     return as_binary_image(mask, name="mask")
 
@@ -116,7 +116,7 @@ def _key(mask: np.ndarray, connectivity: int, weights: bool = False) -> tuple:
 def _pid_alive(pid: int) -> bool:
     try:
         os.kill(pid, 0)
-    except ProcessLookupError:
+    except (ProcessLookupError, OverflowError):  # (a number beyond the C long of a pid is no process)
         return False
     except (PermissionError, OSError):
         return True
@@ -173,6 +173,8 @@ class CentralityCache:
         if directory is not None and not isinstance(directory, (str, os.PathLike)):
             raise TypeError(f"`directory` must be a path (str or os.PathLike) or None; got {type(directory).__name__}.")
         self.directory = None if directory is None else Path(directory)
+        if self.directory is not None and self.directory.exists() and not self.directory.is_dir():
+            raise InputError(f"`directory` must be a folder (created when missing); got {str(directory)!r}, a file.")
         self._store: OrderedDict[tuple, dict] = OrderedDict()
         self._lock = threading.Lock()
         self.hits = 0
@@ -199,7 +201,7 @@ class CentralityCache:
 
     def _load(self, key: tuple, name: str, n_nodes: int):
         """The stored values, or None when absent or not this image's: a file of another
-        length, type or with NaN values (a foreign or stale file under the same name) is
+        length or type (float64 is stored) or with NaN or inf values (a foreign or stale file under the same name) is
         recomputed, never used."""
         if self.directory is None:
             return None
@@ -208,7 +210,7 @@ class CentralityCache:
             values = np.load(path)
         except (FileNotFoundError, EOFError, ValueError, OSError):  # absent, or a foreign partial file
             return None
-        if values.shape != (n_nodes,) or values.dtype.kind != "f" or np.isnan(values).any():
+        if values.shape != (n_nodes,) or values.dtype != np.float64 or not np.isfinite(values).all():
             return None
         return values
 
@@ -342,10 +344,9 @@ class CentralityCache:
         mask = _as_mask(mask)
         name = check_choice(name, CENTRALITIES, name="name")
         key = _key(mask, connectivity, weights)
-        try:
-            values = np.array(values, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise TypeError(f"`values` must be an array of numbers; got {type(values).__name__}.") from None
+        # (complex values lost their imaginary part, and a Python int beyond float64 raised OverflowError)
+        values = as_real_array(values, name="values", shape="one value per foreground pixel")
+        values = np.array(values, dtype=np.float64)
         if values.shape != (int(np.count_nonzero(mask)),):
             raise InputError(
                 f"`values` must hold one value per foreground pixel ({int(np.count_nonzero(mask))}); "
