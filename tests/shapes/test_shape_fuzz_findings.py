@@ -97,6 +97,24 @@ def test_a_stored_file_of_another_length_type_or_not_finite_is_recomputed_not_us
         assert features[0, -1] < 1  # the ones were binned as one full last bin
 
 
+def test_comparisons_check_parameters_changed_after_fit():
+    import pytest
+
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.shapes import CentralityComparisons
+
+    disk = np.add.outer((np.arange(15) - 7) ** 2, (np.arange(15) - 7) ** 2) < 30
+    model = CentralityComparisons(n_comparisons=5).fit([disk])
+    before = model.transform([disk])
+    with pytest.raises(InputError, match=r"changed since fit \(comparisons of closeness, 5 of them.*now degree"):
+        model.set_params(centrality="degree").transform([disk])  # features of closeness, silently
+    with pytest.raises(InputError, match="`orientation` must be one of"):
+        model.set_params(centrality="closeness", orientation="bogus").transform([disk])  # ran as "image"
+    with pytest.raises(InputError, match="extent 2.0; now closeness, 5, extent 3.0"):
+        model.set_params(orientation="image", extent=3.0).transform([disk])
+    np.testing.assert_array_equal(model.set_params(extent=2.0).transform([disk]), before)
+
+
 def test_cache_inputs_found_by_fuzzing_get_named_errors(tmp_path):
     import pytest
 

@@ -236,19 +236,25 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         self.fill_holes = fill_holes
         self.seed = seed
 
-    def fit(self, X, y=None):
-        """Draw the comparisons (the images are only checked)."""
+    def _drawn_with(self) -> tuple:
+        """The checked parameters that the drawn comparisons depend on."""
         names = resolve_centralities(self.centrality)
         n = check_int(self.n_comparisons, name="n_comparisons", low=1)
         # (at most 1e6 radii: beyond, pixel positions leave int64)
         extent = check_float(self.extent, name="extent", low=0.0, low_open=True, high=1e6)
         check_choice(self.reference, ("centroid", "graph-centre"), name="reference")
         check_choice(self.orientation, ("image", "principal"), name="orientation")
+        return names, n, extent
+
+    def fit(self, X, y=None):
+        """Draw the comparisons (the images are only checked)."""
+        names, n, extent = self._drawn_with()
         self._masks(X)
         rng = _random_state(self)
         self.centralities_ = names
         self.offsets_ = rng.uniform(-extent, extent, size=(n, 2, 2))
         self.which_ = rng.integers(0, len(names), size=n)
+        self._drawn = (names, n, extent)
         return self
 
     def transform(self, X) -> np.ndarray:
@@ -256,6 +262,15 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "offsets_")
+        # parameters set after fit are checked, and those the drawn comparisons depend on must
+        # be the fitted ones (a new centrality was ignored, a bad orientation ran as "image")
+        drawn, fitted = self._drawn_with(), self._drawn
+        if drawn != fitted:
+            raise InputError(
+                "`centrality`, `n_comparisons` or `extent` changed since fit (comparisons of "
+                f"{', '.join(fitted[0])}, {fitted[1]} of them, extent {fitted[2]}; now {', '.join(drawn[0])}, "
+                f"{drawn[1]}, extent {drawn[2]}); call fit again."
+            )
         masks = self._masks(X)
         names = list(self.centralities_)
         if self.reference == "graph-centre" and "eccentricity" not in names:

@@ -105,7 +105,9 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         ``"minmax"`` maps the smallest value to 0 and the largest to 1 (the range
         MATLAB's ``hist(v, 40)`` bins over). On Kimia-99 "max" is closer to the thesis'
         Table 4.1 (all 0.98, degree 0.83 noiseless; "minmax": 0.94 and 0.57). A shape
-        whose values are all equal falls in the first bin.
+        whose values are all equal falls in the last bin under "max" (each value is the
+        largest) and in the first under "minmax"; values that are all zero fall in the
+        first bin under both.
     progress : bool, default=False
         Show a progress bar on stderr while centralities are computed.
     weights : bool, default=False
