@@ -130,6 +130,17 @@ def test_a_similarity_match_of_a_tiny_copy_raises_no_overflow_warning():
     assert result.transform.scale == pytest.approx(1e-308)
 
 
+@pytest.mark.parametrize("pair", [(1e-310, 1.0), (1e-300, 1e300)])
+def test_a_scale_beyond_float64_is_a_named_error_without_a_warning_first(pair):
+    import warnings
+
+    points = np.random.default_rng(0).random((12, 2))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # ldexp's overflow warning came before the error
+        with pytest.raises(InputError, match="differ in scale or position beyond float64"):
+            match(points * pair[0], points * pair[1])
+
+
 @pytest.mark.parametrize(
     ("method", "options", "error"),
     [

@@ -1,5 +1,7 @@
 """Shape retrieval: outline profiles, pairwise distances, re-ranking and the field's scores."""
 
+import warnings
+
 import numpy as np
 import pytest
 from scipy import ndimage, sparse
@@ -171,6 +173,12 @@ def test_rerank_of_huge_finite_distances_stays_finite():
     r = diffusion_rerank(d, n_neighbors=2, bandwidth=1)
     assert np.all(np.isfinite(r))
     assert retrieval_counts(r, np.repeat([0, 1], 4), k=3).sum() == 24
+    # a factor d / s_i beyond float64 (1e300 / 1e-300) is an affinity of 0, without a warning
+    d = np.array([[0, 1e-300, 1e300], [1e-300, 0, 1e300], [1e300, 1e300, 0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        r = diffusion_rerank(d, n_neighbors=2, bandwidth=1)
+    assert np.all(np.isfinite(r)) and r[0, 1] < r[0, 2]
 
 
 _D4 = np.abs(np.subtract.outer([0.0, 1, 10, 11], [0.0, 1, 10, 11]))

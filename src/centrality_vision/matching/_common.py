@@ -82,8 +82,8 @@ def similarity_to_units(rotation, translation, scale, moving: Normalised, fixed:
     must fit in float64.
     """
     rotation = np.asarray(rotation, dtype=float)
-    s = float(np.ldexp(scale, fixed.exponent - moving.exponent))
-    with np.errstate(over="ignore", invalid="ignore"):
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):  # checked below, with a named error
+        s = float(np.ldexp(scale, fixed.exponent - moving.exponent))
         inner = (
             np.ldexp(np.asarray(translation, dtype=float), fixed.second)
             - np.ldexp(scale * (rotation @ moving.centre), fixed.second - moving.second)

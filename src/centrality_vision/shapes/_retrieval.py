@@ -561,8 +561,11 @@ def diffusion_rerank(distances, /, *, n_neighbors: int = 8, bandwidth: int = 10,
     for i in np.flatnonzero(scale == 0):
         positive = d[i][d[i] > 0]
         scale[i] = positive.min() if positive.size else 1.0
-    # (d / s_i) * (d / s_j) rather than d**2 / (s_i s_j): no overflow to inf / inf = NaN
-    affinity = np.exp(-(d / scale[:, None]) * (d / scale[None, :]))
+    # (d / s_i) * (d / s_j) rather than d**2 / (s_i s_j): no inf / inf = NaN. A factor may
+    # still overflow (1e300 / 1e-300); it is then inf, whose affinity exp(-inf) is the right 0
+    # (d = 0 gives 0 in both factors, as every scale is positive: never 0 * inf)
+    with np.errstate(over="ignore"):
+        affinity = np.exp(-(d / scale[:, None]) * (d / scale[None, :]))
     keep = np.argsort(-affinity, axis=1, kind="stable")[:, :n_neighbors]
     weights = np.take_along_axis(affinity, keep, axis=1)
     weights /= weights.sum(axis=1, keepdims=True)  # each row keeps itself, affinity 1
