@@ -538,3 +538,41 @@ def test_save_figure_expands_the_home_folder(tmp_path, monkeypatch):
     written = save_figure(fig, "~/figs/a.png", dpi=20)
     assert written == tmp_path / "home" / "figs" / "a.png" and written.is_file()
     assert not (tmp_path / "~").exists()  # a folder literally named "~" was made
+
+
+def test_inputs_found_by_fuzzing_are_drawn_without_warnings_or_named(tmp_path):
+    import io
+    import warnings
+
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.plotting import plot_alignment_errors, plot_registration_snapshots
+
+    points = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    graph = sparse.csr_array([[0, 1, 1], [1, 0, 0], [1, 0, 0]])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # matplotlib's overflow warnings, at the limits drawn
+        for ax in (
+            plot_graph(points, graph, [1e-200, 1e200, 0], norm="log"),
+            plot_alignment_errors({"a": [1e200, 1e-200, 0.0]}),
+            plot_centrality_image([1.0, 2.0], [0, 1], (2, 2), background=1e307),
+        ):
+            ax.figure.savefig(io.BytesIO(), format="png")
+    cases = [
+        # overflow in matplotlib's ticks, or its "Invalid vmin or vmax"
+        (lambda: plot_graph(points, graph, [1e-300, 1e300, 0], norm="log"), InputError, r"'log' draws positive"),
+        (lambda: plot_graph(points, graph, [5e-324, 1e-323, 0], norm="log"), InputError, r"'log' draws positive"),
+        (lambda: plot_alignment_errors({"a": [1e307, 1.0]}), InputError, r"on a log axis must be 0 or within"),
+        (lambda: plot_alignment_errors({"a": [1e-320, 5e-324]}), InputError, r"on a log axis"),  # a ylim of 0
+        (lambda: plot_centrality_image([1.0], [0], (1, 2), background=1e308), InputError, "`background` must be NaN"),
+        (lambda: plot_alignment_errors({"a": sparse.csr_array(np.ones((1, 3)))}), TypeError, r"`errors\['a'\]`"),
+        (lambda: plot_alignment_errors({"a": [[1.0], [2.0, 3.0]]}), InputError, r"`errors\['a'\]` must be an array"),
+        (lambda: plot_registration_snapshots(points, {"CPD": {0: points}}, fig="x"), TypeError, "`fig` must be"),
+    ]
+    for call, error, message in cases:
+        with pytest.raises(error, match=message):
+            call()
+    plot_alignment_errors({"a": [1e307, 1.0]}, log=False)  # a linear axis draws them
+    blocker = tmp_path / "afile"
+    blocker.write_text("")
+    with pytest.raises(InputError, match="is a file"):  # mkdir's FileExistsError
+        save_figure(plt.figure(), blocker / "sub" / "fig.png")

@@ -29,6 +29,8 @@ __all__ = [
 ]
 
 _NORMS = ("linear", "log", "power")
+#: Positive values a logarithmic colour scale or axis can draw (matplotlib overflows beyond).
+_LOG_RANGE = (1e-200, 1e200)
 
 
 def _norm(norm, values: np.ndarray):
@@ -36,7 +38,8 @@ def _norm(norm, values: np.ndarray):
 
     Centralities such as betweenness span orders of magnitude: on a linear scale all but
     the largest few values share the darkest colour. "log" spaces decades evenly (values
-    at or below 0 are drawn in the lowest colour, as the smallest positive value);
+    at or below 0 are drawn in the lowest colour, as the smallest positive value; the
+    positive values must lie within [1e-200, 1e200], where matplotlib can draw the scale);
     "power" takes the square root, which keeps zeros.
     """
     from matplotlib import colors
@@ -49,6 +52,13 @@ def _norm(norm, values: np.ndarray):
         positive = values[values > 0]
         if positive.size == 0:
             raise InputError("`norm` 'log' needs at least one value > 0; got none (use 'power' or 'linear').")
+        # matplotlib's log colour bar overflows in its ticks beyond about 1e250 and refuses
+        # limits near 1e-300 ("Invalid vmin or vmax")
+        if positive.min() < _LOG_RANGE[0] or positive.max() > _LOG_RANGE[1]:
+            raise InputError(
+                f"`norm` 'log' draws positive values within [{_LOG_RANGE[0]:g}, {_LOG_RANGE[1]:g}]; got "
+                f"[{float(positive.min()):g}, {float(positive.max()):g}] (rescale them, or use 'power' or 'linear')."
+            )
         return colors.LogNorm(vmin=float(positive.min()), vmax=float(values.max()), clip=True)
     if norm == "power":
         low, high = float(values.min()), float(values.max())
@@ -114,7 +124,10 @@ def _as_values(values, *, n: int, other: str, name: str = "values") -> np.ndarra
     ``name`` the argument an error names."""
     if sparse.issparse(values):
         raise TypeError(f"`{name}` must be a dense array of shape (n,); got {_describe(values)}.")
-    arr = np.asarray(values)
+    try:
+        arr = np.asarray(values)
+    except (TypeError, ValueError):  # ragged nested lists: numpy's "inhomogeneous shape"
+        raise InputError(f"`{name}` must be an array of shape ({n},); got {_describe(values)}.") from None
     if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
         raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
     if np.iscomplexobj(arr):
@@ -411,8 +424,8 @@ def plot_centrality_image(
     values = _as_values(values, n=nodes.size, other="nodes")
     if isinstance(background, bool) or not isinstance(background, (int, float, np.integer, np.floating)):
         raise TypeError(f"`background` must be a real number (NaN for blank); got {_describe(background)}.")
-    if np.isinf(background):
-        raise InputError(f"`background` must be finite or NaN; got {background!r}.")
+    if np.isinf(background) or abs(background) > _MAX_VALUE:  # (the colour bar's range overflowed)
+        raise InputError(f"`background` must be NaN or within +-{_MAX_VALUE:g}; got {background!r}.")
     if ax is not None:
         _check_ax(ax, three_d=False, why="for an image")
 
@@ -490,6 +503,11 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
         raise InputError(
             f"`path` must end in a format suffix ({', '.join('.' + f for f in sorted(formats))}); got {str(path)!r}."
         )
+    for folder in (path.parent, *path.parent.parents):
+        if folder.exists():
+            if not folder.is_dir():  # (mkdir's FileExistsError)
+                raise InputError(f"`path` must be in a folder; got {str(path)!r}, whose {str(folder)!r} is a file.")
+            break
     path.parent.mkdir(parents=True, exist_ok=True)
     from matplotlib.layout_engine import ConstrainedLayoutEngine
 
@@ -754,8 +772,11 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
     4
     """
     import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
+    if fig is not None and not isinstance(fig, Figure):  # (an AttributeError on add_subplot)
+        raise TypeError(f"`fig` must be a matplotlib Figure or None; got {_describe(fig)}.")
     fixed = _plot_points(fixed, name="fixed", n_dims=(2, 3))
     dim = fixed.shape[1]
     if not isinstance(snapshots, dict) or not snapshots:
@@ -869,7 +890,8 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
     ax : matplotlib Axes, optional
     title : str, optional
     log : bool, default=True
-        Logarithmic error axis.
+        Logarithmic error axis; its positive errors must lie within [1e-200, 1e200], where
+        matplotlib can lay it out (``log=False`` draws any finite errors).
     n_points : int, optional
         If given, ``errors`` are Frobenius norms ``|X - T(Y)|`` over ``n_points``
         points (e.g. ``estimator.history_["error"]``) and are drawn as the per-point
@@ -906,11 +928,18 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
     for k, (label, values) in enumerate(errors.items()):
         if values is None:
             raise InputError(f"`errors[{label!r}]` is None: fit with `true_moving=` to record alignment errors.")
-        if not hasattr(values, "__len__"):
+        if not hasattr(values, "__len__") or sparse.issparse(values):  # (a sparse array's len() raised)
             raise TypeError(f"`errors[{label!r}]` must be a sequence of errors per iteration; got {_describe(values)}.")
         v = _as_values(values, n=len(values), other=f"errors[{label!r}]", name=f"errors[{label!r}]") * scale
         if np.any(v < 0):
             raise InputError(f"`errors[{label!r}]` must be >= 0 (errors); got a minimum of {float(v.min()):.3g}.")
+        positive = v[v > 0]
+        if log and positive.size and (positive.min() < _LOG_RANGE[0] or positive.max() > _LOG_RANGE[1]):
+            # (matplotlib's log axis overflowed, or its lower limit underflowed to 0)
+            raise InputError(
+                f"`errors[{label!r}]` on a log axis must be 0 or within [{_LOG_RANGE[0]:g}, {_LOG_RANGE[1]:g}]; got "
+                f"[{float(positive.min()):g}, {float(positive.max()):g}] (rescale them, or pass log=False)."
+            )
         top = max(top, float(v.max(initial=0.0)))
         low = min(low, float(v[v > 0].min(initial=np.inf)))
         every = max(1, v.size // 8)
