@@ -422,7 +422,11 @@ def check_float(
     """Check that ``value`` is a finite real number in the given interval and return it."""
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"`{name}` must be a real number; got {value!r} of type {type(value).__name__}.")
-    value = float(value)
+    shown = None
+    try:
+        value = float(value)
+    except OverflowError:  # a Python int beyond float64 (10**400): not finite
+        shown, value = f"an int beyond float64 ({_describe(value)})", math.inf if value > 0 else -math.inf
     bad = not np.isfinite(value)
     if low is not None:
         bad |= value <= low if low_open else value < low
@@ -433,5 +437,5 @@ def check_float(
         rb = ")" if high_open else "]"
         lo = "-inf" if low is None else low
         hi = "inf" if high is None else high
-        raise InputError(f"`{name}` must be a finite number in {lb}{lo}, {hi}{rb}; got {value!r}.")
+        raise InputError(f"`{name}` must be a finite number in {lb}{lo}, {hi}{rb}; got {shown or repr(value)}.")
     return value

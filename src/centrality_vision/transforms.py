@@ -121,11 +121,13 @@ class SimilarityTransform(_ArrayEquality):
         scale = check_float(self.scale, name="scale", low=0.0, low_open=True)
         if not np.all(np.isfinite(rotation)) or not np.all(np.isfinite(translation)):
             raise InputError("`rotation` and `translation` must be finite; got NaN or inf.")
-        off = float(np.max(np.abs(rotation @ rotation.T - np.eye(dim))))
-        if off > 1e-8 or np.linalg.det(rotation) < 0:
+        with np.errstate(all="ignore"):  # a huge matrix overflows here: inf is then the named error
+            off = float(np.max(np.abs(rotation @ rotation.T - np.eye(dim))))
+            det = float(np.linalg.det(rotation))
+        if not off <= 1e-8 or det < 0:
             raise InputError(
                 "`rotation` must be a proper rotation (orthogonal, det +1); got max |R R^T - I| "
-                f"{off:.3g} and det {np.linalg.det(rotation):.6g}."
+                f"{off:.3g} and det {det:.6g}."
             )
         rotation.setflags(write=False)
         translation.setflags(write=False)

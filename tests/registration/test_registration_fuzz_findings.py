@@ -203,3 +203,57 @@ def test_auto_w_does_not_depend_on_the_sets_orientation(scale):
     np.testing.assert_allclose(estimates, estimates[0], rtol=1e-6)
     if not scale:
         assert abs(estimates[0] - 0.2) < 0.08
+
+
+def test_a_second_fuzz_round_of_transforms_icp_and_landmarks(pair):
+    from centrality_vision.registration import ICP
+    from centrality_vision.transforms import NonRigidTransform
+
+    y, x = pair
+    cases = [
+        # a Python int beyond float64 in any float parameter: OverflowError
+        (
+            lambda: SimilarityTransform(np.eye(2), [0, 0], 10**400),
+            InputError,
+            "`scale` must be a finite.*beyond float64",
+        ),
+        (lambda: NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), 10**400), InputError, "`beta` must be"),
+        (lambda: ICP(max_distance=10**400).fit(y, x), InputError, "`ICP.max_distance` must be"),
+        (lambda: RigidCPD(sigma2=-(10**400)).fit(y, x), InputError, "`RigidCPD.sigma2` must be"),
+        # ICP: a start 1e154 radii away (cKDTree's "no neighbour" index was used: IndexError)
+        (lambda: ICP(init=RigidTransform(np.eye(2), [1e154, 0.0])).fit(y, x), InputError, "`ICP.init` must bring"),
+        # a trim that leaves too few pairs was blamed on max_distance=None
+        (lambda: ICP(trim=0.95).fit(y, x), InputError, r"`ICP.trim`=0.95 leaves 2 of 30 pairs"),
+        # a bool beside an int was cast to the index 1
+        (lambda: RigidCPD().fit(y, x, landmarks=[(True, 0)]), TypeError, "got True of type bool"),
+        # unnormalised points too close together: the start pose came back "converged"
+        (lambda: RigidCPD(normalize=False).fit(y * 1e-150, x * 1e-150), InputError, "must span at least 1e-135"),
+    ]
+    for call, error, message in cases:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # a huge non-rotation's overflow warnings came first
+            with pytest.raises(error, match=message):
+                call()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match=r"proper rotation.*got max \|R R\^T - I\| inf"):
+            SimilarityTransform(np.eye(2) * 1e200, [0.0, 0.0], 2.0)
+    fit = RigidCPD(normalize=False, tol=1e-12).fit(y * 1e-130, x * 1e-130)  # still within reach
+    assert fit.converged_ and np.abs(fit.moving_transformed_ / 1e-130 - x).max() < 1e-12
+    assert ICP(trim=0.5).fit(y, x).converged_
+
+
+def test_two_matched_points_in_3d_are_a_collapse_not_a_registration():
+    # w='auto' in a wrong basin rose to its bound and sigma2 fell onto 2 of 40 points: the
+    # rotation about their axis was arbitrary (another for the same sets scaled by 3), and the
+    # fit said converged; the matched-mass test asked for 0.25 (1 - w) min(M, N) = 1 point
+    from centrality_vision.exceptions import CollapseWarning
+    from centrality_vision.transforms import random_rotation
+
+    rng = np.random.default_rng(2)
+    rng.random((40, 2)), rng.normal(size=(2, 2))
+    y = rng.random((40, 3))
+    x = 1.4 * y @ random_rotation(3, seed=3).T + 0.3
+    with pytest.warns(CollapseWarning, match=r"only 2 of 40 fixed points were matched.*3 in 3D fix a pose"):
+        fit = GPD(RigidCPD(tol=1e-12, max_iter=500, w="auto"), graph="knn").fit(y, x)
+    assert not fit.converged_

@@ -63,6 +63,9 @@ __all__ = ["RigidCPD", "AffineCPD", "NonRigidCPD", "IterationInfo", "Snapshots",
 
 # sigma2 below this fraction of the data's spread means the sets coincide: stop, converged.
 _SIGMA2_FLOOR = 1e-14
+#: The smallest extent of unnormalised data: sigma2, of the order of its square, must stay
+#: above the 1e-280 that keeps 1 / (2 sigma2) finite.
+_UNNORMALIZED_MIN_SPAN = 1e-135
 # The common scale factor must keep sigma2 = scale^2 sigma2_normalised representable; the
 # normalised sigma2 can reach about 1e12 (a fixed set up to _FRAME_RATIO times the moving set's
 # radius), hence 1e145 rather than 1e154.
@@ -75,6 +78,8 @@ _FRAME_RATIO = 1e6
 _COLLAPSE_RADIUS = 0.05
 # ... or when the matched mass Np ends below this fraction of the (1 - w) min(M, N) expected.
 _COLLAPSE_MATCHED = 0.25
+# ... or below this fraction of D matched points (D fix a pose in D dimensions).
+_COLLAPSE_MATCHED_DIMS = 0.75
 # accelerate: an extrapolated sigma2 stays within this factor of the plain step's.
 _SIGMA_JUMP = 0.25
 # A given sigma2 may be at most this many times the sets' own spread (beyond, every posterior
@@ -192,6 +197,26 @@ def alignment_error(true_moving, moving_transformed) -> float:
 
 
 # --------------------------------------------------------------------- the normalised frame
+def _start_within_reach(frame, init, moving_n: np.ndarray, name: str):
+    """``init`` in the normalised frame, checked to keep the moving set within reach.
+
+    The normalised frame has unit radius: a start that puts the moving set more than
+    ``_SCALE_RANGE[1]`` radii away would overflow sigma2 and the M-step's moments (CPD), or
+    every nearest-neighbour distance (ICP)."""
+    try:
+        with np.errstate(all="ignore"):
+            start = frame.linear_in(init)
+            reach = float(np.max(np.abs(start(moving_n)))) if moving_n.size else 0.0
+    except InputError:  # the transform's result overflows float64
+        reach = math.inf
+    if not reach <= _SCALE_RANGE[1]:
+        raise InputError(
+            f"`{name}` must bring the moving set within {_SCALE_RANGE[1]:g} radii of the fixed set "
+            f"(the data's scale); it maps it {reach:.3g} radii away. Check its scale and translation."
+        )
+    return start
+
+
 @dataclass(frozen=True)
 class _Frame:
     """``y_n = (y - moving_centre) / scale`` and ``x_n = (x - fixed_centre) / scale``."""
@@ -230,6 +255,14 @@ class _Frame:
                     f"With `normalize=False` the coordinates of `moving` and `fixed` must be at most "
                     f"{_SCALE_RANGE[1]:g} in absolute value (their squares must fit in float64); got "
                     f"{max(span, largest):.3g}. Use normalize=True."
+                )
+            if 0.0 < span < _UNNORMALIZED_MIN_SPAN:
+                # (sigma2 then falls below the floor kept for 1 / (2 sigma2): the fit stopped at
+                # the start pose as if the sets coincided, "converged")
+                raise InputError(
+                    f"With `normalize=False` the points of `moving` and `fixed` must span at least "
+                    f"{_UNNORMALIZED_MIN_SPAN:g} (their squared distances must stay normal floats); got "
+                    f"{span:.3g}. Use normalize=True."
                 )
         mu_x, xc = centred(fixed)
         if not normalize:
@@ -323,7 +356,8 @@ def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
     if isinstance(landmarks, (str, bytes)):
         raise TypeError(f"`landmarks` must be {shape}; got text {landmarks!r}.")
     try:
-        arr = np.asarray(landmarks)
+        # nested lists as objects: a bool beside ints is seen as a bool, not cast to the int 1
+        arr = landmarks if isinstance(landmarks, np.ndarray) else np.asarray(landmarks, dtype=object)
     except (TypeError, ValueError):
         raise InputError(f"`landmarks` must be {shape}; got {landmarks!r}.") from None
     if arr.size == 0:
@@ -583,20 +617,7 @@ class _CPD(BaseEstimator):
         name = f"{type(self).__name__}.init"
         if linear.shape != (dim, dim):
             raise InputError(f"`{name}` must be a {dim}D transform; got a {linear.shape[0]}D one.")
-        try:
-            with np.errstate(all="ignore"):
-                start = frame.linear_in(init)
-                reach = float(np.max(np.abs(start(moving_n)))) if moving_n.size else 0.0
-        except InputError:  # the transform's result overflows float64
-            reach = math.inf
-        # the normalised frame has unit radius: a start that puts the moving set more than
-        # _SCALE_RANGE[1] radii away would overflow sigma2 and the M-step's moments
-        if not reach <= _SCALE_RANGE[1]:
-            raise InputError(
-                f"`{name}` must bring the moving set within {_SCALE_RANGE[1]:g} radii of the fixed set "
-                f"(the data's scale); it maps it {reach:.3g} radii away. Check its scale and translation."
-            )
-        return start
+        return _start_within_reach(frame, init, moving_n, name)
 
     def _run(self, moving, moving_n, fixed, frame, true_n, start, landmarks, prior):
         n_fixed, n_dims = fixed.shape
@@ -852,11 +873,14 @@ class _CPD(BaseEstimator):
                 f"the result is not a registration. {advice}"
             )
         expected = (1.0 - w) * min(moving_n.shape[0], fixed.shape[0])
-        if post.n_p < _COLLAPSE_MATCHED * expected:
+        # fewer matched points than dimensions leave the pose undetermined (two points in 3D: any
+        # rotation about their axis), whatever w expects (w='auto' can rise to its bound)
+        needed = _COLLAPSE_MATCHED_DIMS * min(fixed.shape[1], moving_n.shape[0], fixed.shape[0])
+        if post.n_p < max(_COLLAPSE_MATCHED * expected, needed):
             return (
                 f"only {post.n_p:.3g} of {fixed.shape[0]} fixed points were matched at the end (the rest taken as "
-                f"outliers; about {expected:.3g} expected with w={w:.3g}); the result is not a registration. "
-                f"{advice}"
+                f"outliers; about {expected:.3g} expected with w={w:.3g}, and {fixed.shape[1]} in {fixed.shape[1]}D "
+                f"fix a pose); the result is not a registration. {advice}"
             )
         return None
 

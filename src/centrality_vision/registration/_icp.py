@@ -20,7 +20,7 @@ from .._parallel import get_num_threads
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import ConvergenceWarning, InputError
 from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity
-from ._cpd import IterationInfo, _Frame
+from ._cpd import IterationInfo, _Frame, _start_within_reach
 
 __all__ = ["ICP", "estimate_normals"]
 
@@ -216,7 +216,7 @@ class ICP(BaseEstimator):
                 raise InputError(f"`ICP.init` must be a {dim}D transform; got a {self.init.rotation.shape[0]}D one.")
             if not self.scale and self.init.scale != 1.0:
                 raise InputError(f"`ICP.init` must have scale 1 when scale=False; got {self.init.scale!r}.")
-            transform = frame.linear_in(self.init)
+            transform = _start_within_reach(frame, self.init, moving_n, "ICP.init")  # (an IndexError beyond)
             if not self.scale:
                 transform = RigidTransform(transform.rotation, transform.translation)
         moving_t = transform(moving_n)
@@ -238,6 +238,12 @@ class ICP(BaseEstimator):
                 residual2 = dist * dist
             if np.count_nonzero(keep) < dim + 1:
                 if last is None:
+                    kept_by_distance = np.count_nonzero(self._kept(dist, max_d, trim=False))
+                    if kept_by_distance >= dim + 1:  # the trimming took the rest
+                        raise InputError(
+                            f"`ICP.trim`={self.trim} leaves {int(np.count_nonzero(keep))} of {dist.shape[0]} pairs "
+                            f"(at least {dim + 1} are needed); lower it."
+                        )
                     raise InputError(
                         f"ICP found only {int(np.count_nonzero(keep))} pairs within `max_distance`="
                         f"{self.max_distance} at the start (at least {dim + 1} are needed); start closer "
@@ -317,9 +323,9 @@ class ICP(BaseEstimator):
         self.fixed_to_moving_ = cKDTree(moving_t).query(fixed_n, k=1, workers=get_num_threads())[1]
         return self
 
-    def _kept(self, dist: np.ndarray, max_d: float | None) -> np.ndarray:
+    def _kept(self, dist: np.ndarray, max_d: float | None, *, trim: bool = True) -> np.ndarray:
         keep = np.ones(dist.shape[0], dtype=bool) if max_d is None else dist <= max_d
-        if self.trim > 0:
+        if trim and self.trim > 0:
             n_drop = int(math.floor(self.trim * dist.shape[0]))
             if n_drop > 0:
                 worst = np.argsort(dist, kind="stable")[dist.shape[0] - n_drop :]
