@@ -37,7 +37,7 @@ FUZZ = settings(
 
 SCALES = [1e-300, 1e-150, 1e-8, 1.0, 1e8, 1e150, 1e300]
 OFFSETS = [0.0, 1.0, 1e8, 1e15]
-_NAMED = re.compile(r"`[A-Za-z_][\w\[\]. ]*`")
+_NAMED = re.compile(r"`[A-Za-z_][\w\[\]. ']*`")  # a name, an attribute or an item (`errors['a']`)
 
 
 @st.composite

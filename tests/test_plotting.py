@@ -561,7 +561,7 @@ def test_inputs_found_by_fuzzing_are_drawn_without_warnings_or_named(tmp_path):
         # overflow in matplotlib's ticks, or its "Invalid vmin or vmax"
         (lambda: plot_graph(points, graph, [1e-300, 1e300, 0], norm="log"), InputError, r"'log' draws positive"),
         (lambda: plot_graph(points, graph, [5e-324, 1e-323, 0], norm="log"), InputError, r"'log' draws positive"),
-        (lambda: plot_alignment_errors({"a": [1e307, 1.0]}), InputError, r"on a log axis must be 0 or within"),
+        (lambda: plot_alignment_errors({"a": [1e307, 1.0]}), InputError, r"must be 0 or within .* on a log axis"),
         (lambda: plot_alignment_errors({"a": [1e-320, 5e-324]}), InputError, r"on a log axis"),  # a ylim of 0
         (lambda: plot_centrality_image([1.0], [0], (1, 2), background=1e308), InputError, "`background` must be NaN"),
         (lambda: plot_alignment_errors({"a": sparse.csr_array(np.ones((1, 3)))}), TypeError, r"`errors\['a'\]`"),

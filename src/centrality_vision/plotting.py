@@ -57,7 +57,7 @@ def _norm(norm, values: np.ndarray):
         if positive.min() < _LOG_RANGE[0] or positive.max() > _LOG_RANGE[1]:
             raise InputError(
                 f"`norm` 'log' draws positive values within [{_LOG_RANGE[0]:g}, {_LOG_RANGE[1]:g}]; got "
-                f"[{float(positive.min()):g}, {float(positive.max()):g}] (rescale them, or use 'power' or 'linear')."
+                f"[{float(positive.min())!r}, {float(positive.max())!r}] (rescale them, or use 'power' or 'linear')."
             )
         return colors.LogNorm(vmin=float(positive.min()), vmax=float(values.max()), clip=True)
     if norm == "power":
@@ -937,8 +937,8 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
         if log and positive.size and (positive.min() < _LOG_RANGE[0] or positive.max() > _LOG_RANGE[1]):
             # (matplotlib's log axis overflowed, or its lower limit underflowed to 0)
             raise InputError(
-                f"`errors[{label!r}]` on a log axis must be 0 or within [{_LOG_RANGE[0]:g}, {_LOG_RANGE[1]:g}]; got "
-                f"[{float(positive.min()):g}, {float(positive.max()):g}] (rescale them, or pass log=False)."
+                f"`errors[{label!r}]` must be 0 or within [{_LOG_RANGE[0]:g}, {_LOG_RANGE[1]:g}] on a log axis; got "
+                f"[{float(positive.min())!r}, {float(positive.max())!r}] (rescale them, or pass log=False)."
             )
         top = max(top, float(v.max(initial=0.0)))
         low = min(low, float(v[v > 0].min(initial=np.inf)))
