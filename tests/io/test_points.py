@@ -320,6 +320,8 @@ def test_columns_by_index_and_case_insensitive_names(tmp_path):
         read_points(headerless, columns=["x", "y"])
     with pytest.raises(InputError, match="index 4 is out of range"):
         read_points(headerless, columns=[0, 4])
+    with pytest.raises(InputError, match="index -1 is out of range"):  # was "names '-1', which is not a column"
+        read_points(path, columns="-1,0")
     with pytest.raises(InputError, match="'w', which is not a column"):
         read_points(path, columns=["x", "w"])
     with pytest.raises(InputError, match="must not repeat"):

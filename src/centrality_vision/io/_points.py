@@ -201,7 +201,8 @@ def _check_columns(columns):
         if isinstance(item, (int, np.integer)) and not isinstance(item, bool):
             out.append(int(item))
         elif isinstance(item, str) and item:
-            out.append(int(item) if re.fullmatch(r"\d+", item) else item)
+            # (a header names no column "-1": a cell that is a number makes its line data)
+            out.append(int(item) if re.fullmatch(r"-?\d+", item) else item)
         elif isinstance(item, str):
             raise InputError(f"`columns` must not hold an empty name; got {columns!r}.")
         else:
