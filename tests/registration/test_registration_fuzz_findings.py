@@ -257,3 +257,24 @@ def test_two_matched_points_in_3d_are_a_collapse_not_a_registration():
     with pytest.warns(CollapseWarning, match=r"only 2 of 40 fixed points were matched.*3 in 3D fix a pose"):
         fit = GPD(RigidCPD(tol=1e-12, max_iter=500, w="auto"), graph="knn").fit(y, x)
     assert not fit.converged_
+
+
+def test_point_to_plane_icp_on_a_flat_or_straight_fixed_set_says_the_pose_is_not_fitted():
+    # a shifted plane came back "converged" 0.05 off, without a word: the normals leave the
+    # motions within the plane free, and the minimum-norm step does not move along them
+    from centrality_vision.exceptions import ConvergenceWarning
+    from centrality_vision.registration import ICP
+
+    rng = np.random.default_rng(0)
+    plane = np.c_[rng.random((200, 2)), np.zeros(200)]
+    with pytest.warns(ConvergenceWarning, match="leave 3 of the 6 rigid motions free"):
+        ICP(metric="point_to_plane").fit(plane + [0.05, 0.02, 0.01], plane)
+    line = np.c_[np.linspace(0, 1, 50), np.zeros(50)]
+    with pytest.warns(ConvergenceWarning, match="of the 3 rigid motions free"):
+        ICP(metric="point_to_plane").fit(line + [0.05, 0.01], line)
+    curved = np.c_[rng.random((200, 2)), np.zeros(200)]
+    curved[:, 2] = np.sin(3 * curved[:, 0]) * np.cos(2 * curved[:, 1])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # a curved surface constrains every motion
+        fit = ICP(metric="point_to_plane").fit(curved + [0.05, 0.02, 0.01], curved)
+    assert fit.converged_ and np.abs(fit.moving_transformed_ - curved).max() < 1e-9

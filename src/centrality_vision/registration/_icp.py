@@ -64,8 +64,15 @@ def _small_rotation(omega: np.ndarray, n_dims: int) -> np.ndarray:
     return np.eye(3) + math.sin(angle) * k + (1 - math.cos(angle)) * k @ k
 
 
+#: A motion whose singular value in the point-to-plane system is below this fraction of the
+#: largest moves no point off its plane: the fixed set leaves it free (a plane, a line).
+_FREE_MOTION = 1e-8
+
+
 def _point_to_plane_step(current: np.ndarray, targets: np.ndarray, normals: np.ndarray):
-    """``(R, t)`` minimising ``sum (n_i . (R p_i + t - q_i))^2`` linearised in the rotation."""
+    """``(R, t, free)`` minimising ``sum (n_i . (R p_i + t - q_i))^2`` linearised in the rotation;
+    ``free`` counts the motions the normals do not constrain (the minimum-norm solution leaves
+    them at zero)."""
     n_dims = current.shape[1]
     centre = current.mean(axis=0)
     p = current - centre  # rotate about the centroid: better conditioned
@@ -75,11 +82,12 @@ def _point_to_plane_step(current: np.ndarray, targets: np.ndarray, normals: np.n
         rot_part = np.cross(p, normals)
     a = np.hstack([rot_part, normals])
     b = np.einsum("ij,ij->i", targets - current, normals)
-    solution = np.linalg.lstsq(a, b, rcond=None)[0]
+    solution, _, _, singular = np.linalg.lstsq(a, b, rcond=None)
+    free = a.shape[1] - int(np.count_nonzero(singular > _FREE_MOTION * singular.max(initial=0.0)))
     n_rot = 1 if n_dims == 2 else 3
     rotation = _small_rotation(solution[:n_rot], n_dims)
     translation = solution[n_rot:] + centre - rotation @ centre
-    return rotation, translation
+    return rotation, translation, free
 
 
 class ICP(BaseEstimator):
@@ -111,6 +119,8 @@ class ICP(BaseEstimator):
         Fraction of the pairs with the largest distances ignored at each iteration; set it
         to about the share of moving points that have no partner (overlap 80% -> 0.2).
     metric : {'point_to_point', 'point_to_plane'}, default='point_to_point'
+        With a flat (3D) or straight (2D) fixed set, point-to-plane leaves the motions along it
+        free: a :class:`~centrality_vision.exceptions.ConvergenceWarning` then says so.
     k_normals : int, default=10
         Neighbours for the normals of ``metric='point_to_plane'``.
     init : RigidTransform or SimilarityTransform, optional
@@ -228,6 +238,7 @@ class ICP(BaseEstimator):
         scale2 = frame.scale**2
         keep = np.ones(moving_n.shape[0], dtype=bool)
         last = None  # the previous iterate: (transform, moving_t, partner, keep)
+        free = 0  # motions the last point-to-plane step left unconstrained
         while True:
             dist, partner = tree.query(moving_t, k=1, workers=get_num_threads())
             keep = self._kept(dist, max_d)
@@ -285,7 +296,7 @@ class ICP(BaseEstimator):
             previous = objective
             last = (transform, moving_t, partner, keep)
             if self.metric == "point_to_plane":
-                rotation, translation = _point_to_plane_step(
+                rotation, translation, free = _point_to_plane_step(
                     moving_t[keep], fixed_n[partner[keep]], normals[partner[keep]]
                 )
                 transform = RigidTransform(
@@ -302,6 +313,16 @@ class ICP(BaseEstimator):
                 )
             moving_t = transform(moving_n)
             iteration += 1
+        if free:
+            # (a planar or linear fixed set: the pose slid freely along it and came back
+            # "converged" at the start's position, 0.05 off on a shifted plane)
+            warnings.warn(
+                f"ICP: the fixed set's normals leave {free} of the {3 if dim == 2 else 6} rigid motions free (a "
+                "flat or straight fixed set): the pose along them is the start's, not a fit. Use "
+                "metric='point_to_point'.",
+                ConvergenceWarning,
+                stacklevel=2,
+            )
         if stopped is not None:
             warnings.warn(f"ICP: {stopped}", ConvergenceWarning, stacklevel=2)
         elif not converged and iteration >= self.max_iter and self.max_iter > 0 and self.tol > 0:
