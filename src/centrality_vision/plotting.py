@@ -941,7 +941,7 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
                 f"[{float(positive.min())!r}, {float(positive.max())!r}] (rescale them, or pass log=False)."
             )
         top = max(top, float(v.max(initial=0.0)))
-        low = min(low, float(v[v > 0].min(initial=np.inf)))
+        low = min(low, float(positive.min(initial=np.inf)))
         every = max(1, v.size // 8)
         ax.plot(
             np.arange(v.size),
