@@ -64,6 +64,47 @@ def test_nonrigid_field_by_hand():
     np.testing.assert_allclose(t(z), [[0.5 + k, 2 * k]])
 
 
+def test_nonrigid_origins_by_hand():
+    # T(z) = p + v + field(v), v = L (z - o) + t
+    linear, t, o, p = (
+        np.array([[2.0, 0.0], [0.0, 1.0]]),
+        np.array([0.5, 0.0]),
+        np.array([3.0, 1.0]),
+        np.array([-1.0, 4.0]),
+    )
+    field = NonRigidTransform(
+        [[0.0, 0.0]], [[1.0, 0.0]], beta=1.0, linear=linear, translation=t, input_origin=o, output_origin=p
+    )
+    z = np.array([[3.25, 1.0]])
+    v = np.array([[1.0, 0.0]])  # 2 * 0.25 + 0.5, 0
+    np.testing.assert_allclose(field(z), p + v + np.exp(-0.5) * np.array([[1.0, 0.0]]))
+    np.testing.assert_allclose(field.displacement(z), field(z) - z)
+
+
+@pytest.mark.parametrize("offset", [1e4, 1e8, 1e12])
+def test_a_centred_field_far_from_the_origin_is_the_field_at_the_origin_shifted(offset):
+    # only the rounding of the coordinates (a unit in the last place of the offset, times the
+    # field's slope) separates them
+    rng = np.random.default_rng(3)
+    centres = rng.random((40, 2))
+    near = NonRigidTransform(centres, 0.1 * rng.standard_normal((40, 2)), beta=0.3)
+    origin = np.array([offset, -offset])
+    far = NonRigidTransform(centres, near.coefficients, beta=0.3, input_origin=origin, output_origin=origin)
+    tol = 4 * np.spacing(offset) * (1 + np.abs(near.coefficients).sum() / near.beta)
+    np.testing.assert_allclose(far.displacement(centres + origin), near.displacement(centres), rtol=0, atol=tol)
+    np.testing.assert_allclose(far(centres + origin) - origin, near(centres), rtol=0, atol=tol)
+
+
+def test_nonrigid_origins_are_checked():
+    with pytest.raises(ValueError, match="`input_origin` must be a finite array of shape"):
+        NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0, input_origin=[np.nan, 0.0])
+    with pytest.raises(ValueError, match="`output_origin` must be a finite array of shape"):
+        NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0, output_origin=[0.0, 0.0, 0.0])
+    same = NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0, output_origin=[1.0, 2.0])
+    assert same != NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0)
+    assert same == NonRigidTransform(np.zeros((1, 2)), np.ones((1, 2)), beta=1.0, output_origin=(1.0, 2.0))
+
+
 _I2 = np.eye(2)
 
 

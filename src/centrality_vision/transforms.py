@@ -275,15 +275,22 @@ class AffineTransform(_ArrayEquality):
 class NonRigidTransform(_ArrayEquality):
     """CPD's motion-coherent displacement field after an optional affine pre-map.
 
-    ``z -> u + sum_m W[m] exp(-|u - c_m|^2 / (2 beta^2))`` with ``u = linear @ z + translation``
-    (``u = z`` when both are None). The field is defined everywhere, so it can be applied to
-    points other than the ones it was fitted on. It has no closed-form inverse.
+    ``z -> p + v + sum_m W[m] exp(-|v - c_m|^2 / (2 beta^2))`` with
+    ``v = linear @ (z - o) + translation``, where ``o`` is ``input_origin`` and ``p`` is
+    ``output_origin`` (``v = z`` and ``p = 0`` when every optional part is None). The field
+    is defined everywhere, so it can be applied to points other than the ones it was fitted
+    on. It has no closed-form inverse.
+
+    The two origins keep the field's arguments near zero: CPD fits the field on centred
+    sets, and the kernel sums cancel terms whose weights can be 1e5 times the displacement.
+    Data far from the origin (coordinates of 1e8 and a displacement of 0.1) would otherwise
+    lose the field to the rounding of ``v``.
 
     Attributes
     ----------
     control_points : ndarray of shape (M, D)
-        The kernel centres ``c_m``, in the frame of ``u`` (the fitted moving points after the
-        pre-map).
+        The kernel centres ``c_m``, in the frame of ``v`` (the fitted moving points after the
+        pre-map, less ``output_origin``).
     coefficients : ndarray of shape (M, D)
         ``W`` of the CPD paper.
     beta : float
@@ -292,6 +299,10 @@ class NonRigidTransform(_ArrayEquality):
         Linear part of the pre-map (identity when None).
     translation : ndarray of shape (D,), optional
         Translation of the pre-map (zero when None).
+    input_origin : ndarray of shape (D,), optional
+        ``o``, subtracted from the points before the pre-map (zero when None).
+    output_origin : ndarray of shape (D,), optional
+        ``p``, added to the result (zero when None).
 
     Examples
     --------
@@ -303,6 +314,14 @@ class NonRigidTransform(_ArrayEquality):
     >>> shifted = NonRigidTransform(np.zeros((1, 2)), np.array([[1.0, 0.0]]), beta=1.0, translation=[5.0, 0.0])
     >>> shifted(np.array([[-5.0, 0.0]])).round(6)
     array([[1., 0.]])
+
+    The same field about a point far from the origin, in centred form:
+
+    >>> far = NonRigidTransform(
+    ...     np.zeros((1, 2)), np.array([[1.0, 0.0]]), beta=1.0, input_origin=[1e8, 0.0], output_origin=[1e8, 0.0]
+    ... )
+    >>> far(np.array([[1e8, 0.0]])) - [1e8, 0.0]
+    array([[1., 0.]])
     """
 
     control_points: np.ndarray
@@ -310,6 +329,8 @@ class NonRigidTransform(_ArrayEquality):
     beta: float
     linear: np.ndarray | None = None
     translation: np.ndarray | None = None
+    input_origin: np.ndarray | None = None
+    output_origin: np.ndarray | None = None
 
     def __post_init__(self):
         control = _frozen(self.control_points, "control_points")
@@ -323,11 +344,14 @@ class NonRigidTransform(_ArrayEquality):
             raise InputError("`control_points` and `coefficients` must be finite; got NaN or inf.")
         beta = check_float(self.beta, name="beta", low=0.0, low_open=True)
         dim = control.shape[1]
-        for name, value, shape in (("linear", self.linear, (dim, dim)), ("translation", self.translation, (dim,))):
+        vectors = ("translation", "input_origin", "output_origin")
+        for name in ("linear", *vectors):
+            value = getattr(self, name)
             if value is None:
                 continue
+            shape = (dim,) if name in vectors else (dim, dim)
             value = _real_array(value, name)
-            value = _frozen(np.reshape(value, -1) if name == "translation" else value, name)
+            value = _frozen(np.reshape(value, -1) if name in vectors else value, name)
             if value.shape != shape or not np.all(np.isfinite(value)):
                 raise InputError(f"`{name}` must be a finite array of shape {shape}; got shape {value.shape}.")
             object.__setattr__(self, name, value)
@@ -336,31 +360,39 @@ class NonRigidTransform(_ArrayEquality):
         object.__setattr__(self, "beta", beta)
 
     def _pre(self, points: np.ndarray) -> np.ndarray:
-        out = points if self.linear is None else points @ self.linear.T
+        out = points if self.input_origin is None else points - self.input_origin
+        out = out if self.linear is None else out @ self.linear.T
         return out if self.translation is None else out + self.translation
 
-    def _field(self, u: np.ndarray) -> np.ndarray:
-        out = np.empty_like(u)
+    def _field(self, v: np.ndarray) -> np.ndarray:
+        out = np.empty_like(v)
         step = max(1, 2**22 // max(1, self.control_points.shape[0]))
-        for lo in range(0, u.shape[0], step):
-            block = u[lo : lo + step]
+        for lo in range(0, v.shape[0], step):
+            block = v[lo : lo + step]
             # distances in units of beta before squaring: no beta**2 to underflow (0/0) or overflow
             z = (block[:, None, :] - self.control_points[None, :, :]) / self.beta
             out[lo : lo + step] = np.exp(-0.5 * np.sum(z * z, axis=2)) @ self.coefficients
         return out
 
     def displacement(self, points) -> np.ndarray:
-        """The displacement ``T(z) - z`` at each row of ``points``, in blocks of rows."""
+        """The displacement ``T(z) - z`` at each row of ``points``, in blocks of rows.
+
+        It is summed as ``(p - z) + v + field(v)``: far from the origin, near ``p``, no
+        coordinate's rounding enters it."""
         points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
         with np.errstate(over="ignore", invalid="ignore"):
-            moved = self(points) - points  # each finite, their difference need not be
+            v = self._pre(points)
+            start = -points if self.output_origin is None else self.output_origin - points
+            moved = start + v + self._field(v)  # each finite, their sum need not be
         return _finite_result(moved, "NonRigidTransform's displacement")
 
     def __call__(self, points) -> np.ndarray:
         points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
         with np.errstate(over="ignore", invalid="ignore"):
-            u = self._pre(points)
-            out = u + self._field(u)
+            v = self._pre(points)
+            out = v + self._field(v)
+            if self.output_origin is not None:
+                out += self.output_origin
         return _finite_result(out, "NonRigidTransform")
 
 

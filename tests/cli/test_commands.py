@@ -319,8 +319,9 @@ def test_register_methods_and_transforms(tmp_path, method, transform, kind):
     # the affine part before the field: 0.7 off on the fish)
     parts = {k: np.asarray(v) for k, v in record["transform"].items() if k != "type"}
     if kind == "nonrigid":
+        fields = ("linear", "translation", "input_origin", "output_origin")
         rebuilt = NonRigidTransform(
-            parts["control_points"], parts["coefficients"], float(parts["beta"]), parts["linear"], parts["translation"]
+            parts["control_points"], parts["coefficients"], float(parts["beta"]), **{f: parts[f] for f in fields}
         )
         np.testing.assert_allclose(rebuilt(moving), record["moving_transformed"], atol=1e-9)
     elif kind == "affine":
@@ -631,7 +632,8 @@ def test_a_nonrigid_record_without_an_affine_part_holds_the_identity():
 
     record = transform_record(NonRigidTransform(np.zeros((2, 3)), np.ones((2, 3)), 1.0))
     np.testing.assert_array_equal(record["linear"], np.eye(3))
-    np.testing.assert_array_equal(record["translation"], np.zeros(3))
+    for name in ("translation", "input_origin", "output_origin"):
+        np.testing.assert_array_equal(record[name], np.zeros(3))
 
 
 @pytest.mark.parametrize(

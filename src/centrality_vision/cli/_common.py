@@ -377,16 +377,23 @@ def transform_record(transform) -> dict:
         import numpy as np
 
         dim = transform.control_points.shape[1]
-        # the affine part applied before the field (z -> u + field(u), u = linear z + translation):
-        # without it the record did not reproduce the registration (CPD sets it whenever it
-        # normalises the sets); identity and zero when the transform has none
+
+        # the affine part applied before the field and the two origins (z -> p + v + field(v),
+        # v = linear (z - o) + translation): without them the record does not reproduce the
+        # registration (CPD sets them whenever it normalises the sets); identity and zeros
+        # when the transform has none
+        def vector(value):
+            return np.zeros(dim) if value is None else value
+
         return {
             "type": "nonrigid",
             "control_points": transform.control_points,
             "coefficients": transform.coefficients,
             "beta": float(transform.beta),
             "linear": np.eye(dim) if transform.linear is None else transform.linear,
-            "translation": np.zeros(dim) if transform.translation is None else transform.translation,
+            "translation": vector(transform.translation),
+            "input_origin": vector(transform.input_origin),
+            "output_origin": vector(transform.output_origin),
         }
     if isinstance(transform, AffineTransform):
         return {

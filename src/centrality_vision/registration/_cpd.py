@@ -227,7 +227,13 @@ class _Frame:
 
     @staticmethod
     def of(
-        moving: np.ndarray, fixed: np.ndarray, normalize: bool, *, same_centre: bool = False, moving_scale: bool = False
+        moving: np.ndarray,
+        fixed: np.ndarray,
+        normalize: bool,
+        *,
+        same_centre: bool = False,
+        moving_scale: bool = False,
+        posed: np.ndarray | None = None,
     ):
         """The frame and both sets in it (without ``normalize``: a translation only, scale 1).
 
@@ -235,8 +241,10 @@ class _Frame:
         with ``moving_scale`` the moving set's alone (the model's: clutter or missing parts
         of the fixed set then do not change what ``beta`` means), except where the moving
         set is one point repeated, or the fixed set's radius or the moving set's distance from
-        the centre exceeds ``_FRAME_RATIO`` times the moving set's radius (so that no
-        coordinate can overflow).
+        the fixed set's centre exceeds ``_FRAME_RATIO`` times the moving set's radius (then
+        the RMS radius of both about the fixed set's centre, so that no coordinate can
+        overflow). With ``moving_scale`` the moving set is taken where the start puts it:
+        ``posed`` (the caller's pose when None).
         ``same_centre`` centres both sets on the fixed set's mean (a start pose unchanged).
         """
         if not normalize:
@@ -276,21 +284,23 @@ class _Frame:
             yc = _shifted(moving, mu_x)
         else:
             mu_y, yc = centred(moving)
+        sized = yc  # the moving set as the scale sees it
         r_moving = r_fixed = 0.0
         if moving_scale:  # the moving set's radius about its own mean
             r_moving, r_fixed = rms_radius(moving), rms_radius(fixed)
+            # (where the start puts it: far from the fixed set's centre, its coordinates in
+            # units of its own radius could overflow when squared)
+            sized = _shifted(moving if posed is None else posed, mu_x)
         if (
             moving_scale
             and r_moving > 0.0
             and r_fixed <= _FRAME_RATIO * r_moving
-            # (with same_centre the moving set sits where it was: far from the fixed set's
-            # centre, its coordinates in units of its own radius could overflow when squared)
-            and float(np.max(np.abs(yc))) <= _FRAME_RATIO * r_moving
+            and float(np.max(np.abs(sized))) <= _FRAME_RATIO * r_moving
         ):
             scale = r_moving
         else:
-            unit = max(power_of_two_scale(yc), power_of_two_scale(xc))
-            total = float(np.sum((yc / unit) ** 2) + np.sum((xc / unit) ** 2))
+            unit = max(power_of_two_scale(sized), power_of_two_scale(xc))
+            total = float(np.sum((sized / unit) ** 2) + np.sum((xc / unit) ** 2))
             scale = unit * math.sqrt(total / (moving.shape[0] + fixed.shape[0]))
         if scale == 0.0:
             scale = 1.0  # every point of both sets is the same point: only a translation is left
@@ -581,9 +591,20 @@ class _CPD(BaseEstimator):
 
     def _frame(self, moving, fixed):
         """``(frame, moving_n, fixed_n)``: the normalised frame ``fit`` runs in, and both sets in it."""
-        # the k-NN model trusts the start: both sets keep the caller's relative pose
-        knn = self.n_neighbors is not None
-        return _Frame.of(moving, fixed, bool(self.normalize), same_centre=knn, moving_scale=knn)
+        # The k-NN model trusts the start: the moving set keeps the caller's pose relative to
+        # the fixed set (``_start`` turns it into a translation of the normalised frame). Each
+        # set is still centred on its own mean: a pose that brings a far moving set onto the
+        # fixed one then cancels no large coordinates (the field's rounding grew with them).
+        if self.n_neighbors is None:
+            return _Frame.of(moving, fixed, bool(self.normalize))
+        posed = None
+        if isinstance(self.init, (SimilarityTransform, AffineTransform)):
+            try:
+                with np.errstate(all="ignore"):
+                    posed = self.init(moving)
+            except InputError:  # another dimension, or beyond float64: `_start` names it
+                posed = None
+        return _Frame.of(moving, fixed, bool(self.normalize), moving_scale=True, posed=posed)
 
     def _validate(self, moving, fixed, true_moving):
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
@@ -605,7 +626,11 @@ class _CPD(BaseEstimator):
         """The initial transform in the normalised frame (None: the variant's identity)."""
         init = self.init
         if init is None:
-            return None
+            if self.n_neighbors is None or np.array_equal(frame.moving_centre, frame.fixed_centre):
+                return None
+            # the caller's pose (see `_frame`)
+            dim = moving_n.shape[1]
+            return frame.linear_in(RigidTransform(np.eye(dim), np.zeros(dim)))
         dim = moving_n.shape[1]
         if isinstance(init, str):  # "global"
             from ._pose import global_pose_search
@@ -1395,23 +1420,22 @@ class NonRigidCPD(_CPD):
             # moving points up to the discarded tail of G's spectrum
             coefficients = kernel.vectors @ (kernel.vectors.T @ coefficients)
         pre = self._pre
-        dim = moving.shape[1]
-        linear = (
-            np.eye(dim)
-            if pre is None
-            else (pre.linear if isinstance(pre, AffineTransform) else pre.scale * pre.rotation)
-        )
-        translation_n = np.zeros(dim) if pre is None else pre.translation
         if frame.identity and pre is None:
             return NonRigidTransform(self._work, coefficients, self.beta)
-        # u = s * pre_n((y - mu_y) / s) + mu_x = L y + t; the field scales with s
-        translation = frame.scale * translation_n + frame.fixed_centre - linear @ frame.moving_centre
+        # v = s * pre_n((y - mu_y) / s) = L (y - mu_y) + s t_n, and T(y) = mu_x + v + field(v):
+        # the field scales with s, and its arguments stay as small as in the fit
+        linear = translation = None
+        if pre is not None:
+            linear = pre.linear if isinstance(pre, AffineTransform) else pre.scale * pre.rotation
+            translation = frame.scale * pre.translation
         return NonRigidTransform(
-            frame.points_out(self._work),
+            frame.scale * self._work,
             frame.scale * coefficients,
             frame.scale * float(self.beta),
             linear=linear,
             translation=translation,
+            input_origin=frame.moving_centre,
+            output_origin=frame.fixed_centre,
         )
 
 

@@ -94,7 +94,13 @@ def compress_field(transform: NonRigidTransform, *, max_rank=1000, tol=1e-12) ->
     pc = PivotedCholesky(control, transform.beta, max_rank=max_rank, tol=tol)
     centres, coefficients = nystrom_field(control, pc.pivots, pc.factor, np.asarray(transform.coefficients))
     return NonRigidTransform(
-        centres, coefficients, transform.beta, linear=transform.linear, translation=transform.translation
+        centres,
+        coefficients,
+        transform.beta,
+        linear=transform.linear,
+        translation=transform.translation,
+        input_origin=transform.input_origin,
+        output_origin=transform.output_origin,
     )
 
 
