@@ -785,6 +785,14 @@ def test_library_messages_name_the_command_line_options(tmp_path, capsys):
     assert "--columns must not repeat a column" in message and "`columns`" not in message
 
 
+@pytest.mark.parametrize("columns", [["--columns", "-1,0"], ["--columns=-1,0"], ["--columns", "-1, 0"]])
+def test_a_negative_column_index_reaches_the_reader(tmp_path, capsys, columns):
+    # with a space argparse took "-1,0" for an option: "expected one argument"
+    np.savetxt(tmp_path / "p.txt", _points())
+    assert main(["graph", str(tmp_path / "p.txt"), *columns, "--out", str(tmp_path / "g.json")]) == 2
+    assert "index -1 is out of range" in _one_line_error(capsys)
+
+
 def test_warnings_name_the_command_line_options_too(tmp_path, capsys, monkeypatch):
     import warnings
 

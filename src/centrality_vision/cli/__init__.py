@@ -18,6 +18,7 @@ traceback.
 
 from __future__ import annotations
 
+import re
 import sys
 
 from . import centrality, classify, demo, graph, match, register, reproduce
@@ -66,7 +67,7 @@ def main(argv: list[str] | None = None) -> int:
     from ..exceptions import InputError
 
     parser = build_parser()
-    args, extras = parser.parse_known_args(argv)
+    args, extras = parser.parse_known_args(_glued_columns(sys.argv[1:] if argv is None else list(argv)))
     if extras:  # argparse would blame the top-level parser; name the subcommand instead
         getattr(args, "_parser", parser).error(f"unrecognized arguments: {' '.join(extras)}")
     if args.command is None:
@@ -100,6 +101,18 @@ def main(argv: list[str] | None = None) -> int:
             file=sys.stderr,
         )
         return 1
+
+
+def _glued_columns(argv: list[str]) -> list[str]:
+    """``--columns -1,0`` as ``--columns=-1,0``: argparse reads a value that starts with '-'
+    and is not one number as an option ("expected one argument")."""
+    out = []
+    for token in argv:
+        if out and out[-1] == "--columns" and re.fullmatch(r"-\d[\d,\s-]*", token):
+            out[-1] = f"--columns={token}"
+        else:
+            out.append(token)
+    return out
 
 
 def _in_cli_words(message: str, parser) -> str:
