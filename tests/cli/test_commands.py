@@ -829,3 +829,34 @@ def test_the_before_panel_shows_the_moving_file_as_given(tmp_path, monkeypatch):
     argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--out", str(tmp_path / "r.json")]
     assert main([*argv, "--plot", str(tmp_path / "r.png")]) == 0
     np.testing.assert_array_equal(drawn["before"], moving)
+
+
+def _raising(exc):
+    def run(args):
+        raise exc
+
+    return run
+
+
+def _interrupt_inside_a_kernel():
+    # what a compiled kernel does with Ctrl-C: a SystemError whose cause is the interrupt
+    try:
+        raise KeyboardInterrupt
+    except KeyboardInterrupt as interrupt:
+        raise SystemError("<built-in function kernel> returned a result with an exception set") from interrupt
+
+
+@pytest.mark.parametrize(
+    ("run", "status", "said"),
+    [
+        (_raising(KeyboardInterrupt()), 130, "centrality-vision demo: interrupted"),
+        (lambda args: _interrupt_inside_a_kernel(), 130, "centrality-vision demo: interrupted"),
+        (_raising(SystemError("a real bug")), 1, "internal error"),
+    ],
+)
+def test_an_interrupt_is_reported_as_one_even_from_inside_a_kernel(monkeypatch, capsys, run, status, said):
+    from centrality_vision.cli import demo
+
+    monkeypatch.setattr(demo, "run", run)
+    assert main(["demo"]) == status
+    assert said in capsys.readouterr().err

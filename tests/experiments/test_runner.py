@@ -230,3 +230,40 @@ def test_every_experiment_is_registered_once():
         if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "Experiment"
     ]
     assert len(names) == len(set(names)) == len(experiments.REGISTRY)
+
+
+@pytest.mark.skipif(os.name != "posix", reason="process groups and SIGINT")
+def test_ctrl_c_on_a_pool_run_ends_it_at_once(tmp_path):
+    # Ctrl-C reaches every process of the group: the run said "interrupted" and then waited
+    # forever on its pool's workers
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    script = (
+        "import functools, time, sys\n"
+        "from centrality_vision.experiments._runner import Unit, run_units\n"
+        "units = [Unit(f'u{i}', functools.partial(time.sleep, 120), {}) for i in range(4)]\n"
+        f"run_units(units, {str(tmp_path / 'r.jsonl')!r}, scheduler='processes', workers=2, progress=False)\n"
+    )
+    run = subprocess.Popen([sys.executable, "-c", script], start_new_session=True, stderr=subprocess.PIPE)
+    try:
+        time.sleep(8)  # the workers are started and sleeping in their units
+        assert run.poll() is None
+        os.killpg(run.pid, signal.SIGINT)
+        _, err = run.communicate(timeout=30)
+        assert b"KeyboardInterrupt" in err
+    finally:
+        if run.poll() is None:
+            os.killpg(run.pid, signal.SIGKILL)
+            run.communicate()
+    for _ in range(100):  # every worker of the group ends too (the resource tracker at its pace)
+        try:
+            os.killpg(run.pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.1)
+    else:
+        left = subprocess.run(["ps", "-o", "pid,stat,args", "-g", str(run.pid)], capture_output=True, text=True)
+        raise AssertionError(f"processes of the run are left 10 s after it:\n{left.stdout}")

@@ -94,13 +94,27 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
-    except Exception:
+    except Exception as exc:
+        if _caused_by_interrupt(exc):  # a compiled kernel turns Ctrl-C into a SystemError
+            print(f"{prog}: interrupted", file=sys.stderr)
+            return 130
         traceback.print_exc()
         print(
             f"{prog}: internal error (a bug in centrality-vision; please report it with the traceback above)",
             file=sys.stderr,
         )
         return 1
+
+
+def _caused_by_interrupt(exc: BaseException) -> bool:
+    """Whether a KeyboardInterrupt is in the chain of causes of ``exc``."""
+    seen = set()
+    while exc is not None and id(exc) not in seen:
+        if isinstance(exc, KeyboardInterrupt):
+            return True
+        seen.add(id(exc))
+        exc = exc.__cause__ or exc.__context__
+    return False
 
 
 def _glued_columns(argv: list[str]) -> list[str]:

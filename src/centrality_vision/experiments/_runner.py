@@ -27,6 +27,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import signal
 import sys
 import threading
 import time
@@ -92,6 +93,16 @@ def _watch_parent(parent: int, interval: float = 0.5) -> None:
         os._exit(1)
 
     threading.Thread(target=loop, name="parent-watch", daemon=True).start()
+
+
+def _pool_worker(parent: int) -> None:
+    """Pool-worker initializer: leave Ctrl-C to the parent, and end with it (:func:`_watch_parent`).
+
+    A terminal's Ctrl-C reaches every process of the group. Workers that took it died
+    between tasks or sent it back as a task's result, and the parent, shutting the pool
+    down, waited on them forever; the parent now ends them itself."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    _watch_parent(parent)
 
 
 def _watch_pid(pid: int, interval: float = 0.5) -> None:
@@ -289,22 +300,29 @@ def _run_pool(todo, workers, finished):
     import multiprocessing
 
     # "spawn" keeps worker processes free of the parent's threads (numba, BLAS pools)
-    with ProcessPoolExecutor(
+    pool = ProcessPoolExecutor(
         max_workers=workers,
         mp_context=multiprocessing.get_context("spawn"),
-        initializer=_watch_parent,
+        initializer=_pool_worker,
         initargs=(os.getpid(),),
-    ) as pool:
+    )
+    try:
         pending = {pool.submit(_call, u.func, u.kwargs): u.key for u in todo}
-        try:
-            while pending:
-                ready, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in ready:
-                    finished(pending.pop(future), future.result())
-        except BaseException:
-            for future in pending:
-                future.cancel()
-            raise
+        while pending:
+            ready, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in ready:
+                finished(pending.pop(future), future.result())
+    except BaseException:
+        # (an interrupt, or a unit's error): the units still running are given up, not
+        # awaited; the finished ones are already in the results file
+        workers_left = list((getattr(pool, "_processes", None) or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for process in workers_left:
+            process.terminate()
+        for process in workers_left:
+            process.join(5.0)
+        raise
+    pool.shutdown(wait=True)
 
 
 # seconds a running scheduler has to answer: Dask's own connect timeout is 30 s, and a
