@@ -1,6 +1,7 @@
 """Centralities: the thesis' worked example, networkx agreement, exactness and errors."""
 
 import heapq
+import warnings
 from fractions import Fraction
 
 import networkx as nx
@@ -142,6 +143,31 @@ def test_eigenvector_tied_components_match_power_iteration():
     np.testing.assert_allclose(cen.eigenvector(graph), [1, 1, 1, 1, 1, 1, 0, 0], atol=1e-12)
     edgeless = sparse.csr_array((4, 4))
     np.testing.assert_allclose(cen.eigenvector(edgeless, normalized=False), 0.5)
+
+
+@pytest.mark.parametrize("value", [1e-300, 1e-10, 1.0, 1e10, 1e308])
+def test_eigenvector_strengths_are_scale_free(value):
+    # an edge and a triangle (eigenvalues 1 and 2): at 1e-10 every component counted as tied
+    # (an absolute tolerance), at 1e308 the eigenvalues overflowed to NaN
+    graph = _graph(5, [(0, 1), (2, 3), (2, 4), (3, 4)]) * value
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_allclose(cen.eigenvector(graph, strengths=True), [0, 0, 1, 1, 1], atol=1e-12)
+    lengths = np.array([1.0, 2.0, 3.0])
+    expected = cen.eigenvector(_graph(3, [(0, 1), (0, 2), (1, 2)], lengths), strengths=True)
+    scaled = _graph(3, [(0, 1), (0, 2), (1, 2)], lengths * (value / 4))
+    np.testing.assert_allclose(cen.eigenvector(scaled, strengths=True), expected, rtol=1e-12)
+
+
+def test_pagerank_follows_a_subnormal_arc_like_any_other():
+    # node 0's only arc carries all its mass whatever its value (1 / 1e-310 overflowed: 1000
+    # warnings, then "did not converge"); node 1's mass goes to 2 (1e-310 against 1). By hand,
+    # alpha = 0.85, n = 3: x0 = 0.05, x1 = 0.05 + 0.85 (x0 + x2), x2 = 0.05 + 0.85 x1
+    x1 = 0.135 / (1 - 0.85**2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        tiny = cen.pagerank(np.array([[0, 1e-310, 0], [1e-310, 0, 1.0], [0, 1.0, 0]]), strengths=True)
+    np.testing.assert_allclose(tiny, [0.05, x1, 0.05 + 0.85 * x1], rtol=1e-10)
 
 
 def test_eigenvector_large_component_uses_sparse_solver():

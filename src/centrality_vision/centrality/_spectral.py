@@ -7,6 +7,8 @@ so pass ``1 / graph`` (on the stored entries) for affinities.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy import sparse
 
@@ -125,6 +127,12 @@ def eigenvector(graph, /, *, strengths: bool = False, normalized: bool = True, a
         adjacency.data[:] = 1.0  # as_any_graph returned our own copy
     else:
         adjacency.eliminate_zeros()
+        if adjacency.nnz:
+            # the vector does not depend on the strengths' scale: a power of two brings the
+            # largest to [0.5, 1), exactly, so that the eigenvalues neither overflow (NaN at
+            # 1e308) nor fall under the ties' tolerance (every component kept at 1e-10)
+            exponent = math.frexp(float(np.abs(adjacency.data).max()))[1]
+            adjacency.data = np.ldexp(adjacency.data, -exponent)
     n = adjacency.shape[0]
     n_comp, labels = connected_components(adjacency, directed=False)
     from threadpoolctl import threadpool_limits
@@ -223,11 +231,14 @@ def pagerank(
     n = adjacency.shape[0]
     # the transitions do not depend on the values' scale: computed at a power-of-two scale
     adjacency, _ = _scaled_values(adjacency)
+    adjacency = sparse.csr_array(adjacency)
     out_strength = np.asarray(adjacency.sum(axis=1)).ravel()
     dangling = out_strength == 0
-    inv = np.zeros(n)
-    inv[~dangling] = 1.0 / out_strength[~dangling]
-    transition_t = sparse.csr_array((sparse.diags_array(inv) @ adjacency).T)
+    # each value over its row's sum, not times the sum's reciprocal (1 / 1e-310 overflows)
+    transition = adjacency.copy()
+    sums = np.repeat(out_strength, np.diff(adjacency.indptr))
+    transition.data = np.divide(adjacency.data, sums, out=np.zeros_like(adjacency.data), where=sums != 0)
+    transition_t = sparse.csr_array(transition.T)
     x = np.full(n, 1.0 / n)
     for _ in range(max_iter):
         new = alpha * (transition_t @ x) + (alpha * x[dangling].sum() + 1.0 - alpha) / n
