@@ -155,6 +155,7 @@ def test_bad_w_is_a_usage_error(tmp_path, capsys, value):
         ("0 0\n-1 3\n", "--landmarks moving indices must be in [0, 40); got -1"),
         ("0 0\n0 3\n", "--landmarks must pin each moving point at most once"),
         ("1e300 0\n", "a row number must be below 2^62"),
+        ("0 0 1 2\n", "must have 2 or 3 coordinates; got 4 columns."),  # not "pick ... with --columns"
         (None, "no such file"),
     ],
 )
@@ -168,6 +169,16 @@ def test_bad_landmark_files_are_one_line_errors(tmp_path, capsys, content, messa
     line = _error_line(capsys)
     assert message in line and "--landmarks" in line
     assert not (tmp_path / "r.json").exists()
+
+
+@pytest.mark.parametrize("header", ["i,j", "id,index", "moving,fixed"])
+def test_a_landmarks_header_names_both_columns(tmp_path, header):
+    # "i" and "id" name an index column in a point file; here they are the two rows: the
+    # file was refused ("got 1 columns ... pick the coordinates with --columns")
+    from centrality_vision.cli.register import _read_landmarks
+
+    (tmp_path / "pairs.csv").write_text(f"{header}\n0,3\n5,7\n")
+    np.testing.assert_array_equal(_read_landmarks(tmp_path / "pairs.csv"), [[0, 3], [5, 7]])
 
 
 def test_the_library_advice_names_the_init_option():

@@ -278,11 +278,12 @@ def _read_landmarks(path):
 
     from ..exceptions import InputError
     from ..io import read_points
+    from ..io._points import _COLUMNS_HINT
 
     try:
         pairs = read_points(path)
-    except InputError as exc:
-        raise InputError(f"--landmarks: {exc}") from None
+    except InputError as exc:  # (--columns picks the coordinates of MOVING and FIXED, not these)
+        raise InputError(f"--landmarks: {str(exc).replace(_COLUMNS_HINT, '')}") from None
     if pairs.shape[1] != 2:
         raise InputError(
             f"--landmarks {path}: expected two columns, a moving row and a fixed row per line; "

@@ -30,6 +30,8 @@ POINT_SUFFIXES = (".txt", ".csv", ".tsv", ".xyz", ".npy", ".mat", ".ply", ".pcd"
 WRITE_SUFFIXES = (".txt", ".csv", ".xyz", ".npy", ".mat", ".ply", ".pcd", ".obj")
 _TEXT_SUFFIXES = (".txt", ".csv", ".tsv", ".xyz")
 _THREE_D_ONLY = (".ply", ".pcd", ".obj")
+# (the command line shows `columns` as --columns)
+_COLUMNS_HINT = "; pick the coordinates with `columns`"
 _INDEX_NAMES = ("", "index", "idx", "id", "i", "node", "unnamed: 0", "point", "point_id")
 
 
@@ -101,7 +103,8 @@ def read_points(
     The coordinates are then picked from the file's columns: ``columns`` if given; else
     the columns named ``x``, ``y`` (and ``z`` if present), whatever their case, when the
     file names its columns; else every column, after dropping a leading index column
-    (named ``""``, ``index``, ``id``, ``node``, ``Unnamed: 0``, ...). Other columns, such
+    (named ``""``, ``index``, ``id``, ``node``, ``Unnamed: 0``, ...) where the columns
+    left are a point of ``n_dims`` coordinates (so ``i,j`` is read as two). Other columns, such
     as an intensity, are ignored unless ``columns`` selects them.
 
     Parameters
@@ -253,11 +256,11 @@ def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
             picked = [_named_column(path, lower, axis, shown) for axis in ("x", "y", "z") if axis in lower]
         else:
             picked = list(range(n_columns))
-            if names and n_columns > 1 and lower[0] in _INDEX_NAMES:
+            if names and n_columns > 1 and lower[0] in _INDEX_NAMES and n_columns - 1 in n_dims:
                 picked = picked[1:]
     wanted = " or ".join(str(d) for d in n_dims)
     if len(picked) not in n_dims:
-        hint = "" if columns is not None else "; pick the coordinates with `columns` (--columns on the command line)"
+        hint = "" if columns is not None else _COLUMNS_HINT
         raise InputError(f"{path}: points must have {wanted} coordinates; got {len(picked)} columns{shown}{hint}.")
     return picked
 
