@@ -860,3 +860,28 @@ def test_an_interrupt_is_reported_as_one_even_from_inside_a_kernel(monkeypatch, 
     monkeypatch.setattr(demo, "run", run)
     assert main(["demo"]) == status
     assert said in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["match", "m.txt", "f.txt", "--method", "shape-context", "--refine", "cpd"],
+            "--refine is an option of --method robust; got --method shape-context",
+        ),
+        (
+            ["match", "m.txt", "f.txt", "--mwme-method", "exact"],
+            "--mwme-method is an option of --method mwme; got --method robust",
+        ),
+        (["reproduce", "table-2.1", "--workers", "3"], "`--workers` applies to"),
+    ],
+)
+def test_an_option_the_run_would_ignore_is_refused(tmp_path, capsys, argv, message):
+    # each ran with exit 0, the option ignored (and recorded among the parameters)
+    np.savetxt(tmp_path / "m.txt", _points())
+    np.savetxt(tmp_path / "f.txt", _points())
+    argv = [str(tmp_path / a) if a.endswith(".txt") else a for a in argv]
+    out = tmp_path / ("out" if argv[0] == "reproduce" else "out.json")
+    assert main([*argv, "--out", str(out)]) == 2
+    assert message in _one_line_error(capsys)
+    assert not out.exists() or (out.is_dir() and not any(out.iterdir()))

@@ -127,6 +127,14 @@ def test_icp_point_to_plane_in_3d(tmp_path):
         (["--trim", "0.1"], "--trim is an option of --method icp; got --method cpd"),
         (["--method", "gpd", "--max-distance", "1"], "--max-distance is an option of --method icp; got --method gpd"),
         (["--method", "icp", "--metric", "point_to_plane"], "--metric point_to_plane fits a rigid motion"),
+        # given at their defaults, or ignored before (and recorded as used)
+        (["--method", "icp", "--init", "none"], "--init is an option of --method cpd or gpd; got --method icp"),
+        (["--method", "icp", "--w", "0.5"], "--w is an option of --method cpd or gpd; got --method icp"),
+        (["--method", "cpd", "--kappa", "0.2"], "--kappa is an option of --method gpd; got --method cpd"),
+        (["--centrality", "degree"], "--centrality is an option of --method gpd; got --method cpd"),
+        (["--method", "gpd", "--k", "4"], "--k is an option of --graph knn; got --graph delaunay"),
+        (["--beta", "3"], "--beta is an option of --transform nonrigid; got --transform similarity"),
+        (["--transform", "affine", "--lam", "3"], "--lam is an option of --transform nonrigid; got --transform affine"),
     ],
 )
 def test_options_of_another_method_are_refused_before_reading(tmp_path, capsys, options, message):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import functools
 import math
 import sys
 from pathlib import Path
@@ -48,10 +49,49 @@ POINT_FILES = ".csv, .txt, .xyz, .npy, .mat, .ply, .pcd or .obj"
 
 
 class Parser(argparse.ArgumentParser):
-    """argparse, with usage errors on one line (the message and where to find help)."""
+    """argparse, with usage errors on one line (the message and where to find help), that
+    also records which options the command line gave (:func:`given`)."""
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {' '.join(message.split())} (see '{self.prog} --help')\n")
+
+    def add_argument(self, *args, **kwargs):
+        action = super().add_argument(*args, **kwargs)
+        action.__class__ = _recording(type(action))
+        return action
+
+
+@functools.cache
+def _recording(action_class: type) -> type:
+    """``action_class`` that also adds its ``dest`` to the namespace's ``_given`` set when used."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if getattr(namespace, "_given", None) is None:
+            namespace._given = set()
+        namespace._given.add(self.dest)
+        return action_class.__call__(self, parser, namespace, values, option_string)
+
+    return type(action_class.__name__, (action_class,), {"__call__": __call__})
+
+
+def given(args: argparse.Namespace, dest: str) -> bool:
+    """Whether the command line gave the option stored in ``dest`` (its default otherwise)."""
+    return dest in (getattr(args, "_given", None) or ())
+
+
+def refuse_unused(args: argparse.Namespace, applies: dict, chosen: dict) -> None:
+    """An InputError for the first option given that the chosen settings do not use.
+
+    ``applies`` maps an option's dest to ``(setting, values)``: the option is used only when
+    ``chosen[setting]`` is one of ``values`` (a run that silently ignored the kernel width or
+    the centrality the user asked for would look like a success)."""
+    from ..exceptions import InputError
+
+    for dest, (setting, values) in applies.items():
+        if given(args, dest) and chosen[setting] not in values:
+            option, name = "--" + dest.replace("_", "-"), "--" + setting.replace("_", "-")
+            wanted = f"{name} {' or '.join(values)}"
+            raise InputError(f"{option} is an option of {wanted}; got {name} {chosen[setting]}.")
 
 
 def subparser(sub, name: str, *, summary: str, description: str, example: str) -> argparse.ArgumentParser:

@@ -14,6 +14,7 @@ from ._common import (
     options,
     pyplot,
     read_point_file,
+    refuse_unused,
     rms_distance,
     say,
     subparser,
@@ -79,6 +80,7 @@ def run(args: argparse.Namespace) -> int:
     from ..exceptions import InputError
     from ..matching import match
 
+    refuse_unused(args, {"refine": ("method", ("robust",)), "mwme_method": ("method", ("mwme",))}, vars(args))
     started = time.perf_counter()
     moving = read_point_file(args.moving, args)
     fixed = read_point_file(args.fixed, args)

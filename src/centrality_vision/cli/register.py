@@ -16,11 +16,13 @@ from ._common import (
     add_point_options,
     add_progress,
     add_seed,
+    given,
     number,
     options,
     progress_on,
     pyplot,
     read_point_file,
+    refuse_unused,
     rms_distance,
     say,
     subparser,
@@ -184,22 +186,24 @@ def _outlier_weight(text: str):
 
 
 # the options of one family of methods, and their values when not given
-_ICP_ONLY = {"max_distance": None, "trim": None, "metric": None}
-_CPD_ONLY = {"init": "none", "n_neighbors": None, "landmarks": None}
+_CPD = ("cpd", "gpd")
+# the options each method or transform uses: any other given is refused, not ignored (a run
+# without the landmarks, the global search or the centrality asked for looks like a success)
+_APPLIES = {
+    **dict.fromkeys(("w", "init", "n_neighbors", "landmarks"), ("method", _CPD)),
+    **dict.fromkeys(("centrality", "graph", "k", "kappa"), ("method", ("gpd",))),
+    **dict.fromkeys(("max_distance", "trim", "metric"), ("method", ("icp",))),
+    **dict.fromkeys(("beta", "lam"), ("transform", ("nonrigid",))),
+}
 
 
 def _estimator(args: argparse.Namespace, callback):
     from ..exceptions import InputError
     from ..registration import GPD, ICP, AffineCPD, NonRigidCPD, RigidCPD
 
-    # an option the method does not have is refused, not ignored (a run without the
-    # landmarks or the global search the user asked for would look like a success)
-    others = _CPD_ONLY if args.method == "icp" else _ICP_ONLY
-    for dest, unset in others.items():
-        if getattr(args, dest) != unset:
-            option = "--" + dest.replace("_", "-")
-            wanted = "--method cpd or gpd" if args.method == "icp" else "--method icp"
-            raise InputError(f"{option} is an option of {wanted}; got --method {args.method}.")
+    refuse_unused(args, _APPLIES, {"method": args.method, "transform": args.transform})
+    if given(args, "k") and args.graph != "knn":
+        raise InputError(f"--k is an option of --graph knn; got --graph {args.graph}.")
     if args.method == "icp":
         if args.transform not in ("rigid", "similarity"):
             raise InputError(

@@ -66,10 +66,11 @@ def run(args: argparse.Namespace) -> int:
         )
         print(f"wrote {path}")
         return 0
-    if args.scheduler is not None and args.experiment not in RUNNER_EXPERIMENTS:
-        raise InputError(
-            f"`--scheduler` applies to {', '.join(RUNNER_EXPERIMENTS)} (and all); got it for {args.experiment}."
-        )
+    for option, value in (("--scheduler", args.scheduler), ("--workers", args.workers)):
+        if value is not None and args.experiment not in RUNNER_EXPERIMENTS:
+            raise InputError(
+                f"`{option}` applies to {', '.join(RUNNER_EXPERIMENTS)} (and all); got it for {args.experiment}."
+            )
     return run_experiment(
         args.experiment,
         Path(args.out) / args.experiment,
