@@ -42,7 +42,7 @@ def test_directory_cache_is_reused_across_processes_and_leaves_no_lock(tmp_path)
     images = [_disk(4), _disk(5), _disk(6)]
     with parallel_config(backend="threading"):  # loky workers take the same path (benchmarks/shapes.py --cv)
         first = CentralityHistogram(cache=tmp_path, n_jobs=2).fit_transform(images)
-    assert len(list(tmp_path.glob("*-closeness.npy"))) == 3
+    assert len(list(tmp_path.glob("*-closeness.npz"))) == 3
     assert not list(tmp_path.glob("*.lock")) and not list(tmp_path.glob("*.tmp"))
     fresh = CentralityCache(directory=tmp_path)  # a new process would start like this
     np.testing.assert_array_equal(CentralityHistogram(cache=fresh).fit_transform(images), first)

@@ -78,7 +78,7 @@ def test_a_stored_file_of_another_length_type_or_not_finite_is_recomputed_not_us
     square = np.zeros((6, 6), dtype=bool)
     square[1:5, 1:5] = True
     expected, _ = CentralityCache(directory=tmp_path).get(square, "closeness")
-    (path,) = tmp_path.glob("*closeness.npy")
+    (path,) = tmp_path.glob("*closeness.npz")
     # (inf and float32 files were served: inf values turned into a numpy error in the histogram)
     for foreign in (
         np.ones(5),
@@ -88,13 +88,40 @@ def test_a_stored_file_of_another_length_type_or_not_finite_is_recomputed_not_us
         np.arange(16),
         np.ones((4, 4)),
     ):
-        np.save(path, foreign)
+        with open(path, "wb") as handle:  # with the checksum of what it holds: the checks above it
+            np.savez(handle, values=foreign, check=CentralityCache._checksum(path, np.asarray(foreign)))
         cache = CentralityCache(directory=tmp_path)
         values, nodes = cache.get(square, "closeness")
         np.testing.assert_array_equal(values, expected)
         assert values.shape == nodes.shape == (16,) and cache.misses == 1
         features = CentralityHistogram(cache=CentralityCache(directory=tmp_path), bins=5).fit_transform([square])
         assert features[0, -1] < 1  # the ones were binned as one full last bin
+
+
+def test_a_damaged_or_edited_file_is_recomputed_not_used(tmp_path):
+    # values of the right length and type, finite, written over a stored file: fig. 4.2's
+    # closeness distances all became 0 on a re-run
+    square = np.zeros((6, 6), dtype=bool)
+    square[1:5, 1:5] = True
+    expected, _ = CentralityCache(directory=tmp_path).get(square, "closeness")
+    (path,) = tmp_path.glob("*closeness.npz")
+    with np.load(path) as stored:
+        check = stored["check"]
+    for write in (
+        lambda handle: np.savez(handle, values=np.full(16, 0.5), check=check),  # edited values
+        lambda handle: np.savez(handle, values=expected),  # no checksum
+        lambda handle: np.save(handle, expected),  # a bare .npy
+        lambda handle: handle.write(path.read_bytes()[:-40]),  # cut short
+    ):
+        with open(path, "wb") as handle:
+            write(handle)
+        cache = CentralityCache(directory=tmp_path)
+        values, _ = cache.get(square, "closeness")
+        np.testing.assert_array_equal(values, expected)
+        assert cache.misses == 1
+        again = CentralityCache(directory=tmp_path)  # stored again, and read back
+        np.testing.assert_array_equal(again.get(square, "closeness")[0], expected)
+        assert again.misses == 0
 
 
 def test_comparisons_check_parameters_changed_after_fit():
@@ -134,7 +161,7 @@ def test_cache_inputs_found_by_fuzzing_get_named_errors(tmp_path):
         CentralityCache(directory=tmp_path).get(np.ones((2, 3, 3), bool), "degree")
     cache = CentralityCache(directory=tmp_path)
     expected, _ = cache.get(square, "degree")
-    (values,) = tmp_path.glob("*degree.npy")
+    (values,) = tmp_path.glob("*degree.npz")
     values.unlink()
     values.with_suffix(".lock").write_text(str(2**80))  # a lock naming no possible process: stale
     found, _ = CentralityCache(directory=tmp_path).get(square, "degree", wait=False)  # was OverflowError

@@ -249,7 +249,7 @@ def test_disk_cache_is_reused_by_a_new_cache(tmp_path):
     image = _disk(7)
     first = CentralityCache(directory=tmp_path)
     values = shape_centralities([image], ["closeness"], cache=first)[0]["closeness"]
-    assert first.misses == 1 and len(list(tmp_path.glob("*.npy"))) == 1
+    assert first.misses == 1 and len(list(tmp_path.glob("*.npz"))) == 1
     second = CentralityCache(directory=tmp_path)  # e.g. a later process
     again = shape_centralities([image], ["closeness"], cache=second)[0]
     assert (second.hits, second.misses) == (1, 0)
@@ -269,7 +269,7 @@ def test_disk_cache_of_other_code_is_not_read(tmp_path, monkeypatch):
     later = CentralityCache(directory=tmp_path)  # a process running edited code
     shape_centralities([image], ["closeness"], cache=later)
     assert (later.hits, later.misses) == (0, 1)
-    assert len(list(tmp_path.glob("*-closeness.npy"))) == 2
+    assert len(list(tmp_path.glob("*-closeness.npz"))) == 2
 
 
 def test_memory_hits_are_written_to_a_directory_set_later(tmp_path):
@@ -278,4 +278,4 @@ def test_memory_hits_are_written_to_a_directory_set_later(tmp_path):
     shape_centralities([image], ["degree"], cache=cache)
     cache.directory = tmp_path
     shape_centralities([image], ["degree"], cache=cache)
-    assert len(list(tmp_path.glob("*-degree.npy"))) == 1
+    assert len(list(tmp_path.glob("*-degree.npz"))) == 1

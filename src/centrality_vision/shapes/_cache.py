@@ -15,6 +15,7 @@ import numbers
 import os
 import threading
 import time
+import zipfile
 from collections import OrderedDict
 from contextlib import contextmanager
 from pathlib import Path
@@ -143,9 +144,10 @@ class CentralityCache:
         How many images to keep in memory (each holds one float64 value per pixel and
         centrality); 0 keeps none (with ``directory``, the disk alone).
     directory : path, optional
-        Also keep every computed centrality on disk, one ``.npy`` file per image and
+        Also keep every computed centrality on disk, one ``.npz`` file per image and
         centrality, named by a hash of the pixels and a digest of the package's code (values
-        computed by another version are not read back), and written atomically. Another
+        computed by another version are not read back), written atomically, and holding a
+        checksum of its name and values (a damaged or edited file is recomputed). Another
         process (a joblib or Dask worker, or a later run) with a cache on the same
         directory reads them instead of recomputing; while one process computes an
         image it holds a ``.lock`` file there, and the others compute other images
@@ -197,20 +199,31 @@ class CentralityCache:
         (rows, cols), connectivity, weights, digest = key
         suffix = "-w" if weights else ""
         # the package's code digest: values computed by other code are never read back
-        return self.directory / f"{digest}-{rows}x{cols}-c{connectivity}{suffix}-{code_digest()}-{name}.npy"
+        return self.directory / f"{digest}-{rows}x{cols}-c{connectivity}{suffix}-{code_digest()}-{name}.npz"
+
+    @staticmethod
+    def _checksum(path: Path, values: np.ndarray) -> np.ndarray:
+        """SHA-256 of the file's name and its values' bytes, as 32 uint8."""
+        digest = hashlib.sha256(path.name.encode())
+        digest.update(np.ascontiguousarray(values).tobytes())
+        return np.frombuffer(digest.digest(), dtype=np.uint8)
 
     def _load(self, key: tuple, name: str, n_nodes: int):
         """The stored values, or None when absent or not this image's: a file of another
-        length or type (float64 is stored) or with NaN or inf values (a foreign or stale file under the same name) is
-        recomputed, never used."""
+        length or type (float64 is stored), with NaN or inf values, or whose checksum does not
+        match its name and values (a foreign, stale, damaged or edited file under the same
+        name) is recomputed, never used."""
         if self.directory is None:
             return None
         path = self._path(key, name)
         try:
-            values = np.load(path)
-        except (FileNotFoundError, EOFError, ValueError, OSError):  # absent, or a foreign partial file
-            return None
+            with np.load(path) as stored:
+                values, check = stored["values"], stored["check"]
+        except (EOFError, ValueError, OSError, KeyError, IndexError, TypeError, AttributeError, zipfile.BadZipFile):
+            return None  # absent, or not one of our files (a partial one, an .npy, another archive)
         if values.shape != (n_nodes,) or values.dtype != np.float64 or not np.isfinite(values).all():
+            return None
+        if not np.array_equal(check, self._checksum(path, values)):
             return None
         return values
 
@@ -221,7 +234,7 @@ class CentralityCache:
         path = self._path(key, name)
         tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
         with open(tmp, "wb") as handle:
-            np.save(handle, values)
+            np.savez(handle, values=values, check=self._checksum(path, values))
         os.replace(tmp, path)
 
     @contextmanager
