@@ -73,6 +73,31 @@ def test_gabriel_three_points_and_cocircular_square():
     assert _edges(gabriel_graph([[0, 0], [1, 0], [1, 1], [0, 1]])) == {(0, 1), (1, 2), (2, 3), (0, 3)}
 
 
+def test_a_point_just_outside_a_circle_beside_its_end_point_keeps_the_edge():
+    # point 1 lies 1e-14 outside the circles of edges 0-2 and 0-3 (inside those of 1-2 and
+    # 1-3): a tolerance of 1e-12 of the squared radius took it as on them, and the graph split
+    expected = {(0, 1), (0, 2), (0, 3), (2, 3)}
+    assert _edges(gabriel_graph([[0, 0], [-1e-14, 0], [1, 0], [0.5, 2]])) == expected
+
+
+@pytest.mark.parametrize("separation", [1e-14, 1e-13, 1e-12, 1e-11])
+def test_gabriel_graph_of_a_set_with_a_tight_pair_holds_its_emst(separation):
+    # 87 of 135 such sets were disconnected at 1e-14 to 1e-13, 10 of 150 at 1e-13 to 1e-12
+    rng = np.random.default_rng(0)
+    tested = 0
+    for _ in range(60):
+        points = rng.random((12, 2))
+        direction = rng.standard_normal(2)
+        points = np.vstack([points, points[rng.integers(12)] + separation * direction / np.linalg.norm(direction)])
+        try:
+            gabriel = gabriel_graph(points)
+        except ValueError:  # Qhull could not triangulate the pair reliably: refused, named
+            continue
+        tested += 1
+        assert _edges(emst_graph(points)) <= _edges(gabriel) and connected_components(gabriel)[0] == 1
+    assert tested >= 30
+
+
 @pytest.mark.parametrize("dim", [2, 3])
 def test_emst_weight_equals_mst_of_complete_graph(dim):
     points = _random_points(11, 50, dim)

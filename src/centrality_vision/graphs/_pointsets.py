@@ -207,26 +207,35 @@ def delaunay_graph(points, /) -> sparse.csr_array:
 def _gabriel_mask(points: np.ndarray, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
     """True for the edges whose closed diametral ball holds no other point."""
     points, _ = _unit_scale(points)
-    radius2 = 0.25 * np.sum((points[rows] - points[cols]) ** 2, axis=1)
     k = min(5, points.shape[0])
     _, idx = cKDTree(points).query(0.5 * (points[rows] + points[cols]), k=k)
     # The nearest points to a midpoint include at least one point other than the edge's two
     # end points, and the nearest such point decides. Point r lies at squared distance
     # (p - r).(q - r) + radius^2 from the midpoint of p and q: from differences, which keep
     # their digits where the midpoint itself would round away those of a tight cluster.
+    # A point counts as on the circle (so the edge goes) within the data's own precision:
+    # every coordinate moved by 16 units in the last place of the largest of the three
+    # points' magnitudes (the co-circular points of a rotated grid), plus the rounding of the
+    # differences. A tolerance of 1e-12 of the squared radius also took a point 1e-14 outside,
+    # beside an end point, as on it: both edges to a tight pair went, and the graph split.
     other = (idx != rows[:, None]) & (idx != cols[:, None])
     to_p = points[rows][:, None, :] - points[idx]
     to_q = points[cols][:, None, :] - points[idx]
-    excess = np.where(other, np.sum(to_p * to_q, axis=2), np.inf).min(axis=1)
-    return excess > 1e-12 * radius2
+    d_p, d_q = np.sqrt(np.sum(to_p * to_p, axis=2)), np.sqrt(np.sum(to_q * to_q, axis=2))
+    size = np.abs(points).max(axis=1)
+    magnitude = np.maximum(np.maximum(size[rows], size[cols])[:, None], size[idx])
+    tol = 16 * np.finfo(float).eps * (d_p * d_q + magnitude * (d_p + d_q))
+    margin = np.where(other, np.sum(to_p * to_q, axis=2) - tol, np.inf).min(axis=1)
+    return margin > 0
 
 
 def gabriel_graph(points, /) -> sparse.csr_array:
     """Gabriel graph: the Delaunay edges whose closed diametral circle (sphere) is empty.
 
     Edge ``(i, j)`` is kept when no other point lies inside or on the circle that has
-    the segment ``i-j`` as a diameter ("on" to within 1e-12 of the squared radius, so that
-    the co-circular points of a grid count as on it whatever their rounding). With this
+    the segment ``i-j`` as a diameter ("on" to within the coordinates' precision, 16 units
+    in their last place, so that the co-circular points of a rotated grid count as on it
+    whatever their rounding). With this
     closed-ball rule the result does not depend on how Qhull triangulates co-circular
     points, and it is a subgraph of every Delaunay triangulation and a supergraph of every
     Euclidean minimum spanning tree.
@@ -256,7 +265,20 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     points = _triangulable_points(points)
     rows, cols = _gabriel_candidates(points)
     keep = _gabriel_mask(points, rows, cols)
+    # Within the data's precision a point beside an end point can sit "on" the circles of
+    # both edges to a tight pair, and both went (the graph split). The EMST's edges are
+    # Gabriel edges in exact arithmetic: they stay.
+    tree = _spanning_tree(edges_to_graph(points.shape[0], rows, cols, points))
+    in_tree = sparse.csr_array(tree + tree.T)[rows, cols] != 0
+    keep = keep | np.asarray(in_tree).ravel()
     return edges_to_graph(points.shape[0], rows[keep], cols[keep], points)
+
+
+def _spanning_tree(graph: sparse.csr_array) -> sparse.coo_array:
+    """The minimum spanning tree of ``graph`` (one triangle of it)."""
+    from scipy.sparse.csgraph import minimum_spanning_tree
+
+    return sparse.coo_array(minimum_spanning_tree(graph))
 
 
 def _gabriel_candidates(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -302,13 +324,10 @@ def emst_graph(points, /) -> sparse.csr_array:
     >>> tree.nnz // 2, round(float(tree.sum()) / 2, 3)  # 1 + 2 + sqrt(10)
     (3, 6.162)
     """
-    from scipy.sparse.csgraph import minimum_spanning_tree
-
     points = _triangulable_points(points)
     rows, cols = _gabriel_candidates(points)
-    graph = edges_to_graph(points.shape[0], rows, cols, points)
-    tree = sparse.coo_array(minimum_spanning_tree(graph))
-    return edges_to_graph(graph.shape[0], tree.row, tree.col, lengths=tree.data)
+    tree = _spanning_tree(edges_to_graph(points.shape[0], rows, cols, points))
+    return edges_to_graph(points.shape[0], tree.row, tree.col, lengths=tree.data)
 
 
 def knn_graph(points, /, *, k: int) -> sparse.csr_array:
