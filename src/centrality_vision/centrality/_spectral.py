@@ -230,8 +230,7 @@ def pagerank(
     max_iter = check_int(max_iter, name="max_iter", low=1)
     n = adjacency.shape[0]
     # the transitions do not depend on the values' scale: computed at a power-of-two scale
-    adjacency, _ = _scaled_values(adjacency)
-    adjacency = sparse.csr_array(adjacency)
+    adjacency, _ = _scaled_values(adjacency)  # (CSR, as every graph input is)
     out_strength = np.asarray(adjacency.sum(axis=1)).ravel()
     dangling = out_strength == 0
     # each value over its row's sum, not times the sum's reciprocal (1 / 1e-310 overflows)

@@ -30,7 +30,7 @@ POINT_SUFFIXES = (".txt", ".csv", ".tsv", ".xyz", ".npy", ".mat", ".ply", ".pcd"
 WRITE_SUFFIXES = (".txt", ".csv", ".xyz", ".npy", ".mat", ".ply", ".pcd", ".obj")
 _TEXT_SUFFIXES = (".txt", ".csv", ".tsv", ".xyz")
 _THREE_D_ONLY = (".ply", ".pcd", ".obj")
-# (the command line shows `columns` as --columns)
+# (the command line shows a backticked parameter as its option: `columns` as --columns)
 _COLUMNS_HINT = "; pick the coordinates with `columns`"
 _INDEX_NAMES = ("", "index", "idx", "id", "i", "node", "unnamed: 0", "point", "point_id")
 
@@ -223,7 +223,7 @@ def _named_column(path: Path, lower: list[str], name: str, shown: str) -> int:
     if len(found) > 1:
         raise InputError(
             f"{path}: the header names {len(found)} columns {name!r} (indices {', '.join(map(str, found))}){shown}; "
-            "pick the coordinates by 0-based index with `columns` (--columns on the command line)."
+            "pick the coordinates by 0-based index with `columns`."
         )
     return found[0]
 
@@ -590,10 +590,7 @@ def _read_mat(path: Path, variable: str | None) -> _Table:
         return _Table(arrays[variable].astype(np.float64))
     if len(arrays) != 1:
         names = ", ".join(sorted(arrays)) or "none"
-        raise InputError(
-            f"{path}: name the variable to read (`variable`, --variable on the command line); "
-            f"2D numeric arrays in the file: {names}."
-        )
+        raise InputError(f"{path}: name the variable to read with `variable`; 2D numeric arrays in the file: {names}.")
     return _Table(next(iter(arrays.values())).astype(np.float64))
 
 
