@@ -6,6 +6,8 @@ import warnings
 import networkx as nx
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy import sparse
 
 from centrality_vision import centrality as cen
@@ -109,6 +111,44 @@ def test_zero_length_edges_are_edges():
     np.testing.assert_allclose(cen.betweenness(g, weights=True), [0, 1, 0])
 
 
+def test_zero_length_triangle_is_symmetric():
+    # Every pair is joined directly at length 0; a detour over the third node ties in
+    # length but has one more zero-length edge, so it is not shortest. The three nodes
+    # are interchangeable and must get equal values (the settling order gave [0, .5, .25]).
+    g = nx.Graph([(0, 1), (1, 2), (0, 2)])
+    nx.set_edge_attributes(g, 0.0, "weight")
+    np.testing.assert_array_equal(cen.betweenness(g, weights=True), [0, 0, 0])
+    assert set(cen.edge_betweenness(g, weights=True, as_dict=True).values()) == {1.0}
+    # A zero-length detour beside a zero-length edge of a longer path: 0 -0- 1 -0- 2 with a
+    # direct 0 -- 2 of length 0, and 2 -- 3 of length 1. Pair (0, 3) goes 0, 2, 3 only.
+    g.add_edge(2, 3, weight=1.0)
+    np.testing.assert_allclose(cen.betweenness(g, weights=True), [0, 0, 2, 0])
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    n=st.integers(3, 11),
+    edges=st.lists(st.tuples(st.integers(0, 10), st.integers(0, 10), st.integers(0, 2)), min_size=2, max_size=30),
+)
+def test_zero_length_edges_are_infinitesimal(n, edges):
+    # Integer lengths with zeros against networkx with each zero replaced by 2**-10 (exact
+    # in binary, and below any difference of integer sums on these graphs): the same paths
+    # are shortest, and networkx's counts are unambiguous there.
+    g = nx.Graph()
+    g.add_nodes_from(range(n))
+    for a, b, length in edges:
+        if a < n and b < n and a != b:
+            g.add_edge(a, b, weight=float(length))
+    h = g.copy()
+    for _, _, data in h.edges(data=True):
+        data["weight"] = data["weight"] or 2.0**-10
+    expected = nx.betweenness_centrality(h, weight="weight", normalized=False)
+    np.testing.assert_allclose(cen.betweenness(g, weights=True), [expected[v] for v in range(n)], atol=1e-9)
+    ours = cen.edge_betweenness(g, weights=True, as_dict=True)
+    for (a, b), value in nx.edge_betweenness_centrality(h, weight="weight", normalized=False).items():
+        assert ours[min(a, b), max(a, b)] == pytest.approx(value, abs=1e-9)
+
+
 def test_complex_adjacency_is_a_type_error():
     for graph in (np.array([[0, 1j], [1j, 0]]), sparse.csr_array(np.array([[0, 1 + 1j], [1 + 1j, 0]]))):
         with pytest.raises(TypeError, match="`graph` must hold real edge lengths; got complex"):
@@ -208,9 +248,6 @@ def test_eccentricity_auto_falls_back_when_the_bounds_do_not_meet():
 
 def test_fifo_kernel_property_random_masks():
     """On random small masks the exact FIFO betweenness equals the exact-arithmetic reference."""
-    hypothesis = pytest.importorskip("hypothesis")
-    from hypothesis import given, settings
-    from hypothesis import strategies as st
     from hypothesis.extra.numpy import arrays
 
     from tests.centrality.test_centrality import _exact_weighted_betweenness
@@ -233,7 +270,6 @@ def test_fifo_kernel_property_random_masks():
             for a, b in zip(fifo, heap):
                 np.testing.assert_allclose(a, b, rtol=1e-12)
 
-    assert hypothesis is not None
     check()
 
 

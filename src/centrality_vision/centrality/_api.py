@@ -355,8 +355,11 @@ def betweenness(
     path lengths that are equal tie: on graphs with few distinct edge lengths (pixel
     graphs: 1 and sqrt 2) distances are kept as integer counts of each length, so
     ``1 + sqrt 2`` and ``sqrt 2 + 1`` are the same number; on other graphs two lengths
-    tie within a relative ``1e-10``. With zero-length edges, the shortest-path DAG is
-    the one the search settles (networkx's choice).
+    tie within a relative ``1e-10``. A zero-length edge counts as infinitesimally long:
+    among paths of tied length, only those with the fewest zero-length edges are
+    shortest. (Counting every tied path is ill-defined here, since a cycle of zero-length
+    edges gives infinitely many; networkx's result then depends on the order its search
+    settles nodes at equal distance, and nodes that are interchangeable can differ.)
 
     On the graph :func:`~centrality_vision.graphs.pixel_graph` returns (hop counts, exact
     values) the searches walk the pixel grid itself, about twice as fast, and a mask that

@@ -71,6 +71,74 @@ def _heap_pop(heap_d, heap_v, size):
     return d, v, size
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _before(heap_d, heap_z, a, b):
+    """Whether heap entry ``a`` comes before ``b``: by distance, then by zero-length edges."""
+    return heap_d[a] < heap_d[b] or (heap_d[a] == heap_d[b] and heap_z[a] < heap_z[b])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _heap2_push(heap_d, heap_z, heap_v, size, d, z, v):
+    """:func:`_heap_push` keyed by ``(d, z)`` in lexicographic order."""
+    i = size
+    heap_d[i] = d
+    heap_z[i] = z
+    heap_v[i] = v
+    while i > 0:
+        parent = (i - 1) >> 1
+        if not _before(heap_d, heap_z, i, parent):
+            break
+        heap_d[parent], heap_d[i] = heap_d[i], heap_d[parent]
+        heap_z[parent], heap_z[i] = heap_z[i], heap_z[parent]
+        heap_v[parent], heap_v[i] = heap_v[i], heap_v[parent]
+        i = parent
+    return size + 1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _heap2_pop(heap_d, heap_z, heap_v, size):
+    """:func:`_heap_pop` keyed by ``(d, z)``; returns ``(d, z, v, size)``."""
+    d = heap_d[0]
+    z = heap_z[0]
+    v = heap_v[0]
+    size -= 1
+    heap_d[0] = heap_d[size]
+    heap_z[0] = heap_z[size]
+    heap_v[0] = heap_v[size]
+    i = 0
+    while True:
+        left = 2 * i + 1
+        if left >= size:
+            break
+        child = left
+        if left + 1 < size and _before(heap_d, heap_z, left + 1, left):
+            child = left + 1
+        if not _before(heap_d, heap_z, child, i):
+            break
+        heap_d[child], heap_d[i] = heap_d[i], heap_d[child]
+        heap_z[child], heap_z[i] = heap_z[i], heap_z[child]
+        heap_v[child], heap_v[i] = heap_v[i], heap_v[child]
+        i = child
+    return d, z, v, size
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _push(heap_d, heap_z, heap_v, size, d, z, v, keyed_z):
+    """Push onto the ``(d, z)`` heap, or onto the ``d`` heap when not ``keyed_z``."""
+    if keyed_z:
+        return _heap2_push(heap_d, heap_z, heap_v, size, d, z, v)
+    return _heap_push(heap_d, heap_v, size, d, v)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _pop(heap_d, heap_z, heap_v, size, keyed_z):
+    """Pop from the heap :func:`_push` fills; ``z`` is 0 when not ``keyed_z``."""
+    if keyed_z:
+        return _heap2_pop(heap_d, heap_z, heap_v, size)
+    d, v, size = _heap_pop(heap_d, heap_v, size)
+    return d, 0, v, size
+
+
 @njit(cache=True, nogil=True)
 def _bfs(indptr, indices, s, hops, order):
     """Breadth-first search from ``s``; fills ``hops`` (must be -1) and ``order``; returns count."""
@@ -424,20 +492,43 @@ def _brandes_source_bfs_log(indptr, indices, offs, grid, s, hops, order, lsigma,
 
 @njit(cache=True, nogil=True)
 def _brandes_source_dijkstra(
-    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, use_log, rtol, rank
+    indptr,
+    indices,
+    data,
+    s,
+    dist,
+    zeros,
+    done,
+    order,
+    heap_d,
+    heap_z,
+    heap_v,
+    sigma,
+    delta,
+    bc,
+    use_log,
+    rtol,
+    rank,
+    has_zero,
 ):
-    # Forward pass: Dijkstra, counting shortest paths with ties up to rtol.
+    # Forward pass: Dijkstra, counting shortest paths with ties up to rtol. Among paths of
+    # tied length only those with the fewest zero-length edges count (``zeros``): a
+    # zero-length edge is as if infinitesimally long, which keeps the shortest-path DAG
+    # acyclic and independent of the order the search settles nodes at equal distance.
+    # Without zero-length edges (``has_zero`` False) every count is 0 and the heap is keyed
+    # by distance alone, which is faster.
     dist[s] = 0.0
+    zeros[s] = 0
     if use_log:
         sigma[s] = 0.0
     else:
         sigma[s] = 1.0
-    size = _heap_push(heap_d, heap_v, 0, 0.0, s)
+    size = _push(heap_d, heap_z, heap_v, 0, 0.0, 0, s, has_zero)
     count = 0
     overflow = False
     while size > 0:
-        d, v, size = _heap_pop(heap_d, heap_v, size)
-        if done[v]:
+        d, z, v, size = _pop(heap_d, heap_z, heap_v, size, has_zero)
+        if done[v] or z != zeros[v]:  # settled, or an entry a tie with fewer zeros replaced
             continue
         done[v] = True
         order[count] = v
@@ -450,12 +541,15 @@ def _brandes_source_dijkstra(
             if done[w]:
                 continue
             nd = d + data[j]
+            nz = z + (data[j] == 0.0)
             dw = dist[w]
-            if dw == np.inf or nd < dw - rtol * dw:
+            tie = dw < np.inf and nd <= dw + rtol * dw
+            if dw == np.inf or nd < dw - rtol * dw or (tie and nz < zeros[w]):
                 dist[w] = nd
+                zeros[w] = nz
                 sigma[w] = sv
-                size = _heap_push(heap_d, heap_v, size, nd, w)
-            elif nd <= dw + rtol * dw:
+                size = _push(heap_d, heap_z, heap_v, size, nd, nz, w, has_zero)
+            elif tie and nz == zeros[w]:
                 if use_log:
                     a = sigma[w]
                     if a >= sv:
@@ -467,18 +561,24 @@ def _brandes_source_dijkstra(
     ok = not overflow
     if ok:
         # The shortest-path DAG is the one the forward pass counted: arcs v -> w with
-        # d(v) + len = d(w) and w settled after v (this also orders zero-length edges).
+        # d(v) + len = d(w), zeros(v) + [len = 0] = zeros(w), and w settled after v.
         for q in range(count):
             delta[order[q]] = 0.0
             rank[order[q]] = q
         for q in range(count - 1, 0, -1):
             v = order[q]
             dv = dist[v]
+            zv = zeros[v]
             acc = 0.0
             for j in range(indptr[v], indptr[v + 1]):
                 w = indices[j]
                 dw = dist[w]
-                if dw < np.inf and rank[w] > q and abs(dv + data[j] - dw) <= rtol * dw:
+                if (
+                    dw < np.inf
+                    and rank[w] > q
+                    and abs(dv + data[j] - dw) <= rtol * dw
+                    and zv + (data[j] == 0.0) == zeros[w]
+                ):
                     if use_log:
                         acc += np.exp(sigma[v] - sigma[w]) * (1.0 + delta[w])
                     else:
@@ -507,6 +607,9 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
     hops = np.full(n, -1, dtype=np.int64)
     rank = np.empty(n, dtype=np.int64)
     dist, done, heap_d, heap_v = _dijkstra_workspace(n, indices.shape[0] if weighted else 0)
+    zeros = np.zeros(n, dtype=np.int64)
+    heap_z = np.empty(heap_v.shape[0], dtype=np.int64)
+    has_zero = weighted and data.shape[0] > 0 and data.min() == 0.0
     no_offs = np.empty(0, dtype=np.int64)
     # the hop-count search's node indices, unsigned (see _brandes_source_bfs)
     order_u = np.empty(0 if weighted else n, dtype=np.uint64)
@@ -519,12 +622,46 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
         if weighted:
             if not force_log:
                 ok = _brandes_source_dijkstra(
-                    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, False, rtol, rank
+                    indptr,
+                    indices,
+                    data,
+                    s,
+                    dist,
+                    zeros,
+                    done,
+                    order,
+                    heap_d,
+                    heap_z,
+                    heap_v,
+                    sigma,
+                    delta,
+                    bc,
+                    False,
+                    rtol,
+                    rank,
+                    has_zero,
                 )
             if not ok:
                 n_log += 1
                 _brandes_source_dijkstra(
-                    indptr, indices, data, s, dist, done, order, heap_d, heap_v, sigma, delta, bc, True, rtol, rank
+                    indptr,
+                    indices,
+                    data,
+                    s,
+                    dist,
+                    zeros,
+                    done,
+                    order,
+                    heap_d,
+                    heap_z,
+                    heap_v,
+                    sigma,
+                    delta,
+                    bc,
+                    True,
+                    rtol,
+                    rank,
+                    has_zero,
                 )
         else:
             if not force_log:
@@ -927,10 +1064,11 @@ def distances_from(indptr, indices, data, kind, lengths, s, weighted):
 
 @njit(cache=True, nogil=True)
 def brandes_edges(indptr, indices, data, sources, rtol):
+    has_zero = data.shape[0] > 0 and data.min() == 0.0
     """Per-arc dependencies summed over ``sources`` (edge betweenness over ordered pairs).
 
     Path counts are kept as logarithms, so they cannot overflow. For hop counts pass
-    ``data`` of ones.
+    ``data`` of ones. Ties and zero-length edges as in :func:`_brandes_source_dijkstra`.
     """
     n = indptr.shape[0] - 1
     eb = np.zeros(indices.shape[0])
@@ -939,15 +1077,18 @@ def brandes_edges(indptr, indices, data, sources, rtol):
     delta = np.zeros(n)
     rank = np.empty(n, dtype=np.int64)
     dist, done, heap_d, heap_v = _dijkstra_workspace(n, indices.shape[0])
+    zeros = np.zeros(n, dtype=np.int64)
+    heap_z = np.empty(heap_v.shape[0], dtype=np.int64)
     for i in range(sources.shape[0]):
         s = sources[i]
         count = 0
         dist[s] = 0.0
+        zeros[s] = 0
         lsigma[s] = 0.0
-        size = _heap_push(heap_d, heap_v, 0, 0.0, s)
+        size = _push(heap_d, heap_z, heap_v, 0, 0.0, 0, s, has_zero)
         while size > 0:
-            d, v, size = _heap_pop(heap_d, heap_v, size)
-            if done[v]:
+            d, z, v, size = _pop(heap_d, heap_z, heap_v, size, has_zero)
+            if done[v] or z != zeros[v]:
                 continue
             done[v] = True
             order[count] = v
@@ -958,12 +1099,15 @@ def brandes_edges(indptr, indices, data, sources, rtol):
                 if done[w]:
                     continue
                 nd = d + data[j]
+                nz = z + (data[j] == 0.0)
                 dw = dist[w]
-                if dw == np.inf or nd < dw - rtol * dw:
+                tie = dw < np.inf and nd <= dw + rtol * dw
+                if dw == np.inf or nd < dw - rtol * dw or (tie and nz < zeros[w]):
                     dist[w] = nd
+                    zeros[w] = nz
                     lsigma[w] = sv
-                    size = _heap_push(heap_d, heap_v, size, nd, w)
-                elif nd <= dw + rtol * dw:
+                    size = _push(heap_d, heap_z, heap_v, size, nd, nz, w, has_zero)
+                elif tie and nz == zeros[w]:
                     a = lsigma[w]
                     lsigma[w] = max(a, sv) + np.log1p(np.exp(-abs(a - sv)))
         for q in range(count):
@@ -972,11 +1116,17 @@ def brandes_edges(indptr, indices, data, sources, rtol):
         for q in range(count - 1, -1, -1):
             v = order[q]
             dv = dist[v]
+            zv = zeros[v]
             acc = 0.0
             for j in range(indptr[v], indptr[v + 1]):
                 w = indices[j]
                 dw = dist[w]
-                if dw < np.inf and rank[w] > q and abs(dv + data[j] - dw) <= rtol * dw:
+                if (
+                    dw < np.inf
+                    and rank[w] > q
+                    and abs(dv + data[j] - dw) <= rtol * dw
+                    and zv + (data[j] == 0.0) == zeros[w]
+                ):
                     part = np.exp(lsigma[v] - lsigma[w]) * (1.0 + delta[w])
                     eb[j] += part
                     acc += part
