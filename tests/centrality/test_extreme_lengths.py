@@ -10,7 +10,7 @@ import math
 import networkx as nx
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy import sparse
 
@@ -91,3 +91,27 @@ def test_katz_with_a_large_beta():
         cen.katz(complete, alpha=0.2, beta=1e308, normalized=False)  # 5e308
     with pytest.raises(InputError, match=r"`alpha` must be below"):
         cen.katz(path, alpha=1e308)  # (a RuntimeWarning first)
+
+
+@settings(max_examples=40, deadline=None)
+@given(n=st.integers(2, 20), seed=st.integers(0, 2**16), exponent=st.integers(-1000, 1023))
+@example(n=15, seed=1, exponent=1023)
+@example(n=15, seed=1, exponent=1019)
+def test_katz_strengths_scale_with_alpha(n, seed, exponent):
+    # Strengths times 2**e with alpha times 2**-e is the same system, up to float64's
+    # limits (strengths near 1e308 overflowed the row sums; 1e307 failed in LAPACK).
+    graph = nx.gnp_random_graph(n, 0.5, seed=seed)
+    rng = np.random.default_rng(seed)
+    for u, v in graph.edges:
+        graph[u][v]["weight"] = float(rng.uniform(0.5, 1.9))
+    base = sparse.csr_array(nx.to_scipy_sparse_array(graph))
+    scaled = base * math.ldexp(1.0, exponent)
+    expected = cen.katz(base, strengths=True, alpha=0.01)
+    np.testing.assert_allclose(
+        cen.katz(scaled, strengths=True, alpha=math.ldexp(0.01, -exponent)), expected, rtol=1e-12
+    )
+    top = cen.katz(scaled, strengths=True)  # the default never fails or warns
+    assert np.all(np.isfinite(top)) and np.all(top > 0)
+    if graph.number_of_edges():
+        with pytest.raises(InputError, match=r"`alpha` must be below 1 / \(largest eigenvalue"):
+            cen.katz(scaled, strengths=True, alpha=math.ldexp(2.0 * n, -exponent))

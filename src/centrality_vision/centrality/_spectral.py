@@ -301,28 +301,39 @@ def katz(
 
     info, adjacency = _strength_matrix(graph, strengths, None, "katz")
     n = adjacency.shape[0]
+    # Work on the adjacency divided by 2**shift (its largest |value| in [0.5, 1)) with
+    # alpha times 2**shift: the same system, but sums and eigenvalues of strengths near
+    # float64's limits neither overflow nor underflow.
+    shift = int(np.frexp(np.abs(adjacency.data).max())[1]) if adjacency.nnz else 0
+    adjacency = adjacency.copy()
+    adjacency.data = np.ldexp(adjacency.data, -shift)
     rows = np.abs(adjacency).sum(axis=1)
     cols = np.abs(adjacency).sum(axis=0)
-    if alpha is None:  # 0.1 unless 0.1 * lambda_max >= 0.9 (row/column sums bound lambda_max)
-        alpha = 0.1
-        if n and 0.1 * min(rows.max(), cols.max()) >= 0.9:
-            radius = _spectral_radius(adjacency)
-            alpha = 0.1 if 0.1 * radius < 0.9 else 0.9 / radius
-    alpha = check_float(alpha, name="alpha", low=0.0)
+    bound = min(rows.max(), cols.max()) if n else 0.0  # bounds lambda_max (scaled)
+    with np.errstate(over="ignore"):
+        if alpha is None:  # 0.1 unless 0.1 * lambda_max >= 0.9
+            alpha = 0.1
+            if np.ldexp(0.1 * bound, shift) >= 0.9:
+                radius = _spectral_radius(adjacency)
+                alpha = 0.1 if np.ldexp(0.1 * radius, shift) < 0.9 else float(np.ldexp(0.9 / radius, -shift))
+        alpha = check_float(alpha, name="alpha", low=0.0)
+        scaled_alpha = float(np.ldexp(alpha, shift))  # inf for a huge alpha: refused below
     beta = check_float(beta, name="beta", low=0.0)
     if beta == 0.0:
         raise InputError("`beta` must be positive; got 0.0.")
     normalized = check_bool(normalized, name="normalized")
-    with np.errstate(over="ignore"):  # a huge alpha is refused here, not warned about
-        too_large = n and alpha * min(rows.max(), cols.max()) >= 1.0
-        too_large = too_large and alpha * _spectral_radius(adjacency) >= 1.0 - 1e-12
+    too_large = n and scaled_alpha * bound >= 1.0
     if too_large:
+        radius = _spectral_radius(adjacency)
+        too_large = scaled_alpha * radius >= 1.0 - 1e-12
+    if too_large:
+        with np.errstate(over="ignore", under="ignore"):
+            limit = float(np.ldexp(1.0 / radius, -shift))
         raise InputError(
-            f"`alpha` must be below 1 / (largest eigenvalue of the adjacency) = "
-            f"{1.0 / _spectral_radius(adjacency):.6g} for Katz centrality; got {alpha!r}."
+            f"`alpha` must be below 1 / (largest eigenvalue of the adjacency) = {limit:.6g} for Katz centrality; "
+            f"got {alpha!r}."
         )
-    with np.errstate(over="ignore"):
-        system = sparse.csc_matrix(sparse.identity(n, format="csc") - alpha * sparse.csc_matrix(adjacency.T))
+    system = sparse.csc_matrix(sparse.identity(n, format="csc") - scaled_alpha * sparse.csc_matrix(adjacency.T))
     try:
         # x is linear in beta: solved for beta = 1 and scaled after, so that a large beta
         # neither overflows the solve nor (normalised) changes the result
