@@ -76,6 +76,9 @@ def _centred(unit: np.ndarray) -> np.ndarray:
     return unit - (unit.min(axis=0) / 2 + unit.max(axis=0) / 2)
 
 
+_TINY = 1e-140  # distances (of unit-scaled points) below which squared ones may lose digits
+
+
 def _robust_norms(diff: np.ndarray) -> np.ndarray:
     """Row norms of ``diff`` without underflow: each row divided by its largest entry first."""
     top = np.max(np.abs(diff), axis=1)
@@ -358,7 +361,16 @@ def knn_graph(points, /, *, k: int) -> sparse.csr_array:
     n = points.shape[0]
     k = check_int(k, name="k", low=1, high=n - 1)
     unit, _ = _unit_scale(points)
-    _, idx = cKDTree(unit).query(unit, k=k + 1)
+    tree = cKDTree(unit)
+    distances, idx = tree.query(unit, k=k + 1)
+    # The tree compares squared distances, which underflow for points closer than about
+    # 1e-154 of the extent: there it may pick wrong neighbours (or not the point itself
+    # first). Where the k-th neighbour is that close, choose again among the points within
+    # 1e-140 (a radius whose square does not underflow) by their exact distances.
+    for i in np.flatnonzero(distances[:, -1] < _TINY):
+        near = np.asarray(tree.query_ball_point(unit[i], _TINY), dtype=np.int64)
+        lengths = _robust_norms(unit[near] - unit[i])
+        idx[i] = near[np.lexsort((near, lengths))[: k + 1]]
     rows = np.repeat(np.arange(n), k + 1)
     cols = idx.ravel()
     return edges_to_graph(n, rows, cols, points)
@@ -386,7 +398,7 @@ def complete_graph(points, /) -> sparse.csr_array:
     points = as_points(points, name="points", n_dims=ANY_DIMS, min_points=2, allow_duplicates=False)
     unit, scale = _unit_scale(points)
     unit_lengths = pdist(unit)
-    close = np.flatnonzero(unit_lengths < 1e-140)  # squared differences may have underflowed
+    close = np.flatnonzero(unit_lengths < _TINY)  # squared differences may have underflowed
     if close.size:
         lo, hi = np.triu_indices(points.shape[0], k=1)
         unit_lengths[close] = _robust_norms(unit[lo[close]] - unit[hi[close]])
