@@ -9,6 +9,7 @@ from scipy.spatial import ConvexHull
 from scipy.spatial.distance import pdist, squareform
 
 from centrality_vision.centrality import betweenness
+from centrality_vision.exceptions import InputError
 from centrality_vision.graphs import (
     complete_graph,
     delaunay_graph,
@@ -140,6 +141,35 @@ def test_knn_neighbours_in_a_cluster_below_squared_precision(seed):
     expected = np.zeros((m, m), dtype=bool)
     expected[np.repeat(np.arange(m), k), np.argsort(dist, axis=1)[:, :k].ravel()] = True
     np.testing.assert_array_equal(dense, expected | expected.T)
+
+
+@pytest.mark.parametrize("seed", range(10))
+@pytest.mark.parametrize("dim", [2, 3])
+def test_emst_of_a_line_with_a_cluster_below_its_precision(seed, dim):
+    # Points within 1e-12 of a line count as on it; a cluster 1e-15 to 1e-20 across at the
+    # origin was joined in order along the line (wrong in 198 of 200 such 2D sets).
+    rng = np.random.default_rng(seed)
+    line = np.outer(rng.random(8), [1.0, 0.5, 0.25][:dim])
+    points = np.vstack([line, rng.standard_normal((6, dim)) * 10.0 ** -rng.integers(15, 21)])
+    tree = emst_graph(points)
+    # (networkx: scipy's dense input takes lengths below 1e-8 for non-edges)
+    expected = nx.minimum_spanning_tree(nx.from_numpy_array(squareform(pdist(points))))
+    lengths = [length for _, _, length in expected.edges(data="weight")]
+    # Edge lengths, cluster edges included, to within rounding (the edge to the cluster
+    # may be another of lengths equal to a few units in the last place).
+    np.testing.assert_allclose(np.sort(sparse.triu(tree).data), np.sort(lengths), rtol=1e-14)
+    inner = sparse.csr_array(tree)[8:, 8:]
+    assert connected_components(inner, directed=False)[0] == 1  # the cluster's own tree
+
+
+def test_line_with_a_huge_cluster_below_its_precision_is_refused(monkeypatch):
+    from centrality_vision.graphs import _pointsets
+
+    monkeypatch.setattr(_pointsets, "_MAX_LINE_CANDIDATES", 100)
+    rng = np.random.default_rng(0)
+    points = np.vstack([np.outer(rng.random(5), [1.0, 0.5]), rng.standard_normal((30, 2)) * 1e-18])
+    with pytest.raises(InputError, match=r"`points` lie on a line .* closer together along it than their offsets"):
+        emst_graph(points)
 
 
 def test_complete_graph_edge_count():

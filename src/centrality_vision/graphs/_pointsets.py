@@ -247,8 +247,8 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
         As for :func:`delaunay_graph`, except that points on a line, or in 3D on a plane
-        (to within 1e-12 of their extent), are accepted: the graph is then the path along
-        the line, or the Gabriel graph within the plane.
+        (to within 1e-12 of their extent), are accepted: for points exactly on a line the
+        graph is the path along it; within the plane, the Gabriel graph there.
 
     Returns
     -------
@@ -296,25 +296,77 @@ def _gabriel_candidates(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     basis = np.linalg.svd(centred, full_matrices=False)[2][:rank]
     along = centred @ basis.T
     if rank == 1:
-        order = np.argsort(along[:, 0], kind="stable")
-        return np.minimum(order[:-1], order[1:]), np.maximum(order[:-1], order[1:])
+        return _line_candidates(unit, basis[0])
     return _delaunay_edges(along)
+
+
+_MAX_LINE_CANDIDATES = 20_000_000
+
+
+def _line_candidates(unit: np.ndarray, direction: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Pairs that include every Gabriel edge of points within 1e-12 of a line.
+
+    With ``t`` the position along the line and ``h`` the offset across it, a point ``r``
+    between ``p`` and ``q`` along the line lies inside their diametral ball when
+    ``(t_r - t_p) (t_q - t_r) > (h_r - h_p) . (h_q - h_r)``, which holds once the left side
+    exceeds the square of twice the largest offset. Sorted along the line, ``p`` pairs with
+    the following points until one between them is inside; the point nearest the middle
+    decides (the left side is concave in ``t_r``). Exactly collinear points pair with
+    their successor only; a cluster whose offsets are not small against its spacing along
+    the line (below the coordinates' precision, say) pairs within itself, where the path in
+    order along the line was wrong. ``t`` and ``h`` carry rounding of the order of
+    ``eps`` (``unit``'s coordinates are at most 1): both bounds allow for it.
+    """
+    eps = np.finfo(float).eps
+    t = unit @ direction
+    across = unit - t[:, None] * direction
+    spread = 2.0 * float(np.linalg.norm(across, axis=1).max()) + 16 * eps
+    slack = 16 * eps
+    order = np.argsort(t, kind="stable")
+    ts = t[order]
+    n = ts.size
+    firsts, seconds = [np.arange(n - 1)], [np.arange(1, n)]
+    active = np.arange(n - 2)  # p whose pair with the point `gap` later is still possible
+    gap = 2
+    count = n - 1
+    while active.size:
+        last = active + gap
+        middle = np.clip(np.searchsorted(ts, 0.5 * (ts[active] + ts[last])), active + 1, last - 1)
+        inside = np.zeros(active.size, dtype=bool)
+        for r in (np.maximum(middle - 1, active + 1), middle):
+            before, after = ts[r] - ts[active] - slack, ts[last] - ts[r] - slack
+            inside |= (before > 0) & (after > 0) & (before * after > spread * spread)
+        active = active[~inside]
+        firsts.append(active)
+        seconds.append(active + gap)
+        count += active.size
+        if count > _MAX_LINE_CANDIDATES:
+            raise InputError(
+                "`points` lie on a line to within 1e-12 of their extent, but too many of them are closer "
+                "together along it than their offsets across it (a cluster below the coordinates' precision?); "
+                "build the graph of the cluster separately, or remove near-duplicate points."
+            )
+        gap += 1
+        active = active[active + gap < n]
+    first, second = order[np.concatenate(firsts)], order[np.concatenate(seconds)]
+    return np.minimum(first, second), np.maximum(first, second)
 
 
 def emst_graph(points, /) -> sparse.csr_array:
     """Euclidean minimum spanning tree of a 2D or 3D point set.
 
     Computed as the minimum spanning tree of the Delaunay graph, which contains every
-    Euclidean MST (for points on a line or plane: of the path along it, or of the plane's
-    Delaunay graph). When several spanning trees share the minimum weight (equal distances)
-    one of them is returned.
+    Euclidean MST (for points within 1e-12 of a line, of the pairs along it that can be
+    Gabriel edges; on a plane, of the plane's Delaunay graph). When several
+    spanning trees share the minimum weight (equal distances) one of them is returned.
 
     Parameters
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
         As for :func:`delaunay_graph`, except that points on a line, or in 3D on a plane
-        (to within 1e-12 of their extent), are accepted: the tree is then the path along
-        the line, or the tree within the plane.
+        (to within 1e-12 of their extent), are accepted: for points exactly on a line the
+        tree is the path along it (a cluster across the line below the coordinates'
+        precision is joined by its own tree); on a plane, the tree within it.
 
     Returns
     -------
