@@ -97,9 +97,10 @@ def as_points(
         uniq, first, counts = np.unique(arr, axis=0, return_index=True, return_counts=True)
         if uniq.shape[0] != arr.shape[0]:
             dup = uniq[np.argmax(counts)]
+            rows = np.flatnonzero((arr == dup).all(axis=1))
             raise InputError(
                 f"`{name}` must not contain duplicate points; got {arr.shape[0] - uniq.shape[0]} "
-                f"duplicate(s), e.g. {dup.tolist()}."
+                f"duplicate(s), e.g. rows {rows[0]} and {rows[1]}, both {dup.tolist()}."
             )
     return arr
 

@@ -109,3 +109,26 @@ def test_plot_matching_draws_unmatched_points_grey_without_lines():
     assert np.allclose(moving_colours[[1, 3], :3], 0.6)
     fixed_colours = ax.collections[2].get_facecolors()
     assert np.allclose(fixed_colours[[1, 3], :3], 1.0) and not np.allclose(fixed_colours[0, :3], 1.0)
+
+
+def test_library_advice_reads_as_match_options(tmp_path, capsys):
+    # match spells the library's method='local' as --mwme-method local (its own --method
+    # is another choice) and scale=True as --transform similarity
+    points = np.random.default_rng(0).random((25, 2))
+    np.savetxt(tmp_path / "a.txt", points)
+    argv = ["match", str(tmp_path / "a.txt"), str(tmp_path / "a.txt"), "--method", "mwme", "--mwme-method", "exact"]
+    assert main([*argv, "--out", str(tmp_path / "m.json")]) == 2
+    err = capsys.readouterr().err
+    assert "error: --mwme-method exact solves up to 20 points" in err and "Use --mwme-method local." in err
+
+
+def test_scale_advice_names_the_transform_option():
+    import argparse
+
+    from centrality_vision.cli import _in_cli_words
+    from centrality_vision.cli.match import add_parser
+
+    parser = add_parser(argparse.ArgumentParser().add_subparsers())
+    args = parser.parse_args(["m.txt", "f.txt", "--out", "x.json"])
+    said = _in_cli_words("not reliable; use `scale=True`. From Python, try this.", parser, args)
+    assert said == "not reliable; use --transform similarity."

@@ -102,7 +102,7 @@ def test_icp_max_distance_that_leaves_no_pair_is_a_one_line_error(tmp_path, caps
     np.save(tmp_path / "f.npy", fish + 0.1)
     argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--method", "icp"]
     assert main([*argv, "--max-distance", "1e-9", "--out", str(tmp_path / "r.json")]) == 2
-    assert "ICP found only 0 pairs within --max-distance=1e-09" in _error_line(capsys)
+    assert "ICP found only 0 pairs within --max-distance 1e-09 at the start" in _error_line(capsys)
 
 
 def test_icp_point_to_plane_in_3d(tmp_path):
@@ -199,3 +199,33 @@ def test_the_library_advice_names_the_init_option():
     parser = add_parser(argparse.ArgumentParser().add_subparsers())
     said = _in_cli_words("Try a smaller `w`, or a starting pose (`init`).", parser)
     assert said == "Try a smaller --w, or a starting pose (--init)."
+
+
+def test_gpd_duplicates_are_named_by_file_and_row(tmp_path, capsys, fish):
+    # GPD built its graph on the normalised set: the error showed normalised coordinates,
+    # named `moving`, and advised another --graph (every graph refuses duplicates) or
+    # `moving_graph=` (no such option).
+    moving = fish * 100.0 + 1000.0
+    moving[5] = moving[4]
+    np.save(tmp_path / "m.npy", moving)
+    np.save(tmp_path / "f.npy", fish)
+    argv = [
+        "register",
+        str(tmp_path / "m.npy"),
+        str(tmp_path / "f.npy"),
+        "--method",
+        "gpd",
+        "--out",
+        str(tmp_path / "r.json"),
+    ]
+    assert main(argv) == 2
+    line = _error_line(capsys)
+    assert f"MOVING ({tmp_path / 'm.npy'}) must not contain duplicate points" in line
+    assert f"rows 4 and 5, both {moving[4].tolist()}" in line
+    assert "remove the duplicates." in line and "moving_graph" not in line and "Python" not in line
+
+
+def test_library_settings_read_as_options(tmp_path, capsys, fish):
+    # "max_iter=1 ... tol=1e-05" in the library is "--max-iter 1 ... --tol 1e-05" here
+    _register(tmp_path, fish, fish[::-1] + 0.1, "--method", "icp", "--max-iter", "1")
+    assert "warning: ICP stopped at --max-iter 1 before meeting --tol 1e-05." in capsys.readouterr().err

@@ -18,6 +18,7 @@ traceback.
 
 from __future__ import annotations
 
+import argparse
 import re
 import sys
 
@@ -77,7 +78,7 @@ def main(argv: list[str] | None = None) -> int:
     args._warnings = []
 
     def show(message, category, filename, lineno, file=None, line=None):
-        text = _in_cli_words(" ".join(str(message).split()), getattr(args, "_parser", None))
+        text = _in_cli_words(" ".join(str(message).split()), getattr(args, "_parser", None), args)
         args._warnings.append(f"{category.__name__}: {text}")
         print(f"{prog}: warning: {text}", file=sys.stderr)
 
@@ -88,7 +89,7 @@ def main(argv: list[str] | None = None) -> int:
             warnings.showwarning = show
             return args.run(args)
     except (InputError, OSError) as exc:
-        message = _in_cli_words(" ".join(str(exc).split()) or type(exc).__name__, getattr(args, "_parser", None))
+        message = _in_cli_words(" ".join(str(exc).split()) or type(exc).__name__, getattr(args, "_parser", None), args)
         print(f"{prog}: error: {message}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
@@ -129,15 +130,38 @@ def _glued_columns(argv: list[str]) -> list[str]:
     return out
 
 
-def _in_cli_words(message: str, parser) -> str:
-    """A library message with its parameter names (```tol```) as this command's options (``--tol``)."""
+def _in_cli_words(message: str, parser, args: argparse.Namespace | None = None) -> str:
+    """A library message in this command's words.
+
+    - A parameter (```tol```) becomes its option (``--tol``), and a setting
+      (```tol=1e-05```) the option with its value (``--tol 1e-05``); a command's
+      ``_cli_phrases`` (``{library phrase: command-line phrase}``) come first, for
+      settings the command spells otherwise (``match``: ```scale=True``` is
+      ``--transform similarity``).
+    - An input file's parameter (```moving```) becomes its argument and the file given
+      (``MOVING (scan.ply)``).
+    - A sentence that starts "From Python, " is advice only a Python caller can follow
+      (``moving_graph``, say), and is left out.
+    """
     if parser is None:
         return message
+    for phrase, replacement in getattr(args, "_cli_phrases", {}).items():
+        message = message.replace(phrase, replacement)
     for action in parser._actions:
         longs = [option for option in action.option_strings if option.startswith("--")]
         if longs:
+
+            def setting(match, option=longs[0], flag=action.nargs == 0):
+                value = match.group(1).strip("'\"")
+                return option if flag and value == "True" else f"{option} {value}"
+
+            message = re.sub(rf"`{re.escape(action.dest)}=([^`]*)`", setting, message)
             message = message.replace(f"`{action.dest}`", longs[0])
-    return message
+        elif not action.option_strings and isinstance(getattr(args, action.dest, None), str):
+            metavar = action.metavar or action.dest.upper()
+            message = message.replace(f"`{action.dest}`", f"{metavar} ({getattr(args, action.dest)})")
+    sentences = re.split(r"(?<=[.!?])\s+(?=[A-Z(])", message)
+    return " ".join(sentence for sentence in sentences if not sentence.startswith("From Python, "))
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -70,7 +70,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     add_out(parser, ".json", ".npz")
     add_plot(parser, "the matching (2D sets)")
-    parser.set_defaults(run=run, _parser=parser)
+    # the library's advice in this command's options
+    phrases = {
+        "`scale=True`": "--transform similarity",
+        "`method='local'`": "--mwme-method local",
+        "`method='exact'`": "--mwme-method exact",
+    }
+    parser.set_defaults(run=run, _parser=parser, _cli_phrases=phrases)
     return parser
 
 

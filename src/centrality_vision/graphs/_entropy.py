@@ -282,7 +282,7 @@ def mwme_graph(
         if n > MAX_EXACT:
             raise InputError(
                 f"`method='exact'` solves up to {MAX_EXACT} points (time and memory grow as 2^n n); "
-                f"got {n}. Use method='local'."
+                f"got {n}. Use `method='local'`."
             )
         order, cost = _k.mwme_exact(dist, joining)
     else:

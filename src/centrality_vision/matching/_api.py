@@ -53,7 +53,7 @@ def _warn_if_scaled(info: dict) -> None:
         warnings.warn(
             f"The sets seem to differ in scale: a similarity transform of scale {ratio:.3g} brings "
             f"{similar:.1f} points into agreement where the rigid fit brings {rigid:.1f}. A rigid "
-            "transform cannot align them and its correspondences are not reliable; use scale=True.",
+            "transform cannot align them and its correspondences are not reliable; use `scale=True`.",
             MatchingWarning,
             stacklevel=3,
         )

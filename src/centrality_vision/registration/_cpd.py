@@ -796,8 +796,8 @@ class _CPD(BaseEstimator):
             warnings.warn(f"{name}: {stopped}", ConvergenceWarning, stacklevel=3)
         elif not converged and iteration >= self.max_iter and self.max_iter > 0 and self.tol > 0:
             warnings.warn(
-                f"{name} stopped at max_iter={self.max_iter} before the relative change of the "
-                f"objective fell below tol={self.tol}.",
+                f"{name} stopped at `max_iter={self.max_iter}` before the relative change of the "
+                f"objective fell below `tol={self.tol}`.",
                 ConvergenceWarning,
                 stacklevel=3,
             )

@@ -338,13 +338,22 @@ class GPD(BaseEstimator):
                 raise InputError(f"`{name}_centrality` must have shape ({points.shape[0]},); got {values.shape}.")
             return normalize_centrality(values, name=f"{name}_centrality"), None
         if graph is None:
+            if not callable(self.graph):  # every graph GPD builds joins distinct points
+                try:
+                    as_points(points, name=name, n_dims=ANY_DIMS, allow_duplicates=False)
+                except InputError as exc:
+                    raise InputError(
+                        f"{exc} GPD's {self.graph!r} graph needs distinct points: remove the duplicates. "
+                        f"From Python, you can also pass your own `{name}_graph` or `{name}_centrality`."
+                    ) from None
             try:
                 graph = _build_graph(points, self.graph, self.k)
             except InputError as exc:
                 kind = getattr(self.graph, "__name__", self.graph)
                 raise InputError(
-                    f"GPD could not build the {kind!r} graph of `{name}`: {exc} Pass another `graph` "
-                    f"(e.g. 'knn' or 'emst') or `{name}_graph=`."
+                    f"GPD could not build the {kind!r} graph of `{name}`: {exc} Choose another `graph` "
+                    "(e.g. 'knn' or 'emst'). From Python, you can also pass your own "
+                    f"`{name}_graph` or `{name}_centrality`."
                 ) from None
         else:
             graph = as_graph(graph, name=f"{name}_graph")

@@ -256,16 +256,16 @@ class ICP(BaseEstimator):
                             f"(at least {dim + 1} are needed); lower it."
                         )
                     raise InputError(
-                        f"ICP found only {int(np.count_nonzero(keep))} pairs within `max_distance`="
-                        f"{self.max_distance} at the start (at least {dim + 1} are needed); start closer "
-                        "(init=) or raise `max_distance`."
+                        f"ICP found only {int(np.count_nonzero(keep))} pairs within "
+                        f"`max_distance={self.max_distance}` at the start (at least {dim + 1} are needed); "
+                        "start closer (`init`) or raise `max_distance`."
                     )
                 # the last step moved the pairs out of reach: its iterate is dropped, the one
                 # before (which had pairs) is the result
                 stopped = (
-                    f"only {int(np.count_nonzero(keep))} pairs within max_distance={self.max_distance} "
+                    f"only {int(np.count_nonzero(keep))} pairs within `max_distance={self.max_distance}` "
                     f"after trimming at iteration {iteration}; stopped at the iterate before, the last "
-                    "with enough pairs. Start closer (init=) or raise `max_distance`."
+                    "with enough pairs. Start closer (`init`) or raise `max_distance`."
                 )
                 transform, moving_t, partner, keep = last
                 iteration -= 1
@@ -319,7 +319,7 @@ class ICP(BaseEstimator):
             warnings.warn(
                 f"ICP: the fixed set's normals leave {free} of the {3 if dim == 2 else 6} rigid motions free (a "
                 "flat or straight fixed set): the pose along them is the start's, not a fit. Use "
-                "metric='point_to_point'.",
+                "`metric='point_to_point'`.",
                 ConvergenceWarning,
                 stacklevel=2,
             )
@@ -327,7 +327,7 @@ class ICP(BaseEstimator):
             warnings.warn(f"ICP: {stopped}", ConvergenceWarning, stacklevel=2)
         elif not converged and iteration >= self.max_iter and self.max_iter > 0 and self.tol > 0:
             warnings.warn(
-                f"ICP stopped at max_iter={self.max_iter} before meeting tol={self.tol}.",
+                f"ICP stopped at `max_iter={self.max_iter}` before meeting `tol={self.tol}`.",
                 ConvergenceWarning,
                 stacklevel=2,
             )
