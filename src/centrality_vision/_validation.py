@@ -49,6 +49,10 @@ def as_real_array(value, *, name: str, shape: str = "an array") -> np.ndarray:
     Raises a :class:`TypeError` naming ``name`` for None, text, objects and complex numbers,
     and an :class:`InputError` for ragged nested lists (``shape`` describes what was expected).
     """
+    if np.ma.is_masked(value):
+        raise TypeError(
+            f"`{name}` must be a plain array; got a masked array with masked entries (the mask would be ignored)."
+        )
     try:
         arr = np.asarray(value)
     except (TypeError, ValueError) as exc:  # ragged nested lists

@@ -777,6 +777,25 @@ def test_classify_tells_a_file_from_a_missing_folder(tmp_path, capsys):
     assert "--labels: " in (message := _one_line_error(capsys)) and "is a folder, not a CSV file" in message
 
 
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"file,label\nbar0.png,b\xe9\n", "must be a UTF-8 text file; got byte 0xe9, not UTF-8 there"),
+        (b"\x89PNG\r\n\x1a\n", "must be a UTF-8 text file; got byte 0x89, not UTF-8 there"),
+        (b"file,label\nbar0.png\n", "line 2 must give a file and its label; got 'bar0.png' and None"),
+        (b"file,label\nbar0.png,\n", "line 2 must give a file and its label; got 'bar0.png' and ''"),
+    ],
+)
+def test_classify_bad_label_files_are_one_line_errors(tmp_path, capsys, content, message):
+    # a Latin-1 or binary file and a row without its label were "internal error"s;
+    # an empty label made a class named ''
+    folder = _shapes_folder(tmp_path / "shapes")
+    (tmp_path / "labels.csv").write_bytes(content)
+    argv = ["classify", str(folder), "--labels", str(tmp_path / "labels.csv"), "--out", str(tmp_path / "c.json")]
+    assert main(argv) == 2
+    assert message in _one_line_error(capsys)
+
+
 def test_library_messages_name_the_command_line_options(tmp_path, capsys):
     # "`columns` must not repeat a column": the user typed --columns
     np.savetxt(tmp_path / "p.txt", _points())

@@ -156,6 +156,17 @@ def test_scores_by_hand():
     assert bullseye_score(d, swapped, top=4) == pytest.approx(36 / 48)
 
 
+def test_nearest_neighbour_ties_go_to_the_lower_index_whatever_the_class_names():
+    # all shapes equally far apart: the training shapes were kept in class order, so
+    # renaming the classes changed which one a tie went to (1/3 against 2/3)
+    d = 1 - np.eye(5)
+    as_letters = nearest_neighbour_accuracy(d, ["b", "b", "b", "a", "a"], n_train=1, n_splits=1)
+    assert as_letters == nearest_neighbour_accuracy(d, [0, 0, 0, 1, 1], n_train=1, n_splits=1)
+    # by hand: each test shape takes the class of the lower of the two training shapes,
+    # always one of class 0 (indices 0-2): its two other shapes are right, of three tests
+    assert as_letters == pytest.approx(2 / 3)
+
+
 def test_rerank_pulls_a_chain_together():
     x = np.r_[np.arange(6.0) * 3, 40 + np.arange(6.0)]
     d = np.abs(np.subtract.outer(x, x))
@@ -217,7 +228,16 @@ def test_rerank_of_shapes_with_exact_copies_keeps_the_classes_apart():
         (lambda: bullseye_score(_D4, [None, None, "b", "b"], top=2), TypeError, "got NoneType, str"),
         (lambda: nearest_neighbour_accuracy(_D4, [np.nan] * 2 + [1.0] * 2, n_train=1), ValueError, "NaN or None"),
         (lambda: bullseye_score(sparse.csr_array(_D4), [0, 0, 1, 1]), TypeError, "`distances` must be a dense"),
-        (lambda: diffusion_rerank(np.array([[0, [1]], [1, 0]], dtype=object)), TypeError, "`distances` must be"),
+        (lambda: diffusion_rerank(np.array([[0, [1]], [1, 0]], dtype=object)), TypeError, "`distances` must hold"),
+        # found by a fuzz run: numpy's own messages, numeric strings read as numbers, masks ignored
+        (lambda: bullseye_score([[0, 1], [1]], [0, 1]), ValueError, "`distances` must be a square"),
+        (lambda: retrieval_counts([[0, 10**400], [1, 0]], [0, 1]), TypeError, "`distances` must hold real"),
+        (lambda: retrieval_counts([["0", "1"], ["1", "0"]], [0, 1]), TypeError, "`distances` must hold real"),
+        (
+            lambda: bullseye_score(np.ma.masked_array(_D4, mask=np.eye(4)), [0, 0, 1, 1]),
+            TypeError,
+            "`distances` must be a plain array; got a masked array",
+        ),
         (
             lambda: diffusion_rerank(_D4 - 1, n_neighbors=2, bandwidth=2),
             ValueError,

@@ -99,13 +99,29 @@ def _read_labels(path) -> dict:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"--labels: {path}: " + ("is a folder, not a CSV file." if path.is_dir() else "no such file."))
-    with path.open("r", encoding="utf-8-sig", newline="") as handle:
-        reader = csv.DictReader(handle)
-        if reader.fieldnames is None or not {"file", "label"} <= set(reader.fieldnames):
-            raise InputError(
-                f"{path}: a labels file must be a CSV with columns 'file' and 'label'; got {reader.fieldnames}."
-            )
-        return {row["file"]: row["label"] for row in reader}
+    try:
+        with path.open("r", encoding="utf-8-sig", newline="") as handle:
+            reader = csv.DictReader(handle)
+            if reader.fieldnames is None or not {"file", "label"} <= set(reader.fieldnames):
+                raise InputError(
+                    f"{path}: a labels file must be a CSV with columns 'file' and 'label'; got {reader.fieldnames}."
+                )
+            labels = {}
+            for row in reader:
+                file, label = row["file"], row["label"]
+                if not file or not label or not label.strip():
+                    raise InputError(
+                        f"{path}: line {reader.line_num} must give a file and its label; got {file!r} and {label!r}."
+                    )
+                labels[file] = label
+            return labels
+    except UnicodeDecodeError as exc:
+        bad = exc.object[exc.start]
+        raise InputError(
+            f"--labels: {path}: must be a UTF-8 text file; got byte {bad:#04x}, not UTF-8 there."
+        ) from None
+    except csv.Error as exc:
+        raise InputError(f"--labels: {path}: not a readable CSV file ({exc}).") from None
 
 
 def _classifier(name: str, seed: int, trees: int = 300):

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .._validation import as_binary_image, check_choice, check_int
+from .._validation import as_binary_image, as_real_array, check_choice, check_int
 from ..exceptions import InputError
 from ._cache import as_shape_images
 
@@ -464,12 +464,7 @@ def _check_distances(distances, name: str = "distances") -> np.ndarray:
 
     if sparse.issparse(distances):
         raise TypeError(f"`{name}` must be a dense (n, n) array; got a sparse {type(distances).__name__}.")
-    if np.iscomplexobj(distances):
-        raise TypeError(f"`{name}` must hold real numbers; got complex values.")
-    try:
-        d = np.asarray(distances, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise TypeError(f"`{name}` must be a square array of numbers; got {type(distances).__name__}.") from None
+    d = as_real_array(distances, name=name, shape="a square (n, n) array").astype(np.float64, copy=False)
     if d.ndim != 2 or d.shape[0] != d.shape[1] or d.shape[0] < 2:
         raise InputError(f"`{name}` must be a square (n, n) array with n >= 2; got shape {d.shape}.")
     if not np.all(np.isfinite(d)):
@@ -656,7 +651,10 @@ def nearest_neighbour_accuracy(distances, labels, /, *, n_train: int = 10, n_spl
     rng = as_generator(seed)
     scores = []
     for _ in range(n_splits):
-        train = np.concatenate([rng.choice(np.flatnonzero(labels == c), n_train, replace=False) for c in classes])
+        # sorted, so that argmin's first minimum is the lower index
+        train = np.sort(
+            np.concatenate([rng.choice(np.flatnonzero(labels == c), n_train, replace=False) for c in classes])
+        )
         test = np.setdiff1d(np.arange(labels.size), train)
         nearest = train[np.argmin(d[np.ix_(test, train)], axis=1)]
         scores.append(np.mean(labels[nearest] == labels[test]))
