@@ -178,3 +178,34 @@ def test_a_pcd_count_beyond_the_file_is_an_input_error_not_an_out_of_memory_kill
     declared = r"COUNT line declares 9999999999993 values per point, more than the file's 108 bytes"
     with pytest.raises(InputError, match=declared):
         read_points(path)
+
+
+def test_a_cell_beyond_the_csv_modules_limit_is_an_input_error(tmp_path):
+    # the csv module's own error (not a ValueError, no path) came through
+    path = tmp_path / "long.csv"
+    path.write_bytes(b"1," + b"2" + b" " * 200_000 + b"\n3,4\n")
+    with pytest.raises(InputError, match=r"long\.csv: a line could not be split into cells: field larger"):
+        read_points(path)
+
+
+@pytest.mark.parametrize(
+    ("counts", "got"),
+    [("POINTS -1", "POINTS -1"), ("WIDTH -2\nHEIGHT -1", "WIDTH -2, HEIGHT -1")],
+)
+@pytest.mark.parametrize("n_values", [6, 7])
+def test_a_pcd_with_a_negative_point_count_is_an_input_error(tmp_path, counts, got, n_values):
+    # numpy reads count -1 as "all": the records were read whole, or its bare error came out
+    path = tmp_path / "cloud.pcd"
+    header = f"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n{counts}\nDATA binary\n".encode()
+    path.write_bytes(header + np.arange(n_values, dtype="<f4").tobytes())
+    with pytest.raises(InputError, match=f"cloud.pcd: the PCD header's point counts must not be negative; got {got}"):
+        read_points(path)
+
+
+def test_a_signalling_nan_is_refused_without_a_warning(tmp_path):
+    snan = np.array([0x7FA00000, 0x3F800000, 0x40000000], "<u4").view("<f4").reshape(1, 3)
+    np.save(tmp_path / "p.npy", np.vstack([snan, np.ones((3, 3), np.float32)]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(InputError, match="NaN"):
+            read_points(tmp_path / "p.npy")

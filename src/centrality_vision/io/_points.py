@@ -154,7 +154,8 @@ def read_points(
     if variable is not None and suffix != ".mat":
         raise InputError(f"{path}: `variable` applies to .mat files only; got a {suffix} file.")
     reader = {".npy": _read_npy, ".mat": _read_mat, ".ply": _read_ply, ".pcd": _read_pcd, ".obj": _read_obj}
-    table = reader[suffix](path, variable) if suffix == ".mat" else reader.get(suffix, _read_text)(path)
+    with np.errstate(invalid="ignore"):  # a signalling NaN cast to float64 warns; it is refused below as NaN
+        table = reader[suffix](path, variable) if suffix == ".mat" else reader.get(suffix, _read_text)(path)
     if table.values.shape[0] == 0:
         raise InputError(f"{path}: holds no points.")
     picked = _pick_columns(path, table, columns, n_dims)
@@ -286,7 +287,7 @@ def _read_text(path: Path) -> _Table:
     ]
     if not rows:
         raise InputError(f"{path}: holds no points.")
-    split, decimal_comma, delimiter = _sniff([line for _, line in rows[:64]])
+    split, decimal_comma, delimiter = _sniff([line for _, line in rows[:64]], path)
     first_number, first = rows[0]
     cells = split(first)
     numeric = [_is_number(cell, decimal_comma) for cell in cells]
@@ -329,7 +330,7 @@ def _read_text(path: Path) -> _Table:
     return _Table(values, names, lines)
 
 
-def _sniff(sample: list[str]):
+def _sniff(sample: list[str], path: Path):
     """The cell splitter of a text file and whether it writes decimal commas.
 
     The delimiter is the first of semicolon, tab and comma that occurs on every sampled
@@ -342,7 +343,10 @@ def _sniff(sample: list[str]):
     decimal_comma = delimiter == ";" and any("," in line for line in sample)
 
     def split(line: str) -> list[str]:
-        return next(csv.reader([line], delimiter=delimiter, skipinitialspace=True))
+        try:
+            return next(csv.reader([line], delimiter=delimiter, skipinitialspace=True))
+        except csv.Error as exc:  # e.g. a cell longer than the csv module's limit
+            raise InputError(f"{path}: a line could not be split into cells: {exc}.") from None
 
     return split, decimal_comma, delimiter
 
@@ -821,14 +825,16 @@ def _read_pcd(path: Path) -> _Table:
     counts = header.get("COUNT", ["1"] * n)
     try:
         sizes, counts = [int(s) for s in sizes], [int(c) for c in counts]
-        if "POINTS" in header:
-            n_points = int(header["POINTS"][0])
-        else:  # (older headers: an organised cloud holds WIDTH x HEIGHT points)
-            n_points = int(header.get("WIDTH", ["0"])[0]) * int(header.get("HEIGHT", ["1"])[0])
+        counted = {key: int(header[key][0]) for key in ("POINTS", "WIDTH", "HEIGHT") if key in header}
+        # (older headers: an organised cloud holds WIDTH x HEIGHT points)
+        n_points = counted.get("POINTS", counted.get("WIDTH", 0) * counted.get("HEIGHT", 1))
     except (ValueError, IndexError):  # not a number, or a POINTS/WIDTH/HEIGHT line with none
         raise InputError(
             f"{path}: the PCD header has a SIZE, COUNT, POINTS, WIDTH or HEIGHT line without an integer."
         ) from None
+    negative = [f"{key} {value}" for key, value in counted.items() if value < 0]
+    if negative:
+        raise InputError(f"{path}: the PCD header's point counts must not be negative; got {', '.join(negative)}.")
     if not (len(sizes) == len(types) == len(counts) == n) or min(counts) < 1:
         raise InputError(f"{path}: the PCD header's FIELDS, SIZE, TYPE and COUNT lines do not match.")
     if sum(counts) > len(data):
