@@ -576,3 +576,37 @@ def test_inputs_found_by_fuzzing_are_drawn_without_warnings_or_named(tmp_path):
     blocker.write_text("")
     with pytest.raises(InputError, match="is a file"):  # mkdir's FileExistsError
         save_figure(plt.figure(), blocker / "sub" / "fig.png")
+
+
+def test_styles_and_switches_are_checked_by_name(path3):
+    # found by a fuzz run: matplotlib's messages without the parameter, and any truthy
+    # value taken for True (colorbar="no" drew a colorbar)
+    points, graph = path3
+    with pytest.raises(ValueError, match=r"`cmap` must name a matplotlib colormap .*got 'viridiss'"):
+        plot_graph(points, graph, values=[1, 2, 3], cmap="viridiss")
+    with pytest.raises(TypeError, match=r"`cmap` must be a colormap name"):
+        plot_graph(points, graph, values=[1, 2, 3], cmap=3)
+    with pytest.raises(ValueError, match=r"`edge_color` must be a matplotlib colour .*got 'grayish'"):
+        plot_graph(points, graph, edge_color="grayish")
+    with pytest.raises(TypeError, match=r"`colorbar` must be True or False; got"):
+        plot_graph(points, graph, values=[1, 2, 3], colorbar="no")
+    with pytest.raises(TypeError, match=r"`rowcol` must be True or False"):
+        plot_graph(points, graph, rowcol=1)
+    with pytest.raises(TypeError, match=r"`crop` must be True or False"):
+        plot_centrality_image([1.0], [0], (2, 2), crop="yes")
+    plt.close("all")
+
+
+def test_float32_background_and_all_zero_errors_draw_without_warnings():
+    import warnings
+
+    from centrality_vision.plotting import plot_alignment_errors
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ax = plot_centrality_image(np.float32([1.0]), [0], (2, 2), background=np.float32(0))
+        assert ax.images[0].get_array()[0, 1] == 0.0
+        ax = plot_alignment_errors({"CPD": [0.0, 0.0, 0.0]})  # already aligned
+        ax.figure.canvas.draw()
+        assert ax.get_yscale() == "linear"
+    plt.close("all")

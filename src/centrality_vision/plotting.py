@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import sparse
 
-from ._validation import _describe, as_graph, as_points, check_float, check_int
+from ._validation import _describe, as_graph, as_points, check_bool, check_float, check_int
 from .exceptions import InputError
 
 __all__ = [
@@ -69,8 +69,31 @@ def _norm(norm, values: np.ndarray):
 _MAX_COORDINATE = 1e307  # matplotlib's limits and ticks overflow for coordinates near float64's 1.8e308
 
 
+def _check_cmap(cmap):
+    """``cmap`` as a matplotlib colormap (a name or a Colormap), or an error naming it."""
+    import matplotlib
+    from matplotlib.colors import Colormap
+
+    if isinstance(cmap, Colormap):
+        return cmap
+    if not isinstance(cmap, str):
+        raise TypeError(f"`cmap` must be a colormap name or a matplotlib Colormap; got {_describe(cmap)}.")
+    if cmap not in matplotlib.colormaps:
+        raise InputError(f"`cmap` must name a matplotlib colormap (e.g. 'viridis'); got {cmap!r}.")
+    return matplotlib.colormaps[cmap]
+
+
+def _check_color(color, *, name: str):
+    from matplotlib.colors import is_color_like
+
+    if not is_color_like(color):
+        raise InputError(f"`{name}` must be a matplotlib colour (e.g. '0.6' or 'red'); got {color!r}.")
+    return color
+
+
 def _plot_points(points, *, name: str, n_dims: tuple, rowcol: bool = False, min_points: int = 1) -> np.ndarray:
     """Validated points to draw (see :func:`as_points`), within +-1e307, as (x, y) when ``rowcol``."""
+    rowcol = check_bool(rowcol, name="rowcol")
     points = as_points(points, name=name, n_dims=n_dims, min_points=min_points)
     if points.size and np.abs(points).max() > _MAX_COORDINATE:
         raise InputError(
@@ -250,6 +273,9 @@ def plot_graph(
         (6 if three_d else 30) if node_size is None else node_size, name="node_size", low=0, high=_MAX_MARKER_AREA
     )
     edge_width = check_float(edge_width, name="edge_width", low=0)
+    cmap = _check_cmap(cmap)
+    edge_color = _check_color(edge_color, name="edge_color")
+    colorbar = check_bool(colorbar, name="colorbar")
     color_norm = None if values is None else _norm(norm, values)
     if ax is not None:
         _check_ax(ax, three_d=three_d, why=f"for points of shape (n_points, {n_dims})")
@@ -424,8 +450,12 @@ def plot_centrality_image(
     values = _as_values(values, n=nodes.size, other="nodes")
     if isinstance(background, bool) or not isinstance(background, (int, float, np.integer, np.floating)):
         raise TypeError(f"`background` must be a real number (NaN for blank); got {_describe(background)}.")
+    background = float(background)  # (a float32 compared with 1e307 overflowed, with a warning)
     if np.isinf(background) or abs(background) > _MAX_VALUE:  # (the colour bar's range overflowed)
         raise InputError(f"`background` must be NaN or within +-{_MAX_VALUE:g}; got {background!r}.")
+    cmap = _check_cmap(cmap)
+    colorbar = check_bool(colorbar, name="colorbar")
+    crop = check_bool(crop, name="crop")
     if ax is not None:
         _check_ax(ax, three_d=False, why="for an image")
 
@@ -881,7 +911,8 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
     Each method gets its own colour, line style and marker (placed every few
     iterations), so lines that coincide stay distinguishable; the error axis is
     logarithmic by default, where convergence rates are straight lines and the late
-    iterations are not squashed onto zero (values <= 0 are left out of a log axis).
+    iterations are not squashed onto zero (values <= 0 are left out of a log axis; errors
+    that are all 0 are drawn on a linear one).
 
     Parameters
     ----------
@@ -959,9 +990,9 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
     if ylabel is None:
         ylabel = "per-point RMS error" if n_points is not None else "alignment error"
     ax.set_ylabel(ylabel)
-    if log:
+    if log and np.isfinite(low):  # (errors all 0, already aligned: a linear axis, to show them)
         ax.set_yscale("log", nonpositive="mask")
-        if np.isfinite(low) and top > 0:  # rounding-level tails (1e-16) would squash the curves
+        if top > 0:  # rounding-level tails (1e-16) would squash the curves
             ax.set_ylim(bottom=max(low, top * 1e-10) / 2, top=top * 2)
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3, which="both")

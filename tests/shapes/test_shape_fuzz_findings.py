@@ -2,6 +2,7 @@
 definition it broke."""
 
 import numpy as np
+import pytest
 
 from centrality_vision.datasets import contour_points
 from centrality_vision.shapes import CentralityCache, CentralityHistogram
@@ -215,3 +216,17 @@ def test_bad_options_of_the_shape_layer_name_the_parameter():
     for call, error, match in cases:
         with pytest.raises(error, match=match):
             call()
+
+
+@pytest.mark.parametrize(
+    ("pixels", "centrality", "connectivity"),
+    [((slice(1, 2), slice(1, 3)), "katz", 8), ((slice(1, 3), slice(1, 3)), "eigenvector", 4)],
+)
+def test_minmax_histogram_of_values_equal_but_for_rounding(pixels, centrality, connectivity):
+    # a two-pixel shape (katz) or a 2x2 block (eigenvector): the values are equal in exact
+    # arithmetic and a few ulp apart in float64; min-max scaling spread them over the bins
+    # ([0.5, 0, 0, 0.5]); values that are all equal fall in the first bin
+    mask = np.zeros((4, 4), bool)
+    mask[pixels] = True
+    features = CentralityHistogram(centrality=centrality, bins=4, scaling="minmax", connectivity=connectivity)
+    np.testing.assert_array_equal(features.fit_transform([mask]), [[1.0, 0.0, 0.0, 0.0]])

@@ -68,7 +68,10 @@ def _histogram(values: np.ndarray, bins: int, scaling: str) -> np.ndarray:
         lo, hi = values.min(), values.max()
     else:  # "max"
         lo, hi = 0.0, values.max()
-    scaled = (values - lo) / (hi - lo) if hi > lo else np.zeros_like(values)
+    # values equal but for rounding (a few ulp apart on symmetric shapes) count as equal:
+    # min-max scaling would stretch their rounding over the whole range
+    spread = hi - lo > 1e-9 * max(abs(hi), abs(lo))
+    scaled = (values - lo) / (hi - lo) if spread else np.zeros_like(values)
     position = scaled * bins
     # a value on a bin edge (0.5 of the largest, say: common in symmetric shapes) computed a
     # few ulp below it on one graph and above it on its transpose or mirror image would fall
