@@ -230,3 +230,32 @@ def test_minmax_histogram_of_values_equal_but_for_rounding(pixels, centrality, c
     mask[pixels] = True
     features = CentralityHistogram(centrality=centrality, bins=4, scaling="minmax", connectivity=connectivity)
     np.testing.assert_array_equal(features.fit_transform([mask]), [[1.0, 0.0, 0.0, 0.0]])
+
+
+def test_second_fuzz_round_shape_inputs_are_named(tmp_path):
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.shapes import outline_profiles, pairwise_shape_distances, shape_centralities, shape_distance
+
+    mask = np.zeros((12, 12), bool)
+    mask[3:9, 2:10] = True
+    (tmp_path / "afile").write_text("x")
+    # a cache folder below a file raised NotADirectoryError; "" wrote into the current folder
+    with pytest.raises(InputError, match=r"`directory` must be a folder .* below a file \('.*afile' is a file\)"):
+        shape_centralities([mask], ["degree"], cache=tmp_path / "afile" / "sub")
+    with pytest.raises(InputError, match=r"`cache` must name a folder; got an empty path"):
+        shape_centralities([mask], ["degree"], cache="")
+    # n_points had no bound (10**7 asked numpy for 176 GiB)
+    with pytest.raises(InputError, match=r"`n_points` must be .*4096"):
+        outline_profiles(mask, n_points=10**7)
+    # the profile method ignored the histogram options, whatever they were
+    with pytest.raises(InputError, match=r"`bins`"):
+        pairwise_shape_distances([mask, mask.T], bins=-5)
+    with pytest.raises(InputError, match=r"`centrality` must be one of"):
+        pairwise_shape_distances([mask, mask.T], centrality="nope")
+    with pytest.raises(InputError, match=r"`centrality` must name each centrality once; got 'degree' more than once"):
+        CentralityHistogram(centrality=["degree", "degree"]).fit_transform([mask])
+    # the pair's own names, not the list's
+    with pytest.raises(InputError, match=r"^`b` must have at least one foreground pixel"):
+        shape_distance(mask, np.zeros((5, 5), bool))
+    with pytest.raises(InputError, match=r"`name` must be one of"):
+        CentralityCache().lookup(mask, "foo")

@@ -174,9 +174,18 @@ class CentralityCache:
         self.max_images = check_int(max_images, name="max_images", low=0)
         if directory is not None and not isinstance(directory, (str, os.PathLike)):
             raise TypeError(f"`directory` must be a path (str or os.PathLike) or None; got {type(directory).__name__}.")
+        if directory is not None and not str(directory).strip():
+            raise InputError("`directory` must name a folder; got an empty path (for the current folder, pass '.').")
         self.directory = None if directory is None else Path(directory)
-        if self.directory is not None and self.directory.exists() and not self.directory.is_dir():
-            raise InputError(f"`directory` must be a folder (created when missing); got {str(directory)!r}, a file.")
+        if self.directory is not None:
+            # the folder, or the nearest part of its path that exists, must be a folder
+            existing = next((part for part in (self.directory, *self.directory.parents) if part.exists()), None)
+            if existing is not None and not existing.is_dir():
+                where = "" if existing == self.directory else f" ({str(existing)!r} is a file)"
+                raise InputError(
+                    f"`directory` must be a folder (created when missing); got {str(directory)!r}, "
+                    f"{'a file' if existing == self.directory else 'below a file'}{where}."
+                )
         self._store: OrderedDict[tuple, dict] = OrderedDict()
         self._lock = threading.Lock()
         self.hits = 0
@@ -295,6 +304,7 @@ class CentralityCache:
 
     def lookup(self, mask: np.ndarray, name: str, *, connectivity: int = 8, weights: bool = False):
         """The cached values (memory, then disk) or None; never computes."""
+        name = check_choice(name, CENTRALITIES, name="name")
         mask = _as_mask(mask)
         key = _key(mask, connectivity, weights)
         with self._lock:
@@ -397,6 +407,8 @@ def resolve_cache(cache, *, name: str = "cache") -> CentralityCache:
     if isinstance(cache, CentralityCache):
         return cache
     if isinstance(cache, (str, os.PathLike)):
+        if not str(cache).strip():
+            raise InputError(f"`{name}` must name a folder; got an empty path (for the current folder, pass '.').")
         directory = str(Path(cache).expanduser().resolve())
         with _registry_lock:
             if directory not in _directory_caches:

@@ -60,7 +60,12 @@ def resolve_centralities(centrality, *, name: str = "centrality") -> tuple[str, 
         raise TypeError(f"`{name}` must be a centrality name, 'all' or a list of names; got {centrality!r}.") from None
     if not names:
         raise InputError(f"`{name}` must name at least one centrality; got an empty list.")
-    return tuple(check_choice(n, CENTRALITIES, name=name) for n in names)
+    names = tuple(check_choice(n, CENTRALITIES, name=name) for n in names)
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        twice = ", ".join(map(repr, repeated))
+        raise InputError(f"`{name}` must name each centrality once; got {twice} more than once.")
+    return names
 
 
 def _histogram(values: np.ndarray, bins: int, scaling: str) -> np.ndarray:

@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
-from .._validation import as_binary_image, as_real_array, check_choice, check_int
+from .._validation import as_binary_image, as_real_array, check_bool, check_choice, check_int
 from ..exceptions import InputError
 from ._cache import as_shape_images
 
@@ -65,6 +65,7 @@ FEATURE_SCALES = (
 METHODS = ("profile", "chi2", "emd")
 # the largest side of a normalised shape image: 2^15 pixels (about 8 GiB of float64 at that side)
 MAX_RESOLUTION = 2**15
+MAX_POINTS = 2**12  # outline points: profiles take n_points**2 memory (128 MiB at this)
 
 
 def _largest_component(mask: np.ndarray) -> np.ndarray:
@@ -239,7 +240,7 @@ def outline_profiles(
     ----------
     image : 2D array
         A mask or grey image (see :func:`as_shape_images`).
-    n_points : int, default=100
+    n_points : int in [8, 4096], default=100
     resolution : int in [8, 32768], default=48
         Square root of the shape's area after resizing.
     foreground, threshold :
@@ -262,7 +263,7 @@ def outline_profiles(
     >>> bool(profile.std(axis=0).mean() < outline_profiles(bar).std(axis=0).mean())
     True
     """
-    n_points = check_int(n_points, name="n_points", low=8)
+    n_points = check_int(n_points, name="n_points", low=8, high=MAX_POINTS)
     resolution = check_int(resolution, name="resolution", low=8, high=MAX_RESOLUTION)
     try:
         (mask,) = as_shape_images([image], name="image", foreground=foreground, threshold=threshold)
@@ -422,20 +423,22 @@ def pairwise_shape_distances(
     ((4, 4), True)
     """
     check_choice(method, METHODS, name="method")
-    n_points = check_int(n_points, name="n_points", low=8)
+    n_points = check_int(n_points, name="n_points", low=8, high=MAX_POINTS)
     resolution = check_int(resolution, name="resolution", low=8, high=MAX_RESOLUTION)
     n_candidates = check_int(n_candidates, name="n_candidates", low=0)
     band = check_int(band, name="band", low=0)
     from ._cache import _effective_jobs
 
     jobs = _effective_jobs(n_jobs)
+    from ._histogram import MAX_BINS, resolve_centralities
+
+    # (checked whatever the method, so that a bad one is never silently ignored)
+    bins = check_int(bins, name="bins", low=2, high=MAX_BINS)
+    resolve_centralities(centrality)
+    check_bool(weights, name="weights")
     masks = as_shape_images(images, name="images", foreground=foreground, threshold=threshold)
     if method != "profile":
-        from ._histogram import MAX_BINS
-
-        out = _histogram_distances(
-            masks, method, centrality, check_int(bins, name="bins", low=2, high=MAX_BINS), resolution, weights, n_jobs
-        )
+        out = _histogram_distances(masks, method, centrality, bins, resolution, weights, n_jobs)
     else:
         forward, backward = _descriptors(masks, n_points, resolution, jobs)
         out, shift, side = _shift_stage(forward, backward, jobs)
@@ -456,7 +459,13 @@ def shape_distance(a, b, /, **options) -> float:
     >>> shape_distance(square, square.T) == 0.0
     True
     """
-    return float(pairwise_shape_distances([a, b], **options)[0, 1])
+    try:
+        return float(pairwise_shape_distances([a, b], **options)[0, 1])
+    except (ValueError, TypeError) as exc:  # the pair's own names, not the list's
+        message = str(exc).replace("`images[0]`", "`a`").replace("`images[1]`", "`b`")
+        if message == str(exc):
+            raise
+        raise type(exc)(message) from None
 
 
 def _check_distances(distances, name: str = "distances") -> np.ndarray:
