@@ -1,5 +1,7 @@
 """read_shape / read_image on files written by imageio in every format it writes."""
 
+import warnings
+
 import imageio.v3 as iio
 import numpy as np
 import pytest
@@ -122,3 +124,20 @@ def test_a_1_bit_black_on_white_file_is_the_black_shape(tmp_path, suffix):
     assert np.array_equal(read_shape(tmp_path / f"bw{suffix}", foreground="dark"), SHAPE)
     with pytest.warns(UserWarning, match="looks inverted"):
         assert np.array_equal(read_shape(tmp_path / f"bw{suffix}", foreground="light"), ~SHAPE)
+
+
+def test_a_colour_image_near_float64s_limit_and_a_uniform_image(tmp_path):
+    # found by a fuzz run: the channel mean overflowed (then "holds NaN or inf" for a
+    # finite image), and an all-black file blamed a `threshold` 0.5 never given
+    import tifffile
+
+    pixels = np.full((6, 6, 3), 1.5e308)
+    pixels[2:4, 2:4] = 0.0
+    tifffile.imwrite(tmp_path / "big.tif", pixels, photometric="rgb")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        grey = read_image(tmp_path / "big.tif")
+    np.testing.assert_array_equal(grey, pixels[..., 0])
+    iio.imwrite(tmp_path / "black.png", np.zeros((10, 10), np.uint8))
+    with pytest.raises(InputError, match=r"black\.png: the image is uniform \(every pixel is 0\)"):
+        read_shape(tmp_path / "black.png")

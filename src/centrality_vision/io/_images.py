@@ -80,7 +80,11 @@ def read_image(path, /) -> np.ndarray:
         uniform_colour = bool(np.all(flat == flat[0])) if flat.size else True
         pixels = alpha if uniform_colour and np.ptp(alpha) > 0 else colour
     if pixels.ndim == 3 and pixels.shape[2] in (1, 3):
-        pixels = pixels.astype(np.float64).mean(axis=2)
+        pixels = pixels.astype(np.float64)
+        if pixels.size and np.nanmax(np.abs(pixels)) > 1e300:  # (their sum overflowed): each channel's share
+            pixels = (pixels / pixels.shape[2]).sum(axis=2)
+        else:
+            pixels = pixels.mean(axis=2)
     if pixels.ndim != 2:
         raise InputError(f"{path}: must be a 2D grey or colour image; got an array of shape {pixels.shape}.")
     pixels = pixels.astype(np.float64)
@@ -122,10 +126,10 @@ def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = N
     ------
     InputError
         Everything :func:`read_image` raises, a uniform image (no shape in it), a
-        threshold that leaves no shape, or a bad ``foreground``; the message starts
-        with the path.
+        ``threshold`` that is NaN or infinite or leaves no shape, or a bad
+        ``foreground``; the message starts with the path.
     TypeError
-        A ``threshold`` that is not a finite real number.
+        A ``threshold`` that is not a real number.
 
     Examples
     --------
@@ -142,6 +146,10 @@ def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = N
            [0, 0, 0, 0, 0]])
     """
     pixels = read_image(path)
+    if threshold is None and np.ptp(pixels) == 0:  # (0.5, set below, would be blamed for it)
+        raise InputError(
+            f"{Path(path)}: the image is uniform (every pixel is {pixels.flat[0]:g}): there is no shape in it."
+        )
     if threshold is None and np.all((pixels == 0) | (pixels == 1)):
         # 0/1 pixels from a file are black and white, not a mask: split them at half their
         # range like any grey image, so ``foreground="auto"`` still finds the shape
