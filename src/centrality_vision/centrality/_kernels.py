@@ -491,38 +491,22 @@ def _brandes_source_bfs_log(indptr, indices, offs, grid, s, hops, order, lsigma,
 
 
 @njit(cache=True, nogil=True)
-def _brandes_source_dijkstra(
-    indptr,
-    indices,
-    data,
-    s,
-    dist,
-    zeros,
-    done,
-    order,
-    heap_d,
-    heap_z,
-    heap_v,
-    sigma,
-    delta,
-    bc,
-    use_log,
-    rtol,
-    rank,
-    has_zero,
+def _dijkstra_counts(
+    indptr, indices, data, s, dist, zeros, done, order, heap_d, heap_z, heap_v, sigma, use_log, rtol, has_zero
 ):
-    # Forward pass: Dijkstra, counting shortest paths with ties up to rtol. Among paths of
-    # tied length only those with the fewest zero-length edges count (``zeros``): a
-    # zero-length edge is as if infinitesimally long, which keeps the shortest-path DAG
-    # acyclic and independent of the order the search settles nodes at equal distance.
-    # Without zero-length edges (``has_zero`` False) every count is 0 and the heap is keyed
-    # by distance alone, which is faster.
+    """Forward pass of Brandes' algorithm by length: Dijkstra from ``s`` counting shortest
+    paths (``sigma``, as logarithms when ``use_log``), lengths tying within ``rtol``.
+
+    Among paths of tied length only those with the fewest zero-length edges count
+    (``zeros``): a zero-length edge is as if infinitesimally long, which keeps the
+    shortest-path DAG acyclic and independent of the order the search settles nodes at
+    equal distance. Without zero-length edges (``has_zero`` False) every count is 0 and
+    the heap is keyed by distance alone, which is faster. Returns the number of nodes
+    settled (in ``order``) and whether a plain count passed ``_OVERFLOW``.
+    """
     dist[s] = 0.0
     zeros[s] = 0
-    if use_log:
-        sigma[s] = 0.0
-    else:
-        sigma[s] = 1.0
+    sigma[s] = 0.0 if use_log else 1.0
     size = _push(heap_d, heap_z, heap_v, 0, 0.0, 0, s, has_zero)
     count = 0
     overflow = False
@@ -552,33 +536,55 @@ def _brandes_source_dijkstra(
             elif tie and nz == zeros[w]:
                 if use_log:
                     a = sigma[w]
-                    if a >= sv:
-                        sigma[w] = a + np.log1p(np.exp(sv - a))
-                    else:
-                        sigma[w] = sv + np.log1p(np.exp(a - sv))
+                    sigma[w] = max(a, sv) + np.log1p(np.exp(-abs(a - sv)))
                 else:
                     sigma[w] += sv
+    return count, overflow
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _on_dag(dv, zv, length, dw, zw, later, rtol):
+    """Whether arc v -> w (``length`` long; w settled ``later``) is on the shortest-path DAG
+    that :func:`_dijkstra_counts` counted: d(v) + length = d(w) within ``rtol``, and
+    zeros(v) + [length = 0] = zeros(w)."""
+    return dw < np.inf and later and abs(dv + length - dw) <= rtol * dw and zv + (length == 0.0) == zw
+
+
+@njit(cache=True, nogil=True)
+def _brandes_source_dijkstra(
+    indptr,
+    indices,
+    data,
+    s,
+    dist,
+    zeros,
+    done,
+    order,
+    heap_d,
+    heap_z,
+    heap_v,
+    sigma,
+    delta,
+    bc,
+    use_log,
+    rtol,
+    rank,
+    has_zero,
+):
+    count, overflow = _dijkstra_counts(
+        indptr, indices, data, s, dist, zeros, done, order, heap_d, heap_z, heap_v, sigma, use_log, rtol, has_zero
+    )
     ok = not overflow
     if ok:
-        # The shortest-path DAG is the one the forward pass counted: arcs v -> w with
-        # d(v) + len = d(w), zeros(v) + [len = 0] = zeros(w), and w settled after v.
         for q in range(count):
             delta[order[q]] = 0.0
             rank[order[q]] = q
         for q in range(count - 1, 0, -1):
             v = order[q]
-            dv = dist[v]
-            zv = zeros[v]
             acc = 0.0
             for j in range(indptr[v], indptr[v + 1]):
                 w = indices[j]
-                dw = dist[w]
-                if (
-                    dw < np.inf
-                    and rank[w] > q
-                    and abs(dv + data[j] - dw) <= rtol * dw
-                    and zv + (data[j] == 0.0) == zeros[w]
-                ):
+                if _on_dag(dist[v], zeros[v], data[j], dist[w], zeros[w], rank[w] > q, rtol):
                     if use_log:
                         acc += np.exp(sigma[v] - sigma[w]) * (1.0 + delta[w])
                     else:
@@ -1064,12 +1070,12 @@ def distances_from(indptr, indices, data, kind, lengths, s, weighted):
 
 @njit(cache=True, nogil=True)
 def brandes_edges(indptr, indices, data, sources, rtol):
-    has_zero = data.shape[0] > 0 and data.min() == 0.0
     """Per-arc dependencies summed over ``sources`` (edge betweenness over ordered pairs).
 
     Path counts are kept as logarithms, so they cannot overflow. For hop counts pass
-    ``data`` of ones. Ties and zero-length edges as in :func:`_brandes_source_dijkstra`.
+    ``data`` of ones. Ties and zero-length edges as in :func:`_dijkstra_counts`.
     """
+    has_zero = data.shape[0] > 0 and data.min() == 0.0
     n = indptr.shape[0] - 1
     eb = np.zeros(indices.shape[0])
     order = np.empty(n, dtype=np.int64)
@@ -1081,52 +1087,18 @@ def brandes_edges(indptr, indices, data, sources, rtol):
     heap_z = np.empty(heap_v.shape[0], dtype=np.int64)
     for i in range(sources.shape[0]):
         s = sources[i]
-        count = 0
-        dist[s] = 0.0
-        zeros[s] = 0
-        lsigma[s] = 0.0
-        size = _push(heap_d, heap_z, heap_v, 0, 0.0, 0, s, has_zero)
-        while size > 0:
-            d, z, v, size = _pop(heap_d, heap_z, heap_v, size, has_zero)
-            if done[v] or z != zeros[v]:
-                continue
-            done[v] = True
-            order[count] = v
-            count += 1
-            sv = lsigma[v]
-            for j in range(indptr[v], indptr[v + 1]):
-                w = indices[j]
-                if done[w]:
-                    continue
-                nd = d + data[j]
-                nz = z + (data[j] == 0.0)
-                dw = dist[w]
-                tie = dw < np.inf and nd <= dw + rtol * dw
-                if dw == np.inf or nd < dw - rtol * dw or (tie and nz < zeros[w]):
-                    dist[w] = nd
-                    zeros[w] = nz
-                    lsigma[w] = sv
-                    size = _push(heap_d, heap_z, heap_v, size, nd, nz, w, has_zero)
-                elif tie and nz == zeros[w]:
-                    a = lsigma[w]
-                    lsigma[w] = max(a, sv) + np.log1p(np.exp(-abs(a - sv)))
+        count, _ = _dijkstra_counts(
+            indptr, indices, data, s, dist, zeros, done, order, heap_d, heap_z, heap_v, lsigma, True, rtol, has_zero
+        )
         for q in range(count):
             delta[order[q]] = 0.0
             rank[order[q]] = q
         for q in range(count - 1, -1, -1):
             v = order[q]
-            dv = dist[v]
-            zv = zeros[v]
             acc = 0.0
             for j in range(indptr[v], indptr[v + 1]):
                 w = indices[j]
-                dw = dist[w]
-                if (
-                    dw < np.inf
-                    and rank[w] > q
-                    and abs(dv + data[j] - dw) <= rtol * dw
-                    and zv + (data[j] == 0.0) == zeros[w]
-                ):
+                if _on_dag(dist[v], zeros[v], data[j], dist[w], zeros[w], rank[w] > q, rtol):
                     part = np.exp(lsigma[v] - lsigma[w]) * (1.0 + delta[w])
                     eb[j] += part
                     acc += part
