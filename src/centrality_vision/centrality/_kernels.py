@@ -626,49 +626,31 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
         s = sources[i]
         ok = False
         if weighted:
-            if not force_log:
-                ok = _brandes_source_dijkstra(
-                    indptr,
-                    indices,
-                    data,
-                    s,
-                    dist,
-                    zeros,
-                    done,
-                    order,
-                    heap_d,
-                    heap_z,
-                    heap_v,
-                    sigma,
-                    delta,
-                    bc,
-                    False,
-                    rtol,
-                    rank,
-                    has_zero,
-                )
-            if not ok:
-                n_log += 1
-                _brandes_source_dijkstra(
-                    indptr,
-                    indices,
-                    data,
-                    s,
-                    dist,
-                    zeros,
-                    done,
-                    order,
-                    heap_d,
-                    heap_z,
-                    heap_v,
-                    sigma,
-                    delta,
-                    bc,
-                    True,
-                    rtol,
-                    rank,
-                    has_zero,
-                )
+            # plain counts first; where they overflow, the source again in log space (which
+            # cannot overflow, so the loop ends)
+            use_log = force_log
+            while not _brandes_source_dijkstra(
+                indptr,
+                indices,
+                data,
+                s,
+                dist,
+                zeros,
+                done,
+                order,
+                heap_d,
+                heap_z,
+                heap_v,
+                sigma,
+                delta,
+                bc,
+                use_log,
+                rtol,
+                rank,
+                has_zero,
+            ):
+                use_log = True
+            n_log += use_log
         else:
             if not force_log:
                 ok = _brandes_source_bfs(
