@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import numbers
 from collections.abc import Iterable
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -379,6 +380,14 @@ def _finite_real(value) -> bool:
         return math.isfinite(float(value))
     except OverflowError:
         return False
+
+
+def nearest_existing(path: Path) -> Path:
+    """The nearest part of ``path`` that exists: itself, else its closest parent (at worst
+    the root, or ``.`` for a relative path). A folder to be created is possible only where
+    this is a folder, not a file."""
+    path = Path(path)
+    return next(part for part in (path, *path.parents) if part.exists())
 
 
 def check_bool(value, *, name: str) -> bool:

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import sparse
 
-from ._validation import _describe, as_graph, as_points, check_bool, check_float, check_int
+from ._validation import _describe, as_graph, as_points, check_bool, check_float, check_int, nearest_existing
 from .exceptions import InputError
 
 __all__ = [
@@ -533,11 +533,9 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
         raise InputError(
             f"`path` must end in a format suffix ({', '.join('.' + f for f in sorted(formats))}); got {str(path)!r}."
         )
-    for folder in (path.parent, *path.parent.parents):
-        if folder.exists():
-            if not folder.is_dir():  # (mkdir's FileExistsError)
-                raise InputError(f"`path` must be in a folder; got {str(path)!r}, whose {str(folder)!r} is a file.")
-            break
+    folder = nearest_existing(path.parent)
+    if not folder.is_dir():  # (mkdir's FileExistsError)
+        raise InputError(f"`path` must be in a folder; got {str(path)!r}, whose {str(folder)!r} is a file.")
     path.parent.mkdir(parents=True, exist_ok=True)
     from matplotlib.layout_engine import ConstrainedLayoutEngine
 

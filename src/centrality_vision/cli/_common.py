@@ -190,6 +190,7 @@ def check_output_places(args) -> None:
     computation (or after other outputs were written)."""
     import tempfile
 
+    from .._validation import nearest_existing
     from ..exceptions import InputError
 
     inputs = {}
@@ -214,9 +215,7 @@ def check_output_places(args) -> None:
                 f"{option}: {path} is also {inputs[path.resolve()]}, an input that writing it would destroy; "
                 "choose another output file."
             )
-        ancestor = path.parent
-        while not ancestor.exists():
-            ancestor = ancestor.parent
+        ancestor = nearest_existing(path.parent)
         if not ancestor.is_dir():
             raise InputError(f"{option}: cannot create {path}: {ancestor} is a file, not a folder.")
         try:

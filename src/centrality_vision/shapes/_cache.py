@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .._provenance import code_digest
-from .._validation import as_binary_image, as_real_array, check_bool, check_choice, check_int
+from .._validation import as_binary_image, as_real_array, check_bool, check_choice, check_int, nearest_existing
 from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
 from ..graphs import pixel_graph
@@ -179,12 +179,11 @@ class CentralityCache:
         self.directory = None if directory is None else Path(directory)
         if self.directory is not None:
             # the folder, or the nearest part of its path that exists, must be a folder
-            existing = next((part for part in (self.directory, *self.directory.parents) if part.exists()), None)
-            if existing is not None and not existing.is_dir():
-                where = "" if existing == self.directory else f" ({str(existing)!r} is a file)"
+            existing = nearest_existing(self.directory)
+            if not existing.is_dir():
+                where = "a file" if existing == self.directory else f"below a file ({str(existing)!r} is a file)"
                 raise InputError(
-                    f"`directory` must be a folder (created when missing); got {str(directory)!r}, "
-                    f"{'a file' if existing == self.directory else 'below a file'}{where}."
+                    f"`directory` must be a folder (created when missing); got {str(directory)!r}, {where}."
                 )
         self._store: OrderedDict[tuple, dict] = OrderedDict()
         self._lock = threading.Lock()
