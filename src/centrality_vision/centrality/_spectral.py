@@ -127,12 +127,10 @@ def eigenvector(graph, /, *, strengths: bool = False, normalized: bool = True, a
         adjacency.data[:] = 1.0  # as_any_graph returned our own copy
     else:
         adjacency.eliminate_zeros()
-        if adjacency.nnz:
-            # the vector does not depend on the strengths' scale: a power of two brings the
-            # largest to [0.5, 1), exactly, so that the eigenvalues neither overflow (NaN at
-            # 1e308) nor fall under the ties' tolerance (every component kept at 1e-10)
-            exponent = math.frexp(float(np.abs(adjacency.data).max()))[1]
-            adjacency.data = np.ldexp(adjacency.data, -exponent)
+        # the vector does not depend on the strengths' scale: at unit scale the eigenvalues
+        # neither overflow (NaN at 1e308) nor fall under the ties' tolerance (every
+        # component kept at 1e-10)
+        _to_unit_scale(adjacency)
     n = adjacency.shape[0]
     n_comp, labels = connected_components(adjacency, directed=False)
     from threadpoolctl import threadpool_limits
@@ -168,6 +166,17 @@ def _spectral_radius(adjacency: sparse.csr_array) -> float:
         if n <= 512:
             return float(np.abs(np.linalg.eigvals(adjacency.toarray())).max())
         return float(np.abs(eigs(adjacency, k=1, which="LM", return_eigenvectors=False, maxiter=100 * n)).max())
+
+
+def _to_unit_scale(adjacency: sparse.csr_array) -> int:
+    """Divide ``adjacency``'s stored values, in place, by the power of two ``2**shift`` that
+    brings the largest ``|value|`` into [0.5, 1), and return ``shift`` (0 without values).
+    Only exponents change, so it is exact unless a value falls below float64's normal range."""
+    if not adjacency.nnz:
+        return 0
+    shift = math.frexp(float(np.abs(adjacency.data).max()))[1]
+    adjacency.data = np.ldexp(adjacency.data, -shift)
+    return shift
 
 
 def _strength_matrix(graph, strengths, weights, function):
@@ -301,12 +310,10 @@ def katz(
 
     info, adjacency = _strength_matrix(graph, strengths, None, "katz")
     n = adjacency.shape[0]
-    # Work on the adjacency divided by 2**shift (its largest |value| in [0.5, 1)) with
-    # alpha times 2**shift: the same system, but sums and eigenvalues of strengths near
-    # float64's limits neither overflow nor underflow.
-    shift = int(np.frexp(np.abs(adjacency.data).max())[1]) if adjacency.nnz else 0
-    adjacency = adjacency.copy()
-    adjacency.data = np.ldexp(adjacency.data, -shift)
+    # Work on the adjacency divided by 2**shift with alpha times 2**shift: the same system,
+    # but sums and eigenvalues of strengths near float64's limits neither overflow nor
+    # underflow. (_strength_matrix returned our own copy.)
+    shift = _to_unit_scale(adjacency)
     rows = np.abs(adjacency).sum(axis=1)
     cols = np.abs(adjacency).sum(axis=0)
     bound = min(rows.max(), cols.max()) if n else 0.0  # bounds lambda_max (scaled)
