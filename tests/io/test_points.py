@@ -1,5 +1,7 @@
 """read_points / write_points: files written by the formats' own libraries, and round trips."""
 
+import struct
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -539,3 +541,69 @@ def test_write_points_keeps_an_upper_case_suffix(tmp_path, suffix):
     path = write_points(tmp_path / f"points{suffix}", FLAT)
     assert sorted(p.name for p in tmp_path.iterdir()) == [f"points{suffix}"]
     np.testing.assert_array_equal(read_points(path), FLAT)
+
+
+@pytest.mark.parametrize("fmt", ["ascii", "binary_little_endian", "binary_big_endian"])
+def test_ply_with_list_properties_in_and_before_the_vertex_element(tmp_path, fmt):
+    # meshio's binary reader refused a list inside the vertex element with a KeyError.
+    # The file is written here byte by byte: plyfile writes the scalars of an element
+    # with lists in the machine's byte order whatever the header says.
+    order = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(fmt)
+    header = (
+        f"ply\nformat {fmt} 1.0\nelement face 2\nproperty list uchar int vertex_indices\nproperty uchar flag\n"
+        "element vertex 7\nproperty double x\nproperty list uchar short tags\nproperty float y\nproperty double z\n"
+        "end_header\n"
+    ).encode()
+    faces = [([0, 1, 2], 3), ([0, 1, 2, 3, 4], 4)]
+    y = CLOUD[:, 1].astype(np.float32)
+    vertices = [(CLOUD[k, 0], list(range(k % 3)), y[k], CLOUD[k, 2]) for k in range(7)]
+    if order is None:
+        lines = [f"{len(idx)} {' '.join(map(str, idx))} {flag}" for idx, flag in faces]
+        lines += [f"{float(x)!r} {len(t)} {' '.join(map(str, t))} {float(v)!r} {float(z)!r}" for x, t, v, z in vertices]
+        body = ("\n".join(lines) + "\n").encode()
+    else:
+        parts = [struct.pack(f"{order}B{len(idx)}iB", len(idx), *idx, flag) for idx, flag in faces]
+        parts += [struct.pack(f"{order}dB{len(t)}hfd", x, len(t), *t, v, z) for x, t, v, z in vertices]
+        body = b"".join(parts)
+    path = tmp_path / "lists.ply"
+    path.write_bytes(header + body)
+    expected = np.column_stack([CLOUD[:, 0], y, CLOUD[:, 2]])
+    np.testing.assert_array_equal(read_points(path), expected)
+    np.testing.assert_array_equal(read_points(path, columns=[2, 0]), expected[:, [2, 0]])
+    if order is not None:
+        cut = tmp_path / "cut.ply"
+        cut.write_bytes(header + body[:-3])
+        with pytest.raises(InputError, match="cut.ply: the file ends inside its elements"):
+            read_points(cut)
+
+
+def test_a_ply_list_counted_by_a_float_is_refused(tmp_path):
+    path = tmp_path / "bad.ply"
+    path.write_bytes(
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty list float int n\nproperty float x\n"
+        b"property float y\nproperty float z\nend_header\n" + bytes(16)
+    )
+    with pytest.raises(InputError, match="bad.ply: not a readable PLY file .a damaged property line"):
+        read_points(path)
+
+
+@pytest.mark.parametrize("word", ["1_000", "\u0661\u0662", "\uff11"])
+@pytest.mark.parametrize("suffix", [".txt", ".csv", ".obj", ".ply", ".pcd"])
+def test_digit_separators_and_other_scripts_digits_are_not_numbers(tmp_path, word, suffix):
+    # Python's float() (and numpy's) read "1_000" as 1000 and Arabic-Indic or full-width
+    # digits as numbers; a point file never means them
+    row = f"{word} 2 3"
+    body = {
+        ".txt": row,
+        ".csv": row.replace(" ", ","),
+        ".obj": f"v {row}",
+        ".ply": f"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+        f"end_header\n{row}",
+        ".pcd": f"FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 1\nHEIGHT 1\nPOINTS 1\nDATA ascii\n{row}",
+    }[suffix]
+    path = tmp_path / f"p{suffix}"
+    path.write_text(body + "\n", encoding="utf-8")
+    with pytest.raises(InputError, match=f"p\\{suffix}"):
+        read_points(path)
+    path.write_text(body.replace(word, "1000") + "\n", encoding="utf-8")
+    assert read_points(path)[0, 0] == 1000

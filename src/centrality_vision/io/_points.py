@@ -89,10 +89,9 @@ def read_points(
         :func:`scipy.io.loadmat`. Real numeric and logical 2D arrays are candidates;
         ``variable`` names the array, needed only when the file holds more than one.
     ``.ply``
-        The vertex element of an ASCII PLY file or a binary one (both parsed here; a
-        binary file with list properties in or before its vertex element is decoded by
-        ``meshio``, which needs ``x``, ``y`` and ``z``); its scalar properties (``x``,
-        ``y``, ``z``, ``intensity``, ...) are the columns, in the file's order.
+        The vertex element of an ASCII or binary PLY file (both parsed here); its scalar
+        properties (``x``, ``y``, ``z``, ``intensity``, ...) are the columns, in the
+        file's order, and list properties are skipped.
     ``.pcd``
         A Point Cloud Library file, ``DATA ascii`` or ``binary`` (``binary_compressed``
         is refused); its ``FIELDS`` are the columns.
@@ -269,7 +268,9 @@ def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
 # ------------------------------------------------------------------------------- text
 
 
-_NUMBER = re.compile(r"[+-]?(\d+\.?\d*([eE][+-]?\d+)?|\.\d+([eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE)
+# ASCII digits only: Python's float() also reads "1_000" and other scripts' digits, which a
+# point file never means
+_NUMBER = re.compile(r"[+-]?(\d+\.?\d*([eE][+-]?\d+)?|\.\d+([eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE | re.ASCII)
 
 
 def _read_text(path: Path) -> _Table:
@@ -351,7 +352,7 @@ def _sniff(sample: list[str], path: Path):
     return split, decimal_comma, delimiter
 
 
-class _NotANumber(Exception):
+class _NotANumber(ValueError):
     """Internal: a text cell is not a number; the readers turn it into an InputError naming the cell."""
 
 
@@ -359,9 +360,14 @@ def _to_float(cell: str, decimal_comma: bool) -> float:
     cell = cell.strip().strip('"')
     if decimal_comma:
         cell = cell.replace(",", ".")
-    if not _NUMBER.fullmatch(cell):
-        raise _NotANumber(cell)
-    return float(cell)
+    return _number_word(cell)
+
+
+def _number_word(word: str) -> float:
+    """A word of a point file as a float; _NotANumber (a ValueError) if it is not a number."""
+    if not _NUMBER.fullmatch(word):
+        raise _NotANumber(word)
+    return float(word)
 
 
 def _is_number(cell: str, decimal_comma: bool) -> bool:
@@ -624,8 +630,9 @@ _PLY_SIZES = {kind: np.dtype(code).itemsize for kind, code in _PLY_CODES.items()
 
 
 def _ply_header(path: Path, data: bytes):
-    """The format, the elements ``[name, count, [(property, is_list, type), ...]]`` and the body
-    offset (``type``: a scalar's, or a list's item type).
+    """The format, the elements ``[name, count, [(property, count_type, type), ...]]`` and the
+    body offset (``count_type``: a list's count type, None for a scalar; ``type``: a scalar's,
+    or a list's item type).
 
     The vertex count is checked against the bytes that follow the header (a binary
     element takes at least its scalar sizes, a list at least its count's bytes).
@@ -651,10 +658,14 @@ def _ply_header(path: Path, data: bytes):
             # a list property takes at least its count's bytes, a scalar its size
             is_list = words[1:2] == ["list"]
             types = words[2:4] if is_list else words[1:2]
-            if len(words) != (5 if is_list else 3) or not all(kind in _PLY_SIZES for kind in types):
+            if (
+                len(words) != (5 if is_list else 3)
+                or not all(kind in _PLY_SIZES for kind in types)
+                or (is_list and _PLY_CODES[types[0]][0] == "f")  # a list's count is an integer
+            ):
                 raise InputError(f"{path}: not a readable PLY file (a damaged property line: {_clip(line)!r}).")
             sizes[-1] += _PLY_SIZES[types[0]]
-            elements[-1][2].append((words[-1], is_list, types[-1]))
+            elements[-1][2].append((words[-1], types[0] if is_list else None, types[-1]))
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise InputError(f"{path}: not a readable PLY file (unknown format {fmt!r}).")
     vertex = [element for element in elements if element[0] == "vertex"]
@@ -673,47 +684,60 @@ def _ply_header(path: Path, data: bytes):
 def _read_ply(path: Path) -> _Table:
     """The vertex element, one column per scalar property in the file's order.
 
-    ASCII files are parsed here (meshio's ASCII reader assumes the properties start
-    with x, y, z and reads other orders wrongly), and so are binary files without list
-    properties up to the vertex element; meshio decodes the others.
+    Both encodings are parsed here: meshio's ASCII reader assumes the properties start
+    with x, y, z and reads other orders wrongly, and its binary reader needs x, y and z
+    and fails on a list property inside the vertex element.
     """
     data = path.read_bytes()
     fmt, elements, body_offset = _ply_header(path, data)
     vertex = next(element for element in elements if element[0] == "vertex")
-    count, properties = vertex[1], vertex[2]
-    names = [name for name, is_list, _ in properties if not is_list]
+    names = [name for name, count_type, _ in vertex[2] if count_type is None]
     if fmt == "ascii":
         return _read_ply_ascii(path, data[body_offset:], elements, names)
-    before = elements[: next(k for k, element in enumerate(elements) if element[0] == "vertex")]
-    if not any(is_list for _, _, element in [*before, vertex] for _, is_list, _ in element):
-        return _read_ply_binary(path, data, body_offset, fmt, before, vertex)
-    meshio = _meshio()
-    try:
-        # meshio's PLY reader itself: meshio.read prints and calls sys.exit(1) on a ReadError
-        mesh = meshio.ply.read(str(path))
-    except Exception as exc:  # meshio raises ValueError, KeyError, ReadError, struct errors, ...
-        raise InputError(f"{path}: not a readable PLY file ({type(exc).__name__}: {_first_line(exc)}).") from None
-    points = np.asarray(mesh.points, dtype=np.float64)
-    if points.shape[0] != count:
-        raise InputError(f"{path}: the header declares {count} vertices but the file holds {points.shape[0]}.")
-    columns = {axis: points[:, k] for k, axis in enumerate(("x", "y", "z")[: points.shape[1]])}
-    columns.update((key, np.asarray(value)) for key, value in mesh.point_data.items())
-    kept = [
-        name
-        for name in names
-        if name in columns and columns[name].ndim == 1 and np.issubdtype(columns[name].dtype, np.number)
-    ]
-    values = np.column_stack([columns[name].astype(np.float64) for name in kept]) if kept else np.empty((count, 0))
-    return _Table(values.reshape(count, len(kept)), kept)
-
-
-def _read_ply_binary(path: Path, data: bytes, body_offset: int, fmt: str, before, vertex) -> _Table:
-    """A binary vertex element of scalar properties (and only scalar elements before it),
-    decoded here in the file's property order: meshio's reader needs x, y and z, so a 2D
-    file was refused with its internal error."""
     order = "<" if fmt == "binary_little_endian" else ">"
-    offset = body_offset + sum(count * sum(_PLY_SIZES[kind] for _, _, kind in props) for _, count, props in before)
-    count, properties = vertex[1], vertex[2]
+    offset = body_offset
+    for name, count, properties in elements:
+        if name == "vertex":
+            return _read_ply_binary(path, data, offset, order, count, properties)
+        if all(count_type is None for _, count_type, _ in properties):
+            offset += count * sum(_PLY_SIZES[kind] for _, _, kind in properties)
+        else:
+            for _ in range(count):
+                offset = _ply_instance(path, data, offset, order, properties, None)
+    raise AssertionError("unreachable: _ply_header checked the vertex element")  # pragma: no cover
+
+
+def _ply_instance(path: Path, data: bytes, offset: int, order: str, properties, out: list | None) -> int:
+    """Step over one binary element instance with list properties, appending its scalar
+    values to ``out`` unless it is None; the offset after the instance."""
+    for _, count_type, kind in properties:
+        if count_type is None:
+            value = _ply_scalar(path, data, offset, order, kind)
+            if out is not None:
+                out.append(float(value))
+            offset += _PLY_SIZES[kind]
+        else:
+            length = int(_ply_scalar(path, data, offset, order, count_type))
+            if length < 0:
+                raise InputError(f"{path}: not a readable PLY file (a list property of length {length}).")
+            offset += _PLY_SIZES[count_type] + length * _PLY_SIZES[kind]
+    return offset
+
+
+def _ply_scalar(path: Path, data: bytes, offset: int, order: str, kind: str):
+    if offset + _PLY_SIZES[kind] > len(data):
+        raise InputError(f"{path}: the file ends inside its elements (at byte {len(data)}).")
+    return np.frombuffer(data, dtype=order + _PLY_CODES[kind], count=1, offset=offset)[0]
+
+
+def _read_ply_binary(path: Path, data: bytes, offset: int, order: str, count: int, properties) -> _Table:
+    """A binary vertex element starting at ``offset``, its scalar properties in the file's order."""
+    names = [name for name, count_type, _ in properties if count_type is None]
+    if any(count_type is not None for _, count_type, _ in properties):  # rare: one instance at a time
+        values = []
+        for _ in range(count):
+            offset = _ply_instance(path, data, offset, order, properties, values)
+        return _Table(np.array(values, dtype=np.float64).reshape(count, len(names)), names)
     dtype = np.dtype([(f"p{k}", order + _PLY_CODES[kind]) for k, (_, _, kind) in enumerate(properties)])
     if offset + count * dtype.itemsize > len(data):
         raise InputError(
@@ -724,7 +748,7 @@ def _read_ply_binary(path: Path, data: bytes, body_offset: int, fmt: str, before
     values = np.empty((count, len(properties)))
     for k in range(len(properties)):
         values[:, k] = records[f"p{k}"]
-    return _Table(values, [name for name, _, _ in properties])
+    return _Table(values, names)
 
 
 def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Table:
@@ -738,7 +762,8 @@ def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Tab
         rows = lines[first : first + count]
         if len(rows) != count:
             raise InputError(f"{path}: the header declares {count} vertices but the file holds {len(rows)}.")
-        if not any(is_list for _, is_list, _ in properties):  # the usual case, at numpy's speed
+        if all(count_type is None for _, count_type, _ in properties) and not any("_" in line for line in rows):
+            # the usual case, at numpy's speed (numpy reads "1_000" as Python does: such rows go below)
             try:
                 values = np.array([line.split() for line in rows], dtype=np.float64).reshape(count, -1)
             except ValueError:  # ragged or not numbers: the row-by-row reading below names the row
@@ -749,12 +774,12 @@ def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Tab
         for row, line in enumerate(rows):
             words, at, out = line.split(), 0, []
             try:
-                for _, is_list, _ in properties:
-                    if is_list:  # a count, then that many items; a negative count: the row cannot match
+                for _, count_type, _ in properties:
+                    if count_type is not None:  # a count, then that many items; a negative count: the row cannot match
                         length = int(words[at])
                         at = at + length + 1 if length >= 0 else len(words) + 1
                     else:
-                        out.append(float(words[at]))
+                        out.append(_number_word(words[at]))
                         at += 1
             except (IndexError, ValueError):
                 at = -1
@@ -854,6 +879,8 @@ def _read_pcd(path: Path) -> _Table:
         if len(lines) != n_points:
             raise InputError(f"{path}: the header declares {n_points} points but the file holds {len(lines)} rows.")
         try:
+            if "_" in text:  # numpy reads "1_000" as Python does; a point file never means it
+                raise _NotANumber("_")
             values = np.array([line.split() for line in lines], dtype=np.float64)
         except ValueError:
             raise InputError(f"{path}: the ASCII data are not rows of {len(names)} numbers.") from None
@@ -902,7 +929,7 @@ def _read_obj(path: Path) -> _Table:
         if words[:1] != ["v"]:
             continue
         try:
-            rows.append([float(word) for word in words[1:4]])
+            rows.append([_number_word(word) for word in words[1:4]])
         except ValueError:
             raise InputError(f"{path}: line {number} is not a vertex 'v x y z': {_clip(line.strip())!r}.") from None
         if len(rows[-1]) != 3:
