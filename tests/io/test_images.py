@@ -141,3 +141,14 @@ def test_a_colour_image_near_float64s_limit_and_a_uniform_image(tmp_path):
     iio.imwrite(tmp_path / "black.png", np.zeros((10, 10), np.uint8))
     with pytest.raises(InputError, match=r"black\.png: the image is uniform \(every pixel is 0\)"):
         read_shape(tmp_path / "black.png")
+
+
+def test_a_complex_tiff_is_refused_not_cut_to_its_real_part(tmp_path):
+    # found by a fuzz run: the imaginary part was dropped with only numpy's warning
+    import tifffile
+
+    pixels = np.zeros((6, 6), np.complex128)
+    pixels[2:4, 2:4] = 1 + 2j
+    tifffile.imwrite(tmp_path / "complex.tif", pixels)
+    with pytest.raises(InputError, match=r"complex\.tif: the image has complex pixels \(complex128\)"):
+        read_image(tmp_path / "complex.tif")

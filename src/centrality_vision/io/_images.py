@@ -68,6 +68,8 @@ def read_image(path, /) -> np.ndarray:
     kind = path.suffix.lower().lstrip(".").upper()
     if pixels.dtype == object or not (np.issubdtype(pixels.dtype, np.number) or pixels.dtype == bool):
         raise InputError(f"{path}: not a readable {kind} image (pixel type {pixels.dtype}).")
+    if np.iscomplexobj(pixels):  # a grey value has no imaginary part to drop silently
+        raise InputError(f"{path}: the image has complex pixels ({pixels.dtype}); expected real grey or colour values.")
     if pixels.size == 0:
         raise InputError(f"{path}: not a readable {kind} image (it decodes to no pixels, shape {pixels.shape}).")
     stacked = pixels.ndim == 4 or (pixels.ndim == 3 and pixels.shape[2] not in (1, 2, 3, 4))
