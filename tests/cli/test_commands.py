@@ -431,6 +431,19 @@ def test_classify_cross_validates_with_fewer_folds_when_classes_are_small(tmp_pa
     assert "using 3 folds" in captured.err and "warning:" not in captured.err and captured.out.startswith("accuracy")
 
 
+def test_classify_refuses_features_that_never_vary(tmp_path, capsys):
+    # found by a fuzz run: GaussianNB's divide-by-zero warnings were printed and every
+    # image got one prediction
+    folder = tmp_path / "copies"
+    folder.mkdir()
+    yy, xx = np.mgrid[:24, :24]
+    for name in ("a1", "a2", "b1", "b2"):
+        _png(folder / f"{name}.png", np.where((yy - 12) ** 2 + (xx - 12) ** 2 <= 36, 0, 255))
+    assert main(["classify", str(folder), "--centrality", "degree", "--out", str(tmp_path / "c.json")]) == 2
+    message = _one_line_error(capsys)
+    assert "every image has the same degree histogram" in message and "copies" in message
+
+
 def test_classify_needs_two_images_per_class(tmp_path, capsys):
     folder = _shapes_folder(tmp_path / "shapes", extra=["star1.png"])
     assert main(["classify", str(folder), "--out", str(tmp_path / "c.json")]) == 2

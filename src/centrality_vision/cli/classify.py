@@ -193,6 +193,11 @@ def run(args: argparse.Namespace) -> int:
     tic = time.perf_counter()
     features = histogram.fit_transform(images)
     say(f"features: {features.shape[1]} per image in {time.perf_counter() - tic:.1f} s")
+    if np.all(features == features[0]):
+        raise InputError(
+            f"{folder}: every image has the same {args.centrality} histogram (are the shapes copies of one "
+            "another?); a classifier has nothing to learn from."
+        )
     model = _classifier(args.classifier, args.seed, args.trees)
     splitter = StratifiedKFold(n_splits=n_splits, shuffle=True, random_state=args.seed)
     folds = cross_validate(model, features, labels, cv=splitter, return_estimator=True, return_indices=True)
