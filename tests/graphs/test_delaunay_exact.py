@@ -182,3 +182,18 @@ def test_rotated_grids_are_triangulated(dim, seed, step, offset):
     tree = emst_graph(points)
     assert tree.sum() / 2 == pytest.approx((side**dim - 1) * step, rel=1e-9)
     assert delaunay_graph(points).nnz > 0
+
+
+def test_a_nearly_flat_set_that_qhull_cannot_triangulate_is_called_nearly_flat():
+    # a plane's points 3e-13 (of their extent) off it: thin enough to defeat Qhull's
+    # in-sphere tests, too thick to count as on the plane. The message blamed points
+    # "very close together", which these are not.
+    rng = np.random.default_rng(77)
+    flat = np.c_[rng.random((25, 2)), np.zeros(25)]
+    rotation = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    rng.uniform()
+    offsets = rng.normal(size=25) * 2.789003670062372e-13
+    with pytest.raises(InputError, match=r"fails the empty-sphere test .* nearly on a plane \(here within"):
+        emst_graph((flat + np.c_[0 * flat[:, :2], offsets]) @ rotation.T)
+    # well inside the tolerance, the same points are treated as on the plane
+    assert emst_graph((flat + np.c_[0 * flat[:, :2], offsets * 1e-3]) @ rotation.T).nnz == 2 * 24

@@ -158,11 +158,20 @@ def _delaunay_edges(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # for a tight cluster beside distant points (about 1e-7 of the extent): every facet checked
     failed = delaunay_violations(unit, tri.simplices, tri.neighbors)
     if failed:
+        centred = unit - unit.mean(axis=0)
+        singular = np.linalg.svd(centred / np.abs(centred).max(), compute_uv=False)
+        flat = "a line" if points.shape[1] == 2 else "a plane"
+        cause = (
+            f"happens when the points lie nearly on {flat} (here within {singular[-1] / singular[0]:.1g} of their "
+            f"extent; within 1e-12 they count as on it). Project them onto {flat}, or add the missing dimension's "
+            "spread."
+            if singular[-1] < 1e-6 * singular[0]
+            else "happens when some points are very close together relative to the set's extent (about "
+            "1e-7 of it). Merge near-duplicate points, or build the graph of each part separately."
+        )
         raise InputError(
             f"`points` could not be triangulated reliably: Qhull's Delaunay triangulation fails the "
-            f"empty-{'circle' if points.shape[1] == 2 else 'sphere'} test at {failed} facet(s), which "
-            "happens when some points are very close together relative to the set's extent (about "
-            "1e-7 of it). Merge near-duplicate points, or build the graph of each part separately."
+            f"empty-{'circle' if points.shape[1] == 2 else 'sphere'} test at {failed} facet(s), which {cause}"
         )
     indptr, indices = tri.vertex_neighbor_vertices
     rows = np.repeat(np.arange(points.shape[0]), np.diff(indptr))
