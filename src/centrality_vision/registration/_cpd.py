@@ -1286,7 +1286,12 @@ class NonRigidCPD(_CPD):
     low_rank : int, 'auto' or None, default='auto'
         Number of eigenpairs of ``G`` kept (the CPD paper's fast variant, O(M K^2) per
         iteration instead of an O(M^3) solve). None solves exactly; 'auto' is exact up to
-        500 moving points and keeps ``ceil(sqrt(M))`` eigenpairs (at least 50) above.
+        500 moving points; above, it keeps as many eigenpairs as make the kernel exact to
+        1e-12 of its trace (34 for the default beta), up to the largest of 50,
+        ``ceil(sqrt(M))`` and ``min(M / 4, 2000, 5e7 / M)``. Where those leave more than
+        1e-6 of the trace out (a narrow kernel), up to 5,000 points are solved exactly and
+        more get a :class:`~centrality_vision.exceptions.ConvergenceWarning`, as does a
+        number that leaves that much out.
     {common}
 
     Attributes
@@ -1372,9 +1377,13 @@ class NonRigidCPD(_CPD):
         if self.low_rank is None:
             return None
         if isinstance(self.low_rank, str):  # 'auto'
-            if n_moving <= 500:
+            if n_moving <= _AUTO_EXACT_UP_TO:
                 return None
-            rank = max(50, math.ceil(math.sqrt(n_moving)))
+            # the factorisation stops once it is exact to 1e-12 of G's trace (34 columns for
+            # beta 2 in the normalised frame, 2D or 3D); a narrow kernel needs more, up to a
+            # quarter of the points and at most 2,000 columns or 50 million entries of L
+            room = min(n_moving // 4, 2000, 50_000_000 // n_moving)
+            rank = max(50, math.ceil(math.sqrt(n_moving)), room)
             return None if rank >= n_moving - 1 else rank
         if self.low_rank >= n_moving - 1:
             return None  # ARPACK needs k < n; a full-rank "approximation" is the exact kernel
@@ -1384,11 +1393,23 @@ class NonRigidCPD(_CPD):
         # the field acts on the pre-mapped moving points; the pre-map is kept for transform_
         self._pre = start
         self._work = moving if start is None else start(moving)
-        rank = self._rank(moving.shape[0])
+        n_moving = moving.shape[0]
+        rank = self._rank(n_moving)
         beta = float(self.beta)
-        kernel = (
-            gaussian_kernel(self._work, self._work, beta) if rank is None else LowRankKernel(self._work, beta, rank)
-        )
+        work = self._work
+        kernel = gaussian_kernel(work, work, beta) if rank is None else LowRankKernel(work, beta, rank)
+        lost = kernel.residual_trace / n_moving if rank is not None else 0.0
+        if lost > _LOW_RANK_LOSS:
+            if isinstance(self.low_rank, str) and n_moving <= _AUTO_EXACT_FALLBACK:
+                kernel = gaussian_kernel(work, work, beta)  # too narrow a kernel to pay off
+            else:
+                warnings.warn(
+                    f"`low_rank={self.low_rank!r}`: the {len(kernel.values)} eigenpairs kept leave {lost:.2g} of the "
+                    "kernel's trace out, so the motion field is smoother than the model asks; pass a larger "
+                    "low_rank (None: the exact kernel) or a larger `beta`.",
+                    ConvergenceWarning,
+                    stacklevel=4,
+                )
         return {"kernel": kernel, "coefficients": np.zeros_like(moving), "g_term": 0.0}
 
     def _apply(self, state, moving):
@@ -1414,14 +1435,16 @@ class NonRigidCPD(_CPD):
 
     def _make_transform(self, state, moving, frame):
         kernel, coefficients = state["kernel"], state["coefficients"]
+        centres = self._work
         if isinstance(kernel, LowRankKernel):
-            # G Q Q^T C ~ Q diag(values) Q^T C: coefficients projected on the kept eigenvectors
-            # give a field defined everywhere that matches the low-rank iterate at the
-            # moving points up to the discarded tail of G's spectrum
-            coefficients = kernel.vectors @ (kernel.vectors.T @ coefficients)
+            # the low-rank field as kernel weights on the pivots: equal to the fitted
+            # displacement at every moving point (weights G Q Q^T W matched it only up to the
+            # part of G outside the kept eigenvectors, which is not small at a low rank)
+            pivots, coefficients = kernel.pivot_field(coefficients)
+            centres = centres[pivots]
         pre = self._pre
         if frame.identity and pre is None:
-            return NonRigidTransform(self._work, coefficients, self.beta)
+            return NonRigidTransform(centres, coefficients, self.beta)
         # v = s * pre_n((y - mu_y) / s) = L (y - mu_y) + s t_n, and T(y) = mu_x + v + field(v):
         # the field scales with s, and its arguments stay as small as in the fit
         linear = translation = None
@@ -1429,7 +1452,7 @@ class NonRigidCPD(_CPD):
             linear = pre.linear if isinstance(pre, AffineTransform) else pre.scale * pre.rotation
             translation = frame.scale * pre.translation
         return NonRigidTransform(
-            frame.scale * self._work,
+            frame.scale * centres,
             frame.scale * coefficients,
             frame.scale * float(self.beta),
             linear=linear,
@@ -1437,6 +1460,15 @@ class NonRigidCPD(_CPD):
             input_origin=frame.moving_centre,
             output_origin=frame.fixed_centre,
         )
+
+
+# low_rank='auto': exact up to this many moving points; above, the low-rank kernel unless it
+# leaves more than _LOW_RANK_LOSS of G's trace (the mean diagonal residual, a bound on its
+# spectral-norm error over M) out, when up to _AUTO_EXACT_FALLBACK points are solved exactly
+# and more get a warning (as does a low_rank given as a number)
+_AUTO_EXACT_UP_TO = 500
+_AUTO_EXACT_FALLBACK = 5000
+_LOW_RANK_LOSS = 1e-6
 
 
 for _cls in (RigidCPD, AffineCPD, NonRigidCPD):

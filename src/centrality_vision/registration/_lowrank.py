@@ -183,6 +183,13 @@ def low_rank_eigh(points, beta, rank, *, tol=1e-12):
     >>> bool(np.allclose(values[:10], exact[:10], rtol=1e-8)), bool(orthonormal)
     (True, True)
     """
+    values, vectors, _, _ = _low_rank_eigh_parts(points, beta, rank, tol)
+    return values, vectors
+
+
+def _low_rank_eigh_parts(points, beta, rank, tol=1e-12):
+    """:func:`low_rank_eigh`'s ``(values, vectors)``, its :class:`PivotedCholesky` and the
+    eigenvectors ``V`` (K x k) of ``L^T L`` kept: ``vectors = L V diag(values)^-1/2``."""
     pc = PivotedCholesky(points, beta, max_rank=rank, tol=tol)
     factor = pc.factor
     gram = factor @ factor.T
@@ -192,7 +199,7 @@ def low_rank_eigh(points, beta, rank, *, tol=1e-12):
     keep = values > values[0] * 1e-10
     values, v = values[keep], v[:, keep]
     vectors = factor.T @ (v / np.sqrt(values))
-    return values, vectors
+    return values, vectors, pc, v
 
 
 @njit(nogil=True, cache=True, fastmath={"contract", "reassoc", "nnan", "ninf", "nsz"})
@@ -293,8 +300,13 @@ def nystrom_field(points, pivots, factor, coefficients):
 
     ``factor`` is ``L^T`` (K x M) as in :class:`PivotedCholesky`.
     """
+    return np.asarray(points)[pivots], pivot_weights(factor, pivots, factor @ coefficients)
+
+
+def pivot_weights(factor, pivots, lt_w):
+    """``a = C^-T lt_w`` with ``C = L[S]`` (lower triangular): the pivots' kernel weights of
+    the field ``L lt_w`` (``lt_w`` stands for ``L^T W``, K x D)."""
     from scipy.linalg import solve_triangular
 
     c = factor[:, pivots].T  # L[S]: row i is the i-th pivot's row of L, lower triangular
-    a = solve_triangular(c, factor @ coefficients, lower=True, trans="T")
-    return np.asarray(points)[pivots], a
+    return solve_triangular(c, lt_w, lower=True, trans="T")

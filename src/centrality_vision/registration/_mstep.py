@@ -149,10 +149,29 @@ class LowRankKernel:
     """
 
     def __init__(self, moving: np.ndarray, beta: float, rank: int, seed: int = 0):
-        from ._lowrank import low_rank_eigh
+        from ._lowrank import _low_rank_eigh_parts
 
-        self.values, self.vectors = low_rank_eigh(moving, beta, rank)
+        self.values, self.vectors, self._cholesky, self._basis = _low_rank_eigh_parts(moving, beta, rank)
         self.vectors_t = np.ascontiguousarray(self.vectors.T)  # Q^T, for weighted_gram
+
+    @property
+    def residual_trace(self) -> float:
+        """``trace(G - L L^T)``: a bound on the approximation's spectral-norm error."""
+        return float(self._cholesky.residual_trace)
+
+    def pivot_field(self, coefficients: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The field ``Q diag(values) Q^T W`` as Gaussian-kernel weights on the pivots alone.
+
+        With ``Q = L V diag(values)^-1/2``, ``Q diag(values) Q^T W = L (V V^T L^T W)``, and
+        ``L`` is the Nystrom factor ``G[:, S] C^-T`` (see :func:`._lowrank.nystrom_field`):
+        the field ``v(z) = sum_{s in S} g(z, y_s) a_s`` equals the fitted displacement at
+        every moving point and is defined everywhere. Returns ``(pivots, a)``.
+        """
+        from ._lowrank import pivot_weights
+
+        factor, basis, pivots = self._cholesky.factor, self._basis, self._cholesky.pivots
+        projected = basis @ (basis.T @ (factor @ coefficients))  # V V^T L^T W (K x D)
+        return pivots, pivot_weights(factor, pivots, projected)
 
     def apply(self, w: np.ndarray) -> np.ndarray:
         """``G w`` (M x D, C-ordered)."""
