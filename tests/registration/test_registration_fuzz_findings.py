@@ -305,3 +305,78 @@ def test_a_nonrigid_transform_far_from_the_origin_reproduces_the_fit(offset, par
     ulp = np.spacing(max(np.abs(fixed).max(), 1.0))
     np.testing.assert_allclose(est.transform_(moving), est.moving_transformed_, rtol=0, atol=1e-8 + 2 * ulp)
     np.testing.assert_allclose(est.moving_transformed_, fixed, rtol=0, atol=1e-5)
+
+
+# ----------------------------------------------------------------- fuzz round 4 (registration API)
+
+
+def test_global_search_on_a_nearly_single_point_fixed_set_warns_of_collapse_not_overflow():
+    # the batched EM's scale overflowed (numpy's RuntimeWarning) where a pose's posterior
+    # mass sat on one moving point
+    y = np.random.default_rng(0).random((4, 3))
+    for tiny in (1e-20, 1e-67):
+        x = np.zeros((4, 3))
+        x[0, 0] = tiny
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", RuntimeWarning)
+            warnings.simplefilter("ignore", ConvergenceWarning)  # the collapse is reported, as it should be
+            fitted = RigidCPD(init="global", random_state=0).fit(y, x)
+        assert np.all(np.isfinite(fitted.moving_transformed_))
+
+
+@pytest.mark.parametrize("factor", [1e-160, 1e155, 1e300])
+def test_normals_do_not_depend_on_the_scale(factor):
+    # at 1e155 the k-d tree's squared distances overflowed and it returned the index
+    # "no neighbour": an IndexError from inside
+    from centrality_vision.registration import estimate_normals
+
+    points = np.random.default_rng(0).random((10, 3))
+    np.testing.assert_allclose(
+        np.abs(estimate_normals(points * factor, k=3)), np.abs(estimate_normals(points, k=3)), atol=1e-12
+    )
+
+
+@pytest.mark.parametrize("far", [1e200, 1e308])
+def test_a_true_moving_beyond_the_data_s_scale_is_refused_by_name(far):
+    # the errors were computed in the normalised frame: inf (with a RuntimeWarning at 1e308)
+    from centrality_vision.registration import ICP
+
+    y = np.random.default_rng(0).random((20, 2))
+    for estimator in (RigidCPD(), ICP()):
+        with pytest.raises(InputError, match=r"`true_moving` must lie within 1e\+145 radii of the fixed set"):
+            estimator.fit(y, y + 0.1, true_moving=np.full_like(y, far))
+    error = RigidCPD().fit(y, y + 0.1, true_moving=np.full_like(y, 1e100)).history_["error"][-1]
+    assert error == pytest.approx(np.sqrt(40) * 1e100, rel=1e-9)
+
+
+def test_gpd_bins_stone_keeps_numpy_s_suboptimal_warning_in():
+    rng = np.random.default_rng(0)
+    y = rng.random((20, 2))
+    x = y @ np.array([[0.8, -0.6], [0.6, 0.8]]).T + 0.1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        GPD(bins="stone").fit(y, x)
+
+
+def test_gpd_checks_the_dimensions_before_building_graphs():
+    y = np.random.default_rng(0).random((30, 2))
+    with pytest.raises(InputError, match=r"`fixed` must have shape \(n_points, 2\); got shape \(30, 3\)"):
+        GPD().fit(y, np.c_[y, y[:, 0]])
+
+
+def test_icp_names_a_moving_set_too_small_for_a_pose():
+    from centrality_vision.registration import ICP
+
+    y = np.random.default_rng(0).random((30, 2))
+    for metric in ("point_to_point", "point_to_plane"):
+        with pytest.raises(InputError, match=r"`moving` must have at least 3 points for ICP in 2D .*got 2"):
+            ICP(metric=metric).fit(y[:2], y)
+
+
+@pytest.mark.parametrize("sizes", [b"\x05\x10", bytearray(b"\x05"), {5: 1, 10: 2}, {5, 10}])
+def test_multiscale_sizes_must_be_a_sequence_of_ints(sizes):
+    from centrality_vision.registration import MultiscaleCPD
+
+    y = np.random.default_rng(0).random((30, 2))
+    with pytest.raises(TypeError, match="`MultiscaleCPD.sizes` must be a sequence of ints"):
+        MultiscaleCPD(RigidCPD(), sizes=sizes).fit(y, y)

@@ -322,6 +322,21 @@ class _Frame:
     def fixed_in(self, points: np.ndarray) -> np.ndarray:
         return points if self.identity else (points - self.fixed_centre) / self.scale
 
+    def true_in(self, true_moving):
+        """``true_moving`` in the normalised frame (None stays None), refused by name when it
+        lies so far from the data that the errors recorded against it would overflow."""
+        if true_moving is None:
+            return None
+        with np.errstate(over="ignore", invalid="ignore"):
+            true_n = self.fixed_in(true_moving)
+            reach = float(np.max(np.abs(true_n))) if true_n.size else 0.0
+        if not reach <= _SCALE_RANGE[1]:
+            raise InputError(
+                f"`true_moving` must lie within {_SCALE_RANGE[1]:g} radii of the fixed set (the data's scale); it "
+                f"reaches {reach:.3g} radii. Check its units."
+            )
+        return true_n
+
     def linear_in(self, transform):
         """A caller-units similarity or affine transform as a map of the normalised frame."""
         linear = (
@@ -584,7 +599,7 @@ class _CPD(BaseEstimator):
         if isinstance(prior, CentralityPrior):
             _check_prior(prior, moving.shape[0], fixed.shape[0], "prior")
         frame, moving_n, fixed_n = self._frame(moving, fixed)
-        true_n = None if true_moving is None else frame.fixed_in(true_moving)
+        true_n = frame.true_in(true_moving)
         start = self._start(moving_n, fixed_n, frame)
         self._run(moving, moving_n, fixed_n, frame, true_n, start, landmarks, prior)
         return self
@@ -1019,7 +1034,9 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         decides, so above 2^20 pairs two fits of one problem may take different paths and
         differ at rounding level (measured: 1e-12 at 2,000 points; up to the FGT's 1e-8 where
         it is chosen); pass 'dense' or 'truncated' for results bit-identical across runs and
-        thread counts.
+        for any number of this library's threads. (The M-step's solves and products go
+        through NumPy's BLAS, whose own thread count can change the last bits: 1e-14 at
+        700 points between OpenBLAS on 1 and 2 threads.)
     n_neighbors : int, optional
         None (default): CPD's model, every moving point may explain every fixed point.
         An int k: the k-nearest-neighbour model (the E-step of biocpd, our own code): each

@@ -927,7 +927,8 @@ class EStepPlanner:
 
     Timings decide, so two runs of one fit may take different paths; every path equals the
     dense one to its bound ('truncated' to rounding, 'fgt' to about ``eps`` of the total
-    weight). Pass a fixed ``method`` for results bit-identical across runs and thread counts.
+    weight). Pass a fixed ``method`` for results bit-identical across runs and for any
+    number of this library's threads.
 
     Examples
     --------

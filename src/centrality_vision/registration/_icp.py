@@ -43,6 +43,12 @@ def estimate_normals(points, *, k: int = 10) -> np.ndarray:
     """
     points = as_points(points, name="points", n_dims=(2, 3), min_points=2)
     k = min(check_int(k, name="k", low=2), points.shape[0])
+    # normals do not depend on scale: a power-of-two scale to unit size is exact, and keeps
+    # the k-d tree's squared distances from overflowing past 1e154 (it then reported no
+    # neighbours) or underflowing below 1e-154
+    peak = float(np.max(np.abs(points)))
+    if peak > 0:
+        points = points / np.ldexp(1.0, int(np.frexp(peak)[1]))
     _, neighbours = cKDTree(points).query(points, k=k, workers=get_num_threads())
     patches = points[neighbours]  # (n, k, D)
     patches = patches - patches.mean(axis=1, keepdims=True)
@@ -203,6 +209,11 @@ class ICP(BaseEstimator):
                     f"`true_moving` must have the shape of `moving` {moving.shape}; got {true_moving.shape}."
                 )
         dim = moving.shape[1]
+        if moving.shape[0] < dim + 1:
+            raise InputError(
+                f"`moving` must have at least {dim + 1} points for ICP in {dim}D (a pose needs {dim + 1} pairs); "
+                f"got {moving.shape[0]}."
+            )
         if self.metric == "point_to_plane" and dim not in (2, 3):
             raise InputError(f"`ICP.metric='point_to_plane'` needs 2D or 3D points; got {dim}D.")
         if self.metric == "point_to_plane" and fixed.shape[0] < dim:
@@ -211,7 +222,7 @@ class ICP(BaseEstimator):
                 f"got {fixed.shape[0]}."
             )
         frame, moving_n, fixed_n = _Frame.of(moving, fixed, True, same_centre=True)
-        true_n = None if true_moving is None else frame.fixed_in(true_moving)
+        true_n = frame.true_in(true_moving)
         max_d = None if self.max_distance is None else float(self.max_distance) / frame.scale
         normals = estimate_normals(fixed_n, k=self.k_normals) if self.metric == "point_to_plane" else None
         tree = cKDTree(fixed_n)

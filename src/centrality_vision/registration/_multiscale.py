@@ -173,6 +173,8 @@ class MultiscaleCPD(BaseEstimator):
                 f"`MultiscaleCPD.estimator` must be a RigidCPD, AffineCPD or NonRigidCPD; got {self.estimator!r}."
             )
         try:
+            if isinstance(self.sizes, (str, bytes, bytearray, dict, set, frozenset)):
+                raise TypeError  # iterable, but not a sequence of sizes (bytes iterate as ints)
             sizes = [check_int(s, name="MultiscaleCPD.sizes[i]", low=2) for s in self.sizes]
         except TypeError:
             raise TypeError(f"`MultiscaleCPD.sizes` must be a sequence of ints; got {self.sizes!r}.") from None

@@ -158,11 +158,14 @@ def _em(moving, fixed, rotation, translation, scale, sigma2, w, n_iter, estimate
         x_hat = fixed[None, :, :] - mu_x[:, None, :]
         x_px = np.einsum("kn,knd,knd->k", pt1, x_hat, x_hat)
         new_scale = np.ones(n_poses)
-        if estimate_scale:
-            good = (y_py > 0) & (trace > 0)
-            new_scale[good] = trace[good] / y_py[good]
-        new_sigma2 = (x_px - 2 * new_scale * trace + new_scale**2 * y_py) / (n_p * n_dims)
-        ok &= np.isfinite(new_sigma2) & (new_sigma2 > 1e-12)
+        # a pose whose posterior mass sits on (nearly) one moving point has y_py ~ 0: its
+        # scale and variance overflow, and the test below keeps it where it was
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+            if estimate_scale:
+                good = (y_py > 0) & (trace > 0)
+                new_scale[good] = trace[good] / y_py[good]
+            new_sigma2 = (x_px - 2 * new_scale * trace + new_scale**2 * y_py) / (n_p * n_dims)
+        ok &= np.isfinite(new_sigma2) & np.isfinite(new_scale) & (new_sigma2 > 1e-12)
         rotation[ok], scale[ok], sigma2[ok] = new_rotation[ok], new_scale[ok], new_sigma2[ok]
         translation[ok] = mu_x[ok] - scale[ok, None] * np.einsum("kij,kj->ki", rotation[ok], mu_y[ok])
     *_, nll = _batch_e_step(moved(), fixed, np.full(n_poses, _SCORE_SIGMA2), w)
