@@ -290,9 +290,10 @@ class NonRigidTransform(_ArrayEquality):
     ----------
     control_points : ndarray of shape (M, D)
         The kernel centres ``c_m``, in the frame of ``v`` (the fitted moving points after the
-        pre-map, less ``output_origin``).
+        pre-map, less ``output_origin``; after a low-rank fit, the pivots of its kernel's
+        factorisation among them).
     coefficients : ndarray of shape (M, D)
-        ``W`` of the CPD paper.
+        ``W`` of the CPD paper (for a low-rank fit, the weights on those pivots).
     beta : float
         Width of the Gaussian kernel.
     linear : ndarray of shape (D, D), optional
@@ -335,9 +336,9 @@ class NonRigidTransform(_ArrayEquality):
     def __post_init__(self):
         control = _frozen(self.control_points, "control_points")
         coefficients = _frozen(self.coefficients, "coefficients")
-        if control.ndim != 2 or coefficients.shape != control.shape:
+        if control.ndim != 2 or coefficients.shape != control.shape or 0 in control.shape:
             raise InputError(
-                "`control_points` and `coefficients` must both be (M, D); "
+                "`control_points` and `coefficients` must both be (M, D) with M, D >= 1; "
                 f"got {control.shape} and {coefficients.shape}."
             )
         if not (np.all(np.isfinite(control)) and np.all(np.isfinite(coefficients))):

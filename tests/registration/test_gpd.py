@@ -139,7 +139,7 @@ def test_bad_gpd_input(fish_pair):
         GPD().fit(y, x, fixed_graph=sparse.eye(4, format="csr"))
     with pytest.raises(ValueError, match="not fitted"):
         GPD().transform(y)
-    with pytest.raises(ValueError, match="could not build the 'delaunay' graph of `moving`.*collinear"):
+    with pytest.raises(ValueError, match="`moving`: GPD could not build its 'delaunay' graph: .*collinear"):
         GPD().fit([[0.0, 0.0], [1, 0], [2, 0], [3, 0]], [[0.0, 1.0], [1, 2], [2, 0], [3, 1]])
     with pytest.raises(ValueError, match="normalised"):
         centrality_prior([0.0, 2.0], [0.0, 1.0])

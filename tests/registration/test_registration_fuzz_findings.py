@@ -380,3 +380,16 @@ def test_multiscale_sizes_must_be_a_sequence_of_ints(sizes):
     y = np.random.default_rng(0).random((30, 2))
     with pytest.raises(TypeError, match="`MultiscaleCPD.sizes` must be a sequence of ints"):
         MultiscaleCPD(RigidCPD(), sizes=sizes).fit(y, y)
+
+
+def test_a_non_rigid_transform_needs_points_with_coordinates():
+    from centrality_vision.transforms import NonRigidTransform
+
+    with pytest.raises(InputError, match=r"must both be \(M, D\) with M, D >= 1; got \(2, 0\)"):
+        NonRigidTransform(np.zeros((2, 0)), np.zeros((2, 0)), 1.0)
+
+
+def test_gpd_s_graph_failure_names_the_set_and_suggests_other_graphs():
+    # an 'emst' failure suggested 'emst'
+    with pytest.raises(InputError, match=r"^`moving`: GPD could not build its 'emst' graph: .*\(e\.g\. 'knn'\)"):
+        GPD(graph="emst").fit(np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([[0.0, 0.0], [1.0, 0.0]]))

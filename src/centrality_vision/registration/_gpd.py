@@ -355,9 +355,10 @@ class GPD(BaseEstimator):
                 graph = _build_graph(points, self.graph, self.k)
             except InputError as exc:
                 kind = getattr(self.graph, "__name__", self.graph)
+                others = " or ".join(repr(g) for g in ("knn", "emst") if g != kind)
                 raise InputError(
-                    f"GPD could not build the {kind!r} graph of `{name}`: {exc} Choose another `graph` "
-                    "(e.g. 'knn' or 'emst'). From Python, you can also pass your own "
+                    f"`{name}`: GPD could not build its {kind!r} graph: {exc} Choose another `graph` "
+                    f"(e.g. {others}). From Python, you can also pass your own "
                     f"`{name}_graph` or `{name}_centrality`."
                 ) from None
         else:
