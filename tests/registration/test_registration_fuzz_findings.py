@@ -393,3 +393,22 @@ def test_gpd_s_graph_failure_names_the_set_and_suggests_other_graphs():
     # an 'emst' failure suggested 'emst'
     with pytest.raises(InputError, match=r"^`moving`: GPD could not build its 'emst' graph: .*\(e\.g\. 'knn'\)"):
         GPD(graph="emst").fit(np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([[0.0, 0.0], [1.0, 0.0]]))
+
+
+@pytest.mark.parametrize("offset", [1e4, 1e6])
+def test_icp_converges_at_a_tight_tol_whatever_the_offset(offset):
+    # offset, the residual bottomed out at the rounding the coordinates carry (6e-25), above
+    # the fixed 1e-26 "coincide" floor, and jittered: max_iter and a ConvergenceWarning
+    from centrality_vision.registration import ICP
+
+    rng = np.random.default_rng(7)
+    y = rng.random((60, 2))
+    q = np.linalg.qr(rng.normal(size=(2, 2)))[0]
+    x = np.vstack([y @ (np.eye(2) + 0.15 * (q - q.T) / 2).T + 0.03, rng.random((10, 2)) * 3])
+    icp = ICP(tol=1e-12, metric="point_to_plane", trim=0.1, k_normals=5)
+    at_origin = icp.fit(y, x)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ConvergenceWarning)
+        shifted = ICP(**icp.get_params()).fit(y + offset, x + offset)
+    assert shifted.converged_ and shifted.n_iter_ == at_origin.n_iter_
+    np.testing.assert_allclose(shifted.moving_transformed_ - offset, at_origin.moving_transformed_, atol=1e-9)

@@ -25,7 +25,8 @@ from ._cpd import IterationInfo, _Frame, _start_within_reach
 __all__ = ["ICP", "estimate_normals"]
 
 METRICS = ("point_to_point", "point_to_plane")
-# A mean squared residual below this (sets of unit RMS radius) is rounding error: converged.
+# A mean squared residual below this (sets of unit RMS radius) is rounding error: converged
+# (or below the rounding the caller's coordinates carry into the normalised frame, if larger).
 _COINCIDE = 1e-26
 
 
@@ -223,6 +224,10 @@ class ICP(BaseEstimator):
             )
         frame, moving_n, fixed_n = _Frame.of(moving, fixed, True, same_centre=True)
         true_n = frame.true_in(true_moving)
+        # the normalised coordinates carry the rounding of the caller's (an offset of 1e4
+        # leaves ~1e-12 of a unit radius): residuals below it are rounding error too
+        peak = max(float(np.max(np.abs(moving))), float(np.max(np.abs(fixed)))) / frame.scale
+        coincide = max(_COINCIDE, (16 * np.finfo(float).eps * peak) ** 2)
         max_d = None if self.max_distance is None else float(self.max_distance) / frame.scale
         normals = estimate_normals(fixed_n, k=self.k_normals) if self.metric == "point_to_plane" else None
         tree = cKDTree(fixed_n)
@@ -297,7 +302,7 @@ class ICP(BaseEstimator):
                 )
                 if self.callback(info) is True:
                     break
-            if objective <= _COINCIDE or (
+            if objective <= coincide or (
                 previous is not None and abs(previous - objective) <= self.tol * max(previous, 1e-300)
             ):
                 converged = True
