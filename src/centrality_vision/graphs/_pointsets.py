@@ -122,10 +122,16 @@ def _triangulable_points(points) -> np.ndarray:
     return points
 
 
+def _spread(points: np.ndarray) -> np.ndarray:
+    """Singular values of the centred points over their largest centred coordinate, largest
+    first: the extent along each principal axis, relative to the whole."""
+    centred = points - points.mean(axis=0)
+    return np.linalg.svd(centred / np.abs(centred).max(), compute_uv=False)
+
+
 def _affine_rank(points: np.ndarray) -> int:
     """The dimension the points span (to within 1e-12 of their extent)."""
-    centred = points - points.mean(axis=0)
-    return int(np.linalg.matrix_rank(centred / np.abs(centred).max(), tol=1e-12))
+    return int(np.count_nonzero(_spread(points) > 1e-12))
 
 
 def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
@@ -158,8 +164,7 @@ def _delaunay_edges(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     # for a tight cluster beside distant points (about 1e-7 of the extent): every facet checked
     failed = delaunay_violations(unit, tri.simplices, tri.neighbors)
     if failed:
-        centred = unit - unit.mean(axis=0)
-        singular = np.linalg.svd(centred / np.abs(centred).max(), compute_uv=False)
+        singular = _spread(unit)
         flat = "a line" if points.shape[1] == 2 else "a plane"
         cause = (
             f"happens when the points lie nearly on {flat} (here within {singular[-1] / singular[0]:.1g} of their "

@@ -370,6 +370,15 @@ def _number_word(word: str) -> float:
     return float(word)
 
 
+def _numpy_rows(lines: list[str]) -> np.ndarray:
+    """Lines of whitespace-separated numbers as a float array, at numpy's speed; ValueError
+    on any doubt (ragged rows, a word that is not a number, or a "_", which numpy reads as
+    Python does: "1_000" is 1000)."""
+    if any("_" in line for line in lines):
+        raise _NotANumber("_")
+    return np.array([line.split() for line in lines], dtype=np.float64)
+
+
 def _is_number(cell: str, decimal_comma: bool) -> bool:
     try:
         _to_float(cell, decimal_comma)
@@ -762,10 +771,9 @@ def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Tab
         rows = lines[first : first + count]
         if len(rows) != count:
             raise InputError(f"{path}: the header declares {count} vertices but the file holds {len(rows)}.")
-        if all(count_type is None for _, count_type, _ in properties) and not any("_" in line for line in rows):
-            # the usual case, at numpy's speed (numpy reads "1_000" as Python does: such rows go below)
+        if all(count_type is None for _, count_type, _ in properties):  # the usual case, at numpy's speed
             try:
-                values = np.array([line.split() for line in rows], dtype=np.float64).reshape(count, -1)
+                values = _numpy_rows(rows).reshape(count, -1)
             except ValueError:  # ragged or not numbers: the row-by-row reading below names the row
                 values = None
             if values is not None and values.shape[1] == len(names):
@@ -879,9 +887,7 @@ def _read_pcd(path: Path) -> _Table:
         if len(lines) != n_points:
             raise InputError(f"{path}: the header declares {n_points} points but the file holds {len(lines)} rows.")
         try:
-            if "_" in text:  # numpy reads "1_000" as Python does; a point file never means it
-                raise _NotANumber("_")
-            values = np.array([line.split() for line in lines], dtype=np.float64)
+            values = _numpy_rows(lines)
         except ValueError:
             raise InputError(f"{path}: the ASCII data are not rows of {len(names)} numbers.") from None
         if values.ndim != 2 or values.shape[1] != len(names):

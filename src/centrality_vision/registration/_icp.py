@@ -19,7 +19,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._parallel import get_num_threads
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import ConvergenceWarning, InputError
-from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity
+from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity, power_of_two_scale
 from ._cpd import IterationInfo, _Frame, _start_within_reach
 
 __all__ = ["ICP", "estimate_normals"]
@@ -47,9 +47,7 @@ def estimate_normals(points, *, k: int = 10) -> np.ndarray:
     # normals do not depend on scale: a power-of-two scale to unit size is exact, and keeps
     # the k-d tree's squared distances from overflowing past 1e154 (it then reported no
     # neighbours) or underflowing below 1e-154
-    peak = float(np.max(np.abs(points)))
-    if peak > 0:
-        points = points / np.ldexp(1.0, int(np.frexp(peak)[1]))
+    points = points / power_of_two_scale(points)
     _, neighbours = cKDTree(points).query(points, k=k, workers=get_num_threads())
     patches = points[neighbours]  # (n, k, D)
     patches = patches - patches.mean(axis=1, keepdims=True)
