@@ -49,7 +49,7 @@ def test_bad_transforms():
         SimilarityTransform(2 * np.eye(2), [0.0, 0.0])
     with pytest.raises(ValueError, match="scale"):
         RigidTransform(np.eye(2), [0.0, 0.0], 2.0)
-    with pytest.raises(ValueError, match="not invertible"):
+    with pytest.raises(ValueError, match="`linear` must be invertible"):
         AffineTransform(np.zeros((2, 2)), [0.0, 0.0]).inverse()
     with pytest.raises(ValueError, match="beta"):
         NonRigidTransform(np.zeros((2, 2)), np.zeros((2, 2)), beta=0.0)
@@ -148,8 +148,10 @@ def test_a_result_beyond_float64_is_an_error_not_inf(transform):
 
 
 def test_inverse_beyond_float64_is_named():
-    with pytest.raises(ValueError, match="inverse leaves the float64 range"):
+    with pytest.raises(ValueError, match="`scale` and `translation` must have an inverse within float64"):
         SimilarityTransform(_I2, [1e10, 0], 1e-300).inverse()
+    with pytest.raises(ValueError, match="`linear` must have an inverse within float64"):
+        AffineTransform(np.diag([1e-300, 1e-300]), [1e300, 0.0]).inverse()
 
 
 @pytest.mark.parametrize("beta", [5e-324, 1e-200, 1e200])

@@ -83,13 +83,18 @@ def as_points(
 ) -> np.ndarray:
     """Return ``points`` as a C-contiguous float64 array of shape (n_points, n_dims).
 
-    Raises a :class:`TypeError` for non-numeric input and an :class:`InputError`
+    Raises a :class:`TypeError` for non-numeric or boolean input and an :class:`InputError`
     (a ``ValueError``) for a wrong shape, non-finite values, too few points or,
     with ``allow_duplicates=False``, repeated points.
     """
     if sparse.issparse(points):
         raise TypeError(f"`{name}` must be a dense array of shape (n_points, n_dims); got {_describe(points)}.")
     arr = as_real_array(points, name=name, shape="(n_points, n_dims)")
+    if arr.dtype == bool:
+        raise TypeError(
+            f"`{name}` must hold coordinates (real numbers); got an {_describe(arr)} "
+            "(a mask? convert with .astype(float) if 0/1 coordinates are meant)."
+        )
     if arr.ndim != 2 or arr.shape[1] not in n_dims:
         raise InputError(f"`{name}` must have shape (n_points, {_describe_dims(n_dims)}); got shape {arr.shape}.")
     arr = np.array(arr, dtype=np.float64, order="C", copy=True)

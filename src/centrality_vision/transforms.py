@@ -173,8 +173,8 @@ class SimilarityTransform(_ArrayEquality):
             translation, scale = -(rotation @ self.translation) / self.scale, 1.0 / self.scale
         if not (np.all(np.isfinite(translation)) and np.isfinite(scale)):
             raise InputError(
-                f"This transform's inverse leaves the float64 range (`scale` {self.scale:.3g}, "
-                f"`translation` up to {np.abs(self.translation).max():.3g})."
+                f"`scale` and `translation` must have an inverse within float64; got `scale` "
+                f"{self.scale:.3g} and `translation` up to {np.abs(self.translation).max():.3g}."
             )
         return SimilarityTransform(rotation, translation, scale)
 
@@ -260,14 +260,14 @@ class AffineTransform(_ArrayEquality):
         """The inverse map; raises ``InputError`` when ``linear`` is singular."""
         if np.linalg.cond(self.linear) > 1e14:
             raise InputError(
-                "This affine transform is not invertible: `linear` is singular "
+                "`linear` must be invertible for the inverse transform; got a singular matrix "
                 f"(cond {np.linalg.cond(self.linear):.3g})."
             )
         inv = np.linalg.inv(self.linear)
         with np.errstate(over="ignore", invalid="ignore"):
             translation = -(inv @ self.translation)
         if not (np.all(np.isfinite(inv)) and np.all(np.isfinite(translation))):
-            raise InputError("This affine transform's inverse leaves the float64 range.")
+            raise InputError("`linear` must have an inverse within float64; the inverse transform leaves its range.")
         return AffineTransform(inv, translation)
 
 

@@ -102,7 +102,7 @@ def test_icp_max_distance_that_leaves_no_pair_is_a_one_line_error(tmp_path, caps
     np.save(tmp_path / "f.npy", fish + 0.1)
     argv = ["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--method", "icp"]
     assert main([*argv, "--max-distance", "1e-9", "--out", str(tmp_path / "r.json")]) == 2
-    assert "ICP found only 0 pairs within --max-distance 1e-09 at the start" in _error_line(capsys)
+    assert "--max-distance 1e-09 leaves ICP only 0 pairs at the start" in _error_line(capsys)
 
 
 def test_icp_point_to_plane_in_3d(tmp_path):

@@ -412,3 +412,35 @@ def test_icp_converges_at_a_tight_tol_whatever_the_offset(offset):
         shifted = ICP(**icp.get_params()).fit(y + offset, x + offset)
     assert shifted.converged_ and shifted.n_iter_ == at_origin.n_iter_
     np.testing.assert_allclose(shifted.moving_transformed_ - offset, at_origin.moving_transformed_, atol=1e-9)
+
+
+@pytest.mark.parametrize("make", [RigidCPD, NonRigidCPD, AffineCPD])
+def test_boolean_coordinates_are_refused_by_name(make):
+    # a mask passed as a point set was read as 0/1 coordinates before
+    mask = np.random.default_rng(3).random((12, 2)) > 0.5
+    with pytest.raises(TypeError, match=r"^`moving` must hold coordinates .*dtype bool"):
+        make().fit(mask, np.random.default_rng(4).random((12, 2)))
+
+
+_LEADS_WITH_A_NAME = r"^`[A-Za-z_][\w=.\-+]*`"
+
+
+def test_the_last_unnamed_messages_now_start_with_the_parameter(pair):
+    # ICP's "found only N pairs", normalize=False's limits, initial_sigma2 and the inverse
+    # transforms started with a sentence; each now leads with the parameter, as the rest do
+    from centrality_vision.registration import ICP
+    from centrality_vision.transforms import AffineTransform
+
+    y, x = pair
+    calls = [
+        lambda: ICP(max_distance=1e-9).fit(y, x + 1.0),
+        lambda: RigidCPD(normalize=False).fit(y * 1e200, x * 1e200),
+        lambda: RigidCPD(normalize=False).fit(y * 1e-150, x * 1e-150),
+        lambda: initial_sigma2(y * 1e300 - 1e308, x * 1e300 + 1e308),
+        lambda: AffineTransform(np.zeros((2, 2)), [0.0, 0.0]).inverse(),
+        lambda: AffineTransform(np.diag([1e-300, 1e-300]) * 1e-10, [1e300, 0.0]).inverse(),
+        lambda: SimilarityTransform(np.eye(2), [1e308, 0.0], 1e-300).inverse(),
+    ]
+    for call in calls:
+        with pytest.raises(InputError, match=_LEADS_WITH_A_NAME):
+            call()

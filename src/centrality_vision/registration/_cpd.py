@@ -153,8 +153,8 @@ def initial_sigma2(moving, fixed) -> float:
     sigma2 = _initial_sigma2(moving, fixed)
     if not math.isfinite(sigma2):
         raise InputError(
-            "The mean squared distance between `moving` and `fixed` is beyond float64; rescale the sets "
-            "(the estimators do so themselves with normalize=True)."
+            "`moving` and `fixed` must lie close enough for their mean squared distance to fit in "
+            "float64; it is beyond float64. Rescale the sets (the estimators do so themselves with normalize=True)."
         )
     return sigma2
 
@@ -260,16 +260,16 @@ class _Frame:
                 # (squared distances and coordinates, and so sigma2 and the M-step's moments,
                 # would overflow to inf)
                 raise InputError(
-                    f"With `normalize=False` the coordinates of `moving` and `fixed` must be at most "
-                    f"{_SCALE_RANGE[1]:g} in absolute value (their squares must fit in float64); got "
+                    f"`moving` and `fixed` must have coordinates at most {_SCALE_RANGE[1]:g} in absolute "
+                    f"value with `normalize=False` (their squares must fit in float64); got "
                     f"{max(span, largest):.3g}. Use normalize=True."
                 )
             if 0.0 < span < _UNNORMALIZED_MIN_SPAN:
                 # (sigma2 then falls below the floor kept for 1 / (2 sigma2): the fit stopped at
                 # the start pose as if the sets coincided, "converged")
                 raise InputError(
-                    f"With `normalize=False` the points of `moving` and `fixed` must span at least "
-                    f"{_UNNORMALIZED_MIN_SPAN:g} (their squared distances must stay normal floats); got "
+                    f"`moving` and `fixed` must span at least {_UNNORMALIZED_MIN_SPAN:g} with "
+                    f"`normalize=False` (their squared distances must stay normal floats); got "
                     f"{span:.3g}. Use normalize=True."
                 )
         mu_x, xc = centred(fixed)

@@ -270,9 +270,9 @@ class ICP(BaseEstimator):
                             f"(at least {dim + 1} are needed); lower it."
                         )
                     raise InputError(
-                        f"ICP found only {int(np.count_nonzero(keep))} pairs within "
-                        f"`max_distance={self.max_distance}` at the start (at least {dim + 1} are needed); "
-                        "start closer (`init`) or raise `max_distance`."
+                        f"`max_distance={self.max_distance}` leaves ICP only {int(np.count_nonzero(keep))} "
+                        f"pairs at the start (at least {dim + 1} are needed); start closer (`init`) or raise "
+                        "`max_distance`."
                     )
                 # the last step moved the pairs out of reach: its iterate is dropped, the one
                 # before (which had pairs) is the result
