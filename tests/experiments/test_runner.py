@@ -214,7 +214,9 @@ def test_seed_list_checks_seed_and_seeds():
         seed_list(-1, 3, False)
     with pytest.raises(ValueError, match="`seeds`"):
         seed_list(0, 10**9, False)
-    assert seed_list(2**63 - 3, 3, False)[-1] == 2**63 - 1
+    assert seed_list(2**32 - 3, 3, False)[-1] == 2**32 - 1  # scikit-learn's random_state range
+    with pytest.raises(ValueError, match="`seed`"):
+        seed_list(2**32, 1, False)
 
 
 def test_every_experiment_is_registered_once():

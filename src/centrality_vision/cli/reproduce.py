@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from ..experiments._common import MAX_SEED, MAX_SEEDS, int_in
+from ..experiments._common import MAX_SEED, MAX_SEEDS, MAX_WORKERS, int_in
 from ._common import add_progress, out_folder
 
 NAME = "reproduce"
@@ -41,7 +41,10 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "skipped on a re-run",
     )
     parser.add_argument(
-        "--workers", type=int_in(1), default=None, help="processes or Dask workers to start (default: the usable cores)"
+        "--workers",
+        type=int_in(1, MAX_WORKERS),
+        default=None,
+        help="processes or Dask workers to start (default: the usable cores)",
     )
     add_progress(parser)
     parser.set_defaults(run=run, _parser=parser)
@@ -52,7 +55,7 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from ..exceptions import InputError
-    from ..experiments import RUNNER_EXPERIMENTS, run_experiment
+    from ..experiments import RUNNER_EXPERIMENTS, SEEDS_EXPERIMENTS, run_experiment
 
     if args.scheduler is not None:  # before any experiment runs, not after its first part
         from ..experiments._runner import _check_scheduler
@@ -66,11 +69,14 @@ def run(args: argparse.Namespace) -> int:
         )
         print(f"wrote {path}")
         return 0
-    for option, value in (("--scheduler", args.scheduler), ("--workers", args.workers)):
-        if value is not None and args.experiment not in RUNNER_EXPERIMENTS:
-            raise InputError(
-                f"`{option}` applies to {', '.join(RUNNER_EXPERIMENTS)} (and all); got it for {args.experiment}."
-            )
+    for option, value, takers in (
+        ("scheduler", args.scheduler, RUNNER_EXPERIMENTS),
+        ("workers", args.workers, RUNNER_EXPERIMENTS),
+        ("seeds", args.seeds, SEEDS_EXPERIMENTS),
+    ):
+        if value is not None and args.experiment not in takers:
+            # (`option` reads --option in the printed message)
+            raise InputError(f"`{option}` applies to {', '.join(takers)} (and all); got it for {args.experiment}.")
     return run_experiment(
         args.experiment,
         Path(args.out) / args.experiment,

@@ -21,7 +21,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["Experiment", "REGISTRY", "EXPERIMENTS", "RUNNER_EXPERIMENTS", "experiment_argv", "run_experiment"]
+__all__ = [
+    "Experiment",
+    "REGISTRY",
+    "EXPERIMENTS",
+    "RUNNER_EXPERIMENTS",
+    "SEEDS_EXPERIMENTS",
+    "check_options",
+    "experiment_argv",
+    "run_experiment",
+]
 
 
 @dataclass(frozen=True)
@@ -40,6 +49,9 @@ class Experiment:
         Thesis figures ("fig. 5.3") and tables ("Table 5.1") whose data it recomputes.
     runner : bool
         Its units run on the shared runner (``--scheduler``, ``--workers``).
+    seeds : bool
+        Its claims are checked over several seeds (``--seeds``); the others check theirs on
+        every image or point of one run, or have nothing random.
     """
 
     name: str
@@ -47,6 +59,7 @@ class Experiment:
     title: str
     reproduces: tuple = ()
     runner: bool = True
+    seeds: bool = True
 
 
 REGISTRY = {
@@ -58,18 +71,25 @@ REGISTRY = {
             "the four centralities of the 6-node graph",
             ("Table 2.1", "fig. 2.12"),
             runner=False,
+            seeds=False,
         ),
         Experiment(
             "fig-4.2",
             "fig_4_2",
             "centralities of Kimia-99 shapes, noiseless and noisy, and their histograms",
             ("fig. 4.1", "fig. 4.2", "fig. 4.3", "fig. 4.4", "fig. 4.5", "fig. 4.6"),
+            seeds=False,
         ),
         Experiment(
             "table-4.1", "table_4_1", "shape classification on Kimia-99 under salt noise", ("Table 4.1", "fig. 4.8")
         ),
         Experiment(
-            "fig-5.1", "fig_5_1", "GPD's prior and posterior of one fixed point", ("fig. 5.1", "fig. 5.2"), runner=False
+            "fig-5.1",
+            "fig_5_1",
+            "GPD's prior and posterior of one fixed point",
+            ("fig. 5.1", "fig. 5.2"),
+            runner=False,
+            seeds=False,
         ),
         Experiment(
             "fig-5.3", "fig_5_3", "the fish under a similarity transform, CPD against GPD", ("fig. 5.3", "fig. 5.4")
@@ -79,7 +99,12 @@ REGISTRY = {
             "fig-5.7", "fig_5_7", "the fish, non-rigid with outliers and missing points", ("fig. 5.7", "fig. 5.8")
         ),
         Experiment(
-            "fig-5.10", "fig_5_10", "sample point sets of the five classes of Table 5.1", ("fig. 5.10",), runner=False
+            "fig-5.10",
+            "fig_5_10",
+            "sample point sets of the five classes of Table 5.1",
+            ("fig. 5.10",),
+            runner=False,
+            seeds=False,
         ),
         Experiment(
             "table-5.1",
@@ -93,9 +118,10 @@ REGISTRY = {
             "worked examples of ch. 6: six-vertex entropies, Table 6.1",
             ("fig. 6.1", "fig. 6.3", "Table 6.1"),
             runner=False,
+            seeds=False,
         ),
         Experiment("fig-6.4", "fig_6_4", "MWME matching of Kimia-99 outlines", ("fig. 6.4",)),
-        Experiment("fig-7.1", "fig_7_1", "MST against MSTME on five points", ("fig. 7.1",), runner=False),
+        Experiment("fig-7.1", "fig_7_1", "MST against MSTME on five points", ("fig. 7.1",), runner=False, seeds=False),
         Experiment(
             "fig-7.4",
             "fig_7_4",
@@ -109,6 +135,27 @@ REGISTRY = {
 EXPERIMENTS = {name: e.module for name, e in REGISTRY.items()}
 #: The experiments whose units run on the shared runner (they accept ``--scheduler``/``--workers``).
 RUNNER_EXPERIMENTS = tuple(name for name, e in REGISTRY.items() if e.runner)
+#: The experiments whose claims are checked over several seeds (they accept ``--seeds``).
+SEEDS_EXPERIMENTS = tuple(name for name, e in REGISTRY.items() if e.seeds)
+
+
+def check_options(*, quick=False, seed=0, seeds=None, scheduler=None, workers=None) -> dict:
+    """The options shared by :func:`experiment_argv`, :func:`run_experiment` and
+    :func:`~centrality_vision.experiments.report.run_all`, checked: ``quick`` True or False,
+    ``seed`` an int in [0, 2**32 - 1], ``seeds`` None or an int in [1, 100000], ``scheduler``
+    None or a scheduler name, ``workers`` None or an int in [1, 1024]. A bad one is a named
+    ``TypeError`` or :class:`~centrality_vision.exceptions.InputError`."""
+    from .._validation import check_bool, check_int
+    from ._common import MAX_SEED, MAX_SEEDS
+    from ._runner import MAX_WORKERS, _check_scheduler
+
+    return {
+        "quick": check_bool(quick, name="quick"),
+        "seed": check_int(seed, name="seed", low=0, high=MAX_SEED),
+        "seeds": None if seeds is None else check_int(seeds, name="seeds", low=1, high=MAX_SEEDS),
+        "scheduler": None if scheduler is None else _check_scheduler(scheduler),
+        "workers": None if workers is None else check_int(workers, name="workers", low=1, high=MAX_WORKERS),
+    }
 
 
 def experiment_argv(
@@ -121,22 +168,35 @@ def experiment_argv(
     scheduler: str | None = None,
     workers: int | None = None,
 ) -> list[str]:
-    """The command line of experiment ``name``'s ``main`` for these options (``scheduler`` and
-    ``workers`` only for experiments of :data:`RUNNER_EXPERIMENTS`)."""
-    if name not in REGISTRY:
+    """The command line of experiment ``name``'s ``main`` for these options (checked by
+    :func:`check_options`; ``seeds`` only for :data:`SEEDS_EXPERIMENTS`, ``scheduler`` and
+    ``workers`` only for :data:`RUNNER_EXPERIMENTS`).
+
+    Examples
+    --------
+    >>> experiment_argv("fig-5.3", "out/fig-5.3", quick=True, seeds=4)
+    ['--out=out/fig-5.3', '--seed=0', '--quick', '--seeds=4']
+    """
+    import os
+
+    if not isinstance(name, str) or name not in REGISTRY:
         from ..exceptions import InputError
 
         raise InputError(f"`name` must be one of {', '.join(REGISTRY)}; got {name!r}.")
-    argv = ["--out", str(out), "--seed", str(seed)]
-    if quick:
+    if not isinstance(out, (str, os.PathLike)):
+        raise TypeError(f"`out` must be a folder path (str or os.PathLike); got {type(out).__name__}.")
+    options = check_options(quick=quick, seed=seed, seeds=seeds, scheduler=scheduler, workers=workers)
+    # (--out=PATH: a folder whose name starts with '-' is not read as another option)
+    argv = [f"--out={os.fspath(out)}", f"--seed={options['seed']}"]
+    if options["quick"]:
         argv.append("--quick")
-    if seeds is not None:
-        argv += ["--seeds", str(seeds)]
+    if options["seeds"] is not None and REGISTRY[name].seeds:
+        argv.append(f"--seeds={options['seeds']}")
     if REGISTRY[name].runner:
-        if scheduler is not None:
-            argv += ["--scheduler", scheduler]
-        if workers is not None:
-            argv += ["--workers", str(workers)]
+        if options["scheduler"] is not None:
+            argv.append(f"--scheduler={options['scheduler']}")
+        if options["workers"] is not None:
+            argv.append(f"--workers={options['workers']}")
     return argv
 
 
@@ -154,7 +214,8 @@ def run_experiment(
     its exit status; what ``centrality-vision reproduce <name>`` does.
 
     ``seeds`` is how many seeds the thesis' claims are checked over (``--seeds N`` of
-    ``reproduce``; default 20, 3 with ``quick``). ``scheduler``/``workers`` go to the
+    ``reproduce``; default 20, 3 with ``quick``); it goes to the experiments of
+    :data:`SEEDS_EXPERIMENTS` and is ignored by the others. ``scheduler``/``workers`` go to the
     experiments of :data:`RUNNER_EXPERIMENTS` and are ignored by the others (they are
     instant). For ``reproduce all`` see :func:`centrality_vision.experiments.report.run_all`,
     which takes the same options.

@@ -13,6 +13,8 @@ import json
 import math
 from pathlib import Path
 
+from ._runner import MAX_WORKERS
+
 __all__ = [
     "SCHEDULER_HELP",
     "DEFAULT_SEEDS",
@@ -39,8 +41,22 @@ QUICK_SEEDS = 3
 
 #: the most seeds one run checks a claim over (each seed is a unit of work; more is a typo)
 MAX_SEEDS = 100_000
-#: seeds are numpy's: non-negative and below 2**63
-MAX_SEED = 2**63 - 1
+#: seeds go to numpy and to scikit-learn's ``random_state``, which takes 0 .. 2**32 - 1
+MAX_SEED = 2**32 - 1
+
+
+def check_run(quick, seed) -> tuple[bool, int]:
+    """An experiment's ``run`` options checked: ``quick`` True or False, ``seed`` an int in
+    [0, :data:`MAX_SEED`].
+
+    Examples
+    --------
+    >>> check_run(True, 3)
+    (True, 3)
+    """
+    from .._validation import check_bool, check_int
+
+    return check_bool(quick, name="quick"), check_int(seed, name="seed", low=0, high=MAX_SEED)
 
 
 def int_in(low: int, high: int | None = None):
@@ -58,6 +74,32 @@ def int_in(low: int, high: int | None = None):
 
     convert.__name__ = "int"
     return convert
+
+
+def scheduler_arg(text: str) -> str:
+    """An argparse ``type`` for ``--scheduler``: checked when the options are read, not after
+    the first part of a run."""
+    from ..exceptions import InputError
+    from ._runner import _check_scheduler
+
+    try:
+        return _check_scheduler(text)
+    except InputError as exc:
+        raise argparse.ArgumentTypeError(str(exc).replace("`scheduler` must", "must")) from None
+
+
+def command_line(main) -> int:
+    """What ``python -m centrality_vision.experiments.<module>`` runs: ``main()``, with a bad
+    argument or missing data as one line on stderr and exit status 2 (not a traceback)."""
+    import sys
+
+    from ..exceptions import InputError
+
+    try:
+        return main()
+    except (InputError, FileNotFoundError) as exc:
+        print(f"error: {' '.join(str(exc).split())}", file=sys.stderr)
+        return 2
 
 
 def experiment_parser(module: str, doc: str, name: str, *, quick_help=None, seed_help=None, runner=False, seeds=True):
@@ -84,8 +126,8 @@ def experiment_parser(module: str, doc: str, name: str, *, quick_help=None, seed
             f"{QUICK_SEEDS})",
         )
     if runner or seeds:
-        parser.add_argument("--scheduler", default="processes", help=SCHEDULER_HELP)
-        parser.add_argument("--workers", type=int_in(1), default=None)
+        parser.add_argument("--scheduler", type=scheduler_arg, default="processes", help=SCHEDULER_HELP)
+        parser.add_argument("--workers", type=int_in(1, MAX_WORKERS), default=None)
     return parser
 
 
@@ -111,7 +153,7 @@ def seed_list(seed: int, seeds: int | None, quick: bool) -> list[int]:
     if seed + n - 1 > MAX_SEED:
         from ..exceptions import InputError
 
-        raise InputError(f"`seed` + `seeds` must stay below 2**63 (numpy's seeds); got {seed} and {n}.")
+        raise InputError(f"`seed` + `seeds` must stay below 2**32 (scikit-learn's random_state); got {seed} and {n}.")
     return list(range(seed, seed + n))
 
 
@@ -170,13 +212,18 @@ def wilson_interval(k: int, n: int, z: float = 1.959963984540054) -> tuple[float
     [0.64, 0.948]
     >>> wilson_interval(0, 20)[0], round(wilson_interval(0, 20)[1], 3)
     (0.0, 0.161)
+    >>> wilson_interval(27, 27)[1]
+    1.0
     """
     if n <= 0:
         return 0.0, 1.0
     p = k / n
     centre = (p + z * z / (2 * n)) / (1 + z * z / n)
     half = z / (1 + z * z / n) * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return max(0.0, centre - half), min(1.0, centre + half)
+    # (at k = 0 or n one bound is exactly 0 or 1; rounding left 1 - 1e-16, printed as 99.999999...)
+    low = 0.0 if k == 0 else max(0.0, centre - half)
+    high = 1.0 if k == n else min(1.0, centre + half)
+    return low, high
 
 
 def tally(draws) -> dict:
@@ -274,11 +321,12 @@ def new_figure(**kwargs):
 
 
 def run_seed_units(
-    func, seeds, path, *, scheduler="processes", workers=None, progress=True, desc="seeds", **kwargs
+    func, seeds, path, *, scheduler="processes", workers=None, progress=True, desc="seeds", volatile=(), **kwargs
 ) -> list:
-    """``func(seed=s, **kwargs)`` for every seed, as units of the shared runner (kept in ``path``)."""
+    """``func(seed=s, **kwargs)`` for every seed, as units of the shared runner (kept in ``path``;
+    ``volatile``: the keyword arguments that do not change a result, see :class:`~._runner.Unit`)."""
     from ._runner import Unit, run_units
 
-    units = [Unit(f"seed-{s}", func, {"seed": s, **kwargs}) for s in seeds]
+    units = [Unit(f"seed-{s}", func, {"seed": s, **kwargs}, volatile=tuple(volatile)) for s in seeds]
     done = run_units(units, path, scheduler=scheduler, workers=workers, progress=progress, desc=desc)
     return [done[u.key] for u in units]

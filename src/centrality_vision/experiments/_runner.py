@@ -39,18 +39,81 @@ from typing import Any
 
 from ..exceptions import InputError
 
-__all__ = ["Unit", "unit_id", "run_units", "load_results", "SCHEDULERS"]
+__all__ = ["Unit", "unit_id", "run_units", "load_results", "SCHEDULERS", "MAX_WORKERS"]
 
 SCHEDULERS = ("serial", "processes", "dask")
+#: the most processes or Dask workers a run starts (more is a typo: a pool's semaphore is a C int)
+MAX_WORKERS = 1024
 
 
 @dataclass(frozen=True)
 class Unit:
-    """One independent piece of an experiment: ``func(**kwargs)`` must return JSON-able data."""
+    """One independent piece of an experiment: ``func(**kwargs)`` must return JSON-able data.
+
+    ``func`` is best a module-level function: a lambda or a closure (which cannot go to a
+    process pool) is keyed by its code and captured values as well as its name.
+    ``volatile`` names keyword arguments that do not change the result (a cache folder):
+    they are left out of :func:`unit_id`, so that a copied or moved output folder keeps its
+    results.
+    """
 
     key: str
     func: Callable[..., Any]
     kwargs: dict = field(default_factory=dict)
+    volatile: tuple = ()
+
+
+def _canonical(value):
+    """A JSON-able stand-in for a keyword argument that JSON cannot write, exact enough that two
+    different values never share it: an array by its dtype, shape and a digest of its bytes
+    (numpy's repr elides the middle of large arrays), a function by its qualified name."""
+    import numpy as np
+
+    if isinstance(value, np.ndarray):
+        data = np.ascontiguousarray(value)
+        if data.dtype == object:
+            return ["ndarray", "object", list(data.shape), [_canonical(v) for v in data.ravel().tolist()]]
+        return ["ndarray", data.dtype.str, list(data.shape), hashlib.sha256(data.tobytes()).hexdigest()]
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, os.PathLike):
+        return ["path", os.fspath(value)]
+    if isinstance(value, (set, frozenset)):
+        return ["set", sorted(json.dumps(v, sort_keys=True, default=_canonical) for v in value)]
+    if callable(value):
+        return ["function", _function_name(value)]
+    text = repr(value)
+    if " at 0x" in text:  # an object's default repr: its address, not its value
+        raise InputError(
+            f"`Unit.kwargs` must hold values a result can be keyed by (JSON data, arrays, paths, module-level "
+            f"functions); got {type(value).__name__} {text[:60]}."
+        )
+    return ["repr", type(value).__qualname__, text]
+
+
+def _function_name(func):
+    """A function's identity in a unit id: its qualified name; for a lambda or a closure (whose
+    name does not tell two apart) also a digest of its code, defaults and captured values."""
+    name = f"{getattr(func, '__module__', '?')}.{getattr(func, '__qualname__', repr(func))}"
+    if "<lambda>" not in name and "<locals>" not in name:
+        return name
+    code = getattr(func, "__code__", None)
+    cells = [cell.cell_contents for cell in (getattr(func, "__closure__", None) or ())]
+    try:
+        body = json.dumps(
+            [
+                code.co_code.hex() if code is not None else None,
+                repr(code.co_consts) if code is not None else None,
+                list(code.co_names) if code is not None else None,
+                getattr(func, "__defaults__", None),
+                cells,
+            ],
+            sort_keys=True,
+            default=_canonical,
+        )
+    except (InputError, TypeError, ValueError, RecursionError):
+        body = f"object {id(func)}"  # nothing stable to key it by: this process's object only
+    return [name, hashlib.sha256(body.encode()).hexdigest()]
 
 
 def unit_id(unit: Unit) -> str:
@@ -66,9 +129,10 @@ def unit_id(unit: Unit) -> str:
     from .. import __version__
     from .._provenance import code_digest
 
-    func = unit.func
-    name = f"{getattr(func, '__module__', '?')}.{getattr(func, '__qualname__', repr(func))}"
-    payload = json.dumps([name, unit.kwargs, __version__, code_digest()], sort_keys=True, default=repr)
+    kwargs = {k: v for k, v in unit.kwargs.items() if k not in unit.volatile}
+    payload = json.dumps(
+        [_function_name(unit.func), kwargs, __version__, code_digest()], sort_keys=True, default=_canonical
+    )
     return f"{unit.key}#{hashlib.sha256(payload.encode()).hexdigest()[:16]}"
 
 
@@ -235,7 +299,7 @@ def run_units(
     if workers is not None:
         from .._validation import check_int
 
-        workers = check_int(workers, name="workers", low=1)
+        workers = check_int(workers, name="workers", low=1, high=MAX_WORKERS)
     units = list(units)
     keys = [u.key for u in units]
     if len(set(keys)) != len(keys):

@@ -92,8 +92,10 @@ def run(
     import tempfile
 
     from ..datasets import load_kimia99
-    from ._common import tally
+    from ._common import check_run, tally
     from ._runner import Unit, run_units
+
+    quick, seed = check_run(quick, seed)
 
     data = load_kimia99()
     index = np.arange(len(data))
@@ -106,6 +108,7 @@ def run(
             f"{seed}/{int(i)}",
             histogram_distances,
             {"image_index": int(i), "position": p, "seed": seed, "cache_dir": cache_dir},
+            volatile=("cache_dir",),  # a content-keyed cache: its place does not change the result
         )
         for p, i in enumerate(index)
     ]
@@ -256,6 +259,8 @@ def main(argv=None) -> int:
         "fig-4.2",
         quick_help="3 images per class for the distances",
         seed_help="seed of the noise (default: %(default)s); the claims are checked on every image",
+        runner=True,
+        seeds=False,
     )
     parser.add_argument("--cache", default=None, help="folder for computed centralities (default: OUT/cache)")
     args = parser.parse_args(argv)
@@ -270,4 +275,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

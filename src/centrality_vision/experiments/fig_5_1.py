@@ -91,8 +91,10 @@ def partner_ranks(prior) -> list[int]:
 
 def run(*, quick: bool = False, seed: int = 0) -> dict:
     """The problem of fig-5.3's seed ``seed``; priors, posteriors and the per-point claims."""
-    from ._common import tally
+    from ._common import check_run, tally
     from .fig_5_3 import problem
+
+    quick, seed = check_run(quick, seed)
 
     moving, fixed, transform = problem(seed)
     pp = prior_and_posterior(moving, fixed)
@@ -243,6 +245,7 @@ def main(argv=None) -> int:
         "fig-5.1",
         quick_help="the same (instant)",
         seed_help="the transform of fig-5.3's seed (default: %(default)s); the claims are checked on every fixed point",
+        seeds=False,
     ).parse_args(argv)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
@@ -252,4 +255,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

@@ -1,6 +1,6 @@
 """Thesis fig. 5.10: one sample point set of each of the five classes of Table 5.1.
 
-Set ``--seed`` (0-98) of each class (:func:`centrality_vision.experiments.table_5_1.make_set`,
+Set ``--index`` (0-98) of each class (:func:`centrality_vision.experiments.table_5_1.make_set`,
 the sets Table 5.1 registers, drawn with the same seed 0 of that experiment) with its
 Delaunay graph, the data-graph GPD uses.
 """
@@ -17,8 +17,12 @@ __all__ = ["run", "format_table", "explain", "plot", "main"]
 
 def run(*, quick: bool = False, seed: int = 0, index: int = 0) -> dict:
     """Set ``index`` of each class of Table 5.1 under the experiment's ``seed``."""
-    from .table_5_1 import CLASSES, N_POINTS, make_set
+    from .._validation import check_int
+    from ._common import check_run
+    from .table_5_1 import CLASSES, N_POINTS, SETS_PER_CLASS, make_set
 
+    quick, seed = check_run(quick, seed)
+    index = check_int(index, name="index", low=0, high=SETS_PER_CLASS - 1)
     n_points = 40 if quick else N_POINTS
     sets = {kind: make_set(kind, index, seed=seed, n_points=n_points) for kind in CLASSES}
     return {"seed": seed, "index": index, "quick": quick, "sets": {k: v.tolist() for k, v in sets.items()}}
@@ -59,7 +63,8 @@ def plot(result: dict, path) -> Path:
 
 
 def main(argv=None) -> int:
-    from ._common import experiment_parser, prepare_out, save_outputs
+    from ._common import experiment_parser, int_in, prepare_out, save_outputs
+    from .table_5_1 import SETS_PER_CLASS
 
     parser = experiment_parser(
         "fig_5_10",
@@ -67,8 +72,14 @@ def main(argv=None) -> int:
         "fig-5.10",
         quick_help="40 points per set, as table-5.1 --quick",
         seed_help="Table 5.1's seed (default: %(default)s); a picture, nothing to check over seeds",
+        seeds=False,
     )
-    parser.add_argument("--index", type=int, default=0, help="which set of each class, 0-98 (default: %(default)s)")
+    parser.add_argument(
+        "--index",
+        type=int_in(0, SETS_PER_CLASS - 1),
+        default=0,
+        help=f"which set of each class, 0-{SETS_PER_CLASS - 1} (default: %(default)s)",
+    )
     args = parser.parse_args(argv)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed, index=args.index)
@@ -78,4 +89,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

@@ -76,6 +76,9 @@ def _claims(methods: dict) -> dict:
 def run(*, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int = 150) -> dict:
     """Error curves, snapshots and iteration counts (``quick``: 40 iterations at most)."""
     from ..registration import RigidCPD
+    from ._common import check_run
+
+    quick, seed = check_run(quick, seed)
 
     started = time.perf_counter()
     moving, fixed, transform = problem(seed)
@@ -177,4 +180,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

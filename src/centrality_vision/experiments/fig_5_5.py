@@ -37,7 +37,19 @@ from ._compare import (
     unreached,
 )
 
-__all__ = ["METHODS", "CLAIMS", "face_points", "problem", "run", "seed_unit", "format_table", "explain", "plot", "main"]
+__all__ = [
+    "METHODS",
+    "CLAIMS",
+    "face_points",
+    "digest_of_face",
+    "problem",
+    "run",
+    "seed_unit",
+    "format_table",
+    "explain",
+    "plot",
+    "main",
+]
 
 MISSING = 0.08
 W = 0.1
@@ -69,9 +81,33 @@ def face_points(face_dir=None) -> np.ndarray:
         ) from None
 
 
-def problem(seed: int = 0, face_dir=None):
-    """(moving, fixed, true_moving, A, t) of the experiment."""
+def digest_of_face(face_dir=None) -> str:
+    """The first 16 hex digits of a SHA-256 of the face as read from ``face_dir``.
+
+    The per-seed units carry it among their arguments, so that their stored results are
+    keyed by the data (other files under the same folder, or the same files elsewhere, are
+    another key), and each unit checks that it reads the data the run started with.
+    """
+    return _digest(face_points(face_dir))
+
+
+def _digest(face: np.ndarray) -> str:
+    import hashlib
+
+    return hashlib.sha256(np.ascontiguousarray(face).tobytes()).hexdigest()[:16]
+
+
+def problem(seed: int = 0, face_dir=None, digest: str | None = None):
+    """(moving, fixed, true_moving, A, t) of the experiment; with ``digest``, the face read
+    must have that :func:`digest_of_face`."""
     face = face_points(face_dir)
+    if digest is not None and _digest(face) != digest:
+        from ..exceptions import InputError
+
+        raise InputError(
+            f"`face_dir`: the face data changed during the run (digest {_digest(face)}, the run started "
+            f"with {digest}); run again."
+        )
     rng = np.random.default_rng([seed, 55])
     linear = np.eye(3) + 0.2 * rng.standard_normal((3, 3))
     shift = rng.standard_normal(3)
@@ -100,11 +136,16 @@ def _claims(methods: dict) -> dict:
     }
 
 
-def run(*, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int = 150, face_dir=None) -> dict:
+def run(
+    *, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int = 150, face_dir=None, face_digest=None
+) -> dict:
     from ..registration import AffineCPD
+    from ._common import check_run
+
+    quick, seed = check_run(quick, seed)
 
     started = time.perf_counter()
-    moving, fixed, true_moving, linear, shift = problem(seed, face_dir)
+    moving, fixed, true_moving, linear, shift = problem(seed, face_dir, face_digest)
     cap = 30 if quick else max_iter
     methods = compare_methods(
         moving,
@@ -131,9 +172,10 @@ def run(*, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int 
     }
 
 
-def seed_unit(seed: int, quick: bool = False, face_dir=None) -> dict:
-    """One runner unit: the claims and iteration counts of seed ``seed``."""
-    return seed_summary(run(quick=quick, seed=seed, face_dir=face_dir))
+def seed_unit(seed: int, quick: bool = False, face_dir=None, face_digest=None) -> dict:
+    """One runner unit: the claims and iteration counts of seed ``seed`` (``face_digest``: see
+    :func:`digest_of_face`)."""
+    return seed_summary(run(quick=quick, seed=seed, face_dir=face_dir, face_digest=face_digest))
 
 
 def format_table(result: dict) -> str:
@@ -187,8 +229,8 @@ def _add_options(parser) -> None:
 
 def _options(args) -> dict:
     face_dir = None if args.face_dir is None else str(Path(args.face_dir).resolve())
-    face_points(face_dir)  # fail before anything is written when the data are missing
-    return {"face_dir": face_dir}
+    # (fails before anything is written when the data are missing)
+    return {"face_dir": face_dir, "face_digest": digest_of_face(face_dir)}
 
 
 def main(argv=None) -> int:
@@ -207,4 +249,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

@@ -71,6 +71,9 @@ def problem(seed: int = 0):
 
 def run(*, quick: bool = False, seed: int = 0, tol: float = 1e-8, max_iter: int = 100) -> dict:
     from ..registration import NonRigidCPD
+    from ._common import check_run
+
+    quick, seed = check_run(quick, seed)
 
     started = time.perf_counter()
     moving, fixed, true_moving = problem(seed)
@@ -177,4 +180,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

@@ -49,6 +49,9 @@ def _graphs() -> dict:
 def run(*, quick: bool = False, seed: int = 0) -> dict:
     """Entropies of the four fig. 6.1 graphs and the three solvers on Table 6.1."""
     from ..graphs import mwme_graph
+    from ._common import check_run
+
+    quick, seed = check_run(quick, seed)
 
     entropy = {name: _entropy(g) for name, g in _graphs().items()}
     solvers = {}
@@ -158,7 +161,12 @@ def plot(result: dict, path) -> Path:
 
 def main(argv=None) -> int:
     args = experiment_parser(
-        "fig_6_1", __doc__, "fig-6.1", quick_help="the same (instant)", seed_help="recorded; nothing is random"
+        "fig_6_1",
+        __doc__,
+        "fig-6.1",
+        quick_help="the same (instant)",
+        seed_help="recorded; nothing is random",
+        seeds=False,
     ).parse_args(argv)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
@@ -168,4 +176,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

@@ -90,8 +90,10 @@ def run(
     import tempfile
 
     from ..datasets import load_kimia99
-    from ._common import tally
+    from ._common import check_run, tally
     from ._runner import Unit, run_units
+
+    quick, seed = check_run(quick, seed)
 
     data = load_kimia99()
     seeds = with_drawn_seed(seed, seeds)
@@ -269,4 +271,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

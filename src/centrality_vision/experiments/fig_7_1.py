@@ -73,6 +73,9 @@ def exhaustive(points: np.ndarray, lam: float) -> dict:
 def run(*, quick: bool = False, seed: int = 0) -> dict:
     from ..centrality import degree
     from ..graphs import mstme_graph
+    from ._common import check_run
+
+    quick, seed = check_run(quick, seed)
 
     mst = mstme_graph(POINTS, lam=0.0, normalize="none")
     greedy = mstme_graph(POINTS, lam=LAM, normalize="none")
@@ -169,6 +172,7 @@ def main(argv=None) -> int:
         "fig-7.1",
         quick_help="the same (the experiment is instant)",
         seed_help="recorded; nothing is random",
+        seeds=False,
     ).parse_args(argv)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
@@ -178,4 +182,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

@@ -133,8 +133,10 @@ def run(
 
     from scipy.spatial.distance import pdist
 
-    from ._common import tally
+    from ._common import check_run, tally
     from ._runner import Unit, run_units
+
+    quick, seed = check_run(quick, seed)
 
     seeds = with_drawn_seed(seed, seeds)
     levels = (1, 5, 10) if quick else tuple(range(1, 11))
@@ -506,4 +508,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

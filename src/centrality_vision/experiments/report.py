@@ -16,6 +16,7 @@ import io
 import json
 import sys
 import time
+from collections.abc import Iterable, Mapping
 from importlib import import_module
 from pathlib import Path
 
@@ -142,13 +143,16 @@ def run_all(
     An experiment that cannot run here (fig-5.5 without the GPL face data) is reported as not
     run, with its reason, and the others go on.
     """
+    names = list(REGISTRY) if only is None else _check_only(only)
+    per_name = _check_seeds(seeds, names)
+    for name in names:  # every option checked before anything is written
+        experiment_argv(name, "-", quick=quick, seed=seed, seeds=per_name[name], scheduler=scheduler, workers=workers)
     out = make_out_folder(out)
-    names = list(REGISTRY) if only is None else list(only)
     timings, skipped = {}, {}
     for name in names:
         module = import_module(f"{__package__}.{REGISTRY[name].module}")
         argv = experiment_argv(
-            name, out / name, quick=quick, seed=seed, seeds=seeds, scheduler=scheduler, workers=workers
+            name, out / name, quick=quick, seed=seed, seeds=per_name[name], scheduler=scheduler, workers=workers
         )
         if name == "fig-4.2":  # the same noisy copies as Table 4.1: one cache of centralities for both
             argv += ["--cache", str(out / "table-4.1" / "cache")]
@@ -166,6 +170,30 @@ def run_all(
             raise RuntimeError(f"experiment {name} failed with exit code {code}")
         timings[name] = time.perf_counter() - started
     return write_report(out, names, quick=quick, seed=seed, seeds=seeds, timings=timings, skipped=skipped)
+
+
+def _check_only(only) -> list[str]:
+    from ..exceptions import InputError
+
+    if isinstance(only, (str, bytes)) or not isinstance(only, Iterable):
+        raise TypeError(f"`only` must be a list of experiment names; got {only!r}.")
+    names = list(only)
+    unknown = [name for name in names if not isinstance(name, str) or name not in REGISTRY]
+    if unknown or not names:
+        raise InputError(f"`only` must name experiments among {', '.join(REGISTRY)}; got {only!r}.")
+    return list(dict.fromkeys(names))
+
+
+def _check_seeds(seeds, names) -> dict:
+    """``{name: seeds for that experiment}`` from an int, None or ``{name: n}``."""
+    from ..exceptions import InputError
+
+    if not isinstance(seeds, Mapping):
+        return dict.fromkeys(names, seeds)
+    unknown = [name for name in seeds if name not in REGISTRY]
+    if unknown:
+        raise InputError(f"`seeds` must map experiment names among {', '.join(REGISTRY)} to ints; got {unknown!r}.")
+    return {name: seeds.get(name) for name in names}
 
 
 def _of_this_run(files, quick: bool) -> list[Path]:
@@ -202,7 +230,7 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
     skipped = skipped or {}
     from .. import __version__
 
-    if isinstance(seeds, dict):
+    if isinstance(seeds, Mapping):
         command = f"run_all(quick={quick}, seed={seed}, seeds={seeds})"
     else:
         command = f"centrality-vision reproduce all{' --quick' if quick else ''} --seed {seed}" + (

@@ -40,6 +40,9 @@ def graph():
 
 def run(*, quick: bool = False, seed: int = 0) -> dict:
     from ..centrality import compute
+    from ._common import check_run
+
+    quick, seed = check_run(quick, seed)
 
     g = graph()
     ours = {name: compute(g, name).tolist() for name in THESIS}
@@ -103,6 +106,7 @@ def main(argv=None) -> int:
         "table-2.1",
         quick_help="the same (the experiment is instant)",
         seed_help="recorded; nothing is random",
+        seeds=False,
     ).parse_args(argv)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
@@ -112,4 +116,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import MAX_SEED, MAX_SEEDS, SCHEDULER_HELP, int_in, make_out_folder
+from ._common import MAX_SEED, MAX_SEEDS, MAX_WORKERS, SCHEDULER_HELP, int_in, make_out_folder, scheduler_arg
 
 __all__ = [
     "THESIS_TABLE_4_1",
@@ -175,6 +175,9 @@ def run(
     workers : int, optional
         Processes or Dask workers for ``scheduler``.
     """
+    from ._common import check_run
+
+    quick, seed = check_run(quick, seed)
     return _run(
         quick=quick,
         seed=seed,
@@ -221,6 +224,7 @@ def _run(*, quick, seed, n_folds, progress, forest, scaling, cache=None, schedul
                     "seed": seed,
                     "cache_dir": cache,
                 },
+                volatile=("cache_dir",),  # a content-keyed cache: its place does not change the result
             )
             for j, level in enumerate(NOISE_LEVELS)
             for i in range(len(images))
@@ -465,9 +469,12 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--cache", default=None, help="folder for computed centralities (default: OUT/cache)")
     parser.add_argument(
-        "--scheduler", default="processes", help=f"where the centralities and the seeds run: {SCHEDULER_HELP}"
+        "--scheduler",
+        type=scheduler_arg,
+        default="processes",
+        help=f"where the centralities and the seeds run: {SCHEDULER_HELP}",
     )
-    parser.add_argument("--workers", type=int_in(1), default=None)
+    parser.add_argument("--workers", type=int_in(1, MAX_WORKERS), default=None)
     args = parser.parse_args(argv)
     out = make_out_folder(args.out)
     cache = str(Path(args.cache or out / "cache").resolve())
@@ -492,6 +499,7 @@ def main(argv=None) -> int:
             forest=not args.no_forest,
             scaling=args.scaling,
             cache_dir=cache,
+            volatile=("cache_dir",),
             scheduler=args.scheduler,
             workers=args.workers,
             desc="table-4.1 seeds",
@@ -514,4 +522,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    from ._common import command_line
+
+    sys.exit(command_line(main))
