@@ -320,6 +320,19 @@ def new_figure(**kwargs):
     return Figure(**kwargs)
 
 
+def run_kept_units(units, out, name: str, *, quick: bool, scheduler, workers, progress, desc: str) -> dict:
+    """:func:`~._runner.run_units` with the results kept in ``out/<name>[-quick].jsonl`` (resumable),
+    or in a temporary file when ``out`` is None."""
+    import tempfile
+
+    from ._runner import run_units
+
+    with tempfile.TemporaryDirectory() as scratch:
+        folder = Path(out) if out is not None else Path(scratch)
+        path = folder / f"{name}{'-quick' if quick else ''}.jsonl"
+        return run_units(units, path, scheduler=scheduler, workers=workers, progress=progress, desc=desc)
+
+
 def run_seed_units(
     func, seeds, path, *, scheduler="processes", workers=None, progress=True, desc="seeds", volatile=(), **kwargs
 ) -> list:

@@ -89,11 +89,10 @@ def run(
     *, quick: bool = False, seed: int = 0, cache_dir=None, scheduler="processes", workers=None, progress=True, out=None
 ) -> dict:
     """Distances for every image (``quick``: 3 per class), the shapes drawn and the claims per image."""
-    import tempfile
 
     from ..datasets import load_kimia99
-    from ._common import check_run, tally
-    from ._runner import Unit, run_units
+    from ._common import check_run, run_kept_units, tally
+    from ._runner import Unit
 
     quick, seed = check_run(quick, seed)
 
@@ -112,16 +111,16 @@ def run(
         )
         for p, i in enumerate(index)
     ]
-    with tempfile.TemporaryDirectory() as scratch:
-        folder = Path(out) if out is not None else Path(scratch)
-        done = run_units(
-            units,
-            folder / f"fig-4.2{'-quick' if quick else ''}.jsonl",
-            scheduler=scheduler,
-            workers=workers,
-            progress=progress,
-            desc="histogram distances",
-        )
+    done = run_kept_units(
+        units,
+        out,
+        "fig-4.2",
+        quick=quick,
+        scheduler=scheduler,
+        workers=workers,
+        progress=progress,
+        desc="histogram distances",
+    )
     distances = {str(data.names[i]): done[u.key] for i, u in zip(index, units)}
     return {
         "seed": seed,

@@ -87,11 +87,10 @@ def run(
     image, and tallied as odds. Each (seed, image) is a unit of the shared runner, kept in
     ``out/fig-6.4[-quick].jsonl`` (a temporary file when ``out`` is None).
     """
-    import tempfile
 
     from ..datasets import load_kimia99
-    from ._common import check_run, tally
-    from ._runner import Unit, run_units
+    from ._common import check_run, run_kept_units, tally
+    from ._runner import Unit
 
     quick, seed = check_run(quick, seed)
 
@@ -105,10 +104,16 @@ def run(
         for s in seeds
         for i in index
     ]
-    with tempfile.TemporaryDirectory() as scratch:
-        folder = Path(out) if out is not None else Path(scratch)
-        path = folder / ("fig-6.4-quick.jsonl" if quick else "fig-6.4.jsonl")
-        done = run_units(units, path, scheduler=scheduler, workers=workers, progress=progress, desc="mwme matching")
+    done = run_kept_units(
+        units,
+        out,
+        "fig-6.4",
+        quick=quick,
+        scheduler=scheduler,
+        workers=workers,
+        progress=progress,
+        desc="mwme matching",
+    )
     per_seed = []
     for s in seeds:
         accuracy = {m: np.array([done[f"{s}/{i:02d}"][m] for i in index]) for m in METHODS}

@@ -129,12 +129,11 @@ def run(
     every graph sees the same perturbed sets. Each batch is a unit of the shared runner,
     kept in ``out/fig-7.4[-quick].jsonl`` (a temporary file when ``out`` is None).
     """
-    import tempfile
 
     from scipy.spatial.distance import pdist
 
-    from ._common import check_run, tally
-    from ._runner import Unit, run_units
+    from ._common import check_run, run_kept_units, tally
+    from ._runner import Unit
 
     quick, seed = check_run(quick, seed)
 
@@ -162,10 +161,9 @@ def run(
         for level in levels
         for b in range(n_batches)
     ]
-    with tempfile.TemporaryDirectory() as scratch:
-        folder = Path(out) if out is not None else Path(scratch)
-        path = folder / ("fig-7.4-quick.jsonl" if quick else "fig-7.4.jsonl")
-        done = run_units(units, path, scheduler=scheduler, workers=workers, progress=progress, desc="stability")
+    done = run_kept_units(
+        units, out, "fig-7.4", quick=quick, scheduler=scheduler, workers=workers, progress=progress, desc="stability"
+    )
 
     def shares_of(s):
         return {

@@ -172,10 +172,9 @@ def run(
     (default: ``[seed]``), and the per-set claims on every set of every seed. ``n_sets``
     overrides the sets per class (99, or 4 when ``quick``), for tests.
     """
-    import tempfile
 
-    from ._common import check_run, tally
-    from ._runner import Unit, run_units
+    from ._common import check_run, run_kept_units, tally
+    from ._runner import Unit
 
     quick, seed = check_run(quick, seed)
 
@@ -191,17 +190,16 @@ def run(
         for kind in CLASSES
         for i in range(n_sets)
     ]
-    name = "table-5.1-quick" if quick else "table-5.1"
-    with tempfile.TemporaryDirectory() as scratch:
-        folder = Path(out) if out is not None else Path(scratch)
-        results = run_units(
-            units,
-            folder / f"{name}.jsonl",
-            scheduler=scheduler,
-            workers=workers,
-            progress=progress,
-            desc=f"{len(units)} registrations",
-        )
+    results = run_kept_units(
+        units,
+        out,
+        "table-5.1",
+        quick=quick,
+        scheduler=scheduler,
+        workers=workers,
+        progress=progress,
+        desc=f"{len(units)} registrations",
+    )
     by_seed = {
         s: {kind: _summary([results[f"{s}/{kind}/{i:02d}"] for i in range(n_sets)]) for kind in CLASSES} for s in seeds
     }
