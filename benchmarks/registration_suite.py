@@ -1209,28 +1209,26 @@ def _explain_misses(pairs):
     from centrality_vision.registration import NonRigidCPD
 
     beta, lam, tol, max_iter = SETTINGS["beta"], SETTINGS["lam"], SETTINGS["tol"], SETTINGS["max_iter"]
+
+    def fit(y, x, w, **kw):
+        return NonRigidCPD(beta=beta, lam=lam, w=w, tol=tol, max_iter=max_iter, **kw).fit(y, x)
+
     rows = []
     for family, shape, level, peer in EXPLAIN_MISS_CASES:
-        w = FAMILY_W[family]
-        err = {"knn-auto": [], "knn-w": [], "dense": [], peer: []}
         estimates = []
-        for pair in range(pairs):
-            y, x, true = synthetic_pair(family, shape, level, pair)
 
-            def fit(w_used, y=y, x=x, **kw):
-                reg = NonRigidCPD(beta=beta, lam=lam, w=w_used, tol=tol, max_iter=max_iter, **kw)
-                return reg.fit(y, x)
+        def auto(y, x, w, estimates=estimates):
+            reg = fit(y, x, "auto", n_neighbors=KNN)
+            estimates.append(reg.w_)
+            return reg.moving_transformed_
 
-            auto = fit("auto", n_neighbors=KNN)
-            estimates.append(auto.w_)
-            moved = {
-                "knn-auto": auto.moving_transformed_,
-                "knn-w": fit(w, n_neighbors=KNN).moving_transformed_,
-                "dense": fit(w).moving_transformed_,
-                peer: peer_nonrigid(peer, y, x, w)[0],
-            }
-            for name, m in moved.items():
-                err[name].append(float(np.mean(np.linalg.norm(np.asarray(m) - true, axis=1))))
+        variants = {
+            "knn-auto": auto,
+            "knn-w": lambda y, x, w: fit(y, x, w, n_neighbors=KNN).moving_transformed_,
+            "dense": lambda y, x, w: fit(y, x, w).moving_transformed_,
+            peer: lambda y, x, w, peer=peer: peer_nonrigid(peer, y, x, w)[0],
+        }
+        err = _variant_errors([(family, shape, level)], variants, pairs)[(family, shape, level)]
         e = {name: np.asarray(v) for name, v in err.items()}
         gap = e["knn-auto"] - e[peer]
         worst = np.sort(gap)[::-1]

@@ -145,13 +145,14 @@ def check_options(*, quick=False, seed=0, seeds=None, scheduler=None, workers=No
     ``seed`` an int in [0, 2**32 - 1], ``seeds`` None or an int in [1, 100000], ``scheduler``
     None or a scheduler name, ``workers`` None or an int in [1, 1024]. A bad one is a named
     ``TypeError`` or :class:`~centrality_vision.exceptions.InputError`."""
-    from .._validation import check_bool, check_int
-    from ._common import MAX_SEED, MAX_SEEDS
+    from .._validation import check_int
+    from ._common import MAX_SEEDS, check_run
     from ._runner import MAX_WORKERS, _check_scheduler
 
+    quick, seed = check_run(quick, seed)
     return {
-        "quick": check_bool(quick, name="quick"),
-        "seed": check_int(seed, name="seed", low=0, high=MAX_SEED),
+        "quick": quick,
+        "seed": seed,
         "seeds": None if seeds is None else check_int(seeds, name="seeds", low=1, high=MAX_SEEDS),
         "scheduler": None if scheduler is None else _check_scheduler(scheduler),
         "workers": None if workers is None else check_int(workers, name="workers", low=1, high=MAX_WORKERS),

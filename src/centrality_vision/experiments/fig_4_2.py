@@ -89,7 +89,6 @@ def run(
     *, quick: bool = False, seed: int = 0, cache_dir=None, scheduler="processes", workers=None, progress=True, out=None
 ) -> dict:
     """Distances for every image (``quick``: 3 per class), the shapes drawn and the claims per image."""
-
     from ..datasets import load_kimia99
     from ._common import check_run, run_kept_units, tally
     from ._runner import Unit

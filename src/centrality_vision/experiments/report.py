@@ -145,15 +145,18 @@ def run_all(
     """
     names = list(REGISTRY) if only is None else _check_only(only)
     per_name = _check_seeds(seeds, names)
-    for name in names:  # every option checked before anything is written
-        experiment_argv(name, "-", quick=quick, seed=seed, seeds=per_name[name], scheduler=scheduler, workers=workers)
+    # every option checked (by experiment_argv) before anything is written
+    argvs = {
+        name: experiment_argv(
+            name, Path(out) / name, quick=quick, seed=seed, seeds=per_name[name], scheduler=scheduler, workers=workers
+        )
+        for name in names
+    }
     out = make_out_folder(out)
     timings, skipped = {}, {}
     for name in names:
         module = import_module(f"{__package__}.{REGISTRY[name].module}")
-        argv = experiment_argv(
-            name, out / name, quick=quick, seed=seed, seeds=per_name[name], scheduler=scheduler, workers=workers
-        )
+        argv = argvs[name]
         if name == "fig-4.2":  # the same noisy copies as Table 4.1: one cache of centralities for both
             argv += ["--cache", str(out / "table-4.1" / "cache")]
         started = time.perf_counter()

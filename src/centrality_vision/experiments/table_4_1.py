@@ -28,7 +28,16 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import MAX_SEED, MAX_SEEDS, MAX_WORKERS, SCHEDULER_HELP, int_in, make_out_folder, scheduler_arg
+from ._common import (
+    MAX_SEED,
+    MAX_SEEDS,
+    MAX_WORKERS,
+    SCHEDULER_HELP,
+    check_run,
+    int_in,
+    make_out_folder,
+    scheduler_arg,
+)
 
 __all__ = [
     "THESIS_TABLE_4_1",
@@ -175,8 +184,6 @@ def run(
     workers : int, optional
         Processes or Dask workers for ``scheduler``.
     """
-    from ._common import check_run
-
     quick, seed = check_run(quick, seed)
     return _run(
         quick=quick,
