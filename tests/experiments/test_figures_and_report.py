@@ -27,7 +27,7 @@ def test_no_experiment_switches_the_matplotlib_backend(tmp_path, monkeypatch):
     monkeypatch.setattr(matplotlib, "use", refuse)
     assert table_2_1.main(["--out", str(tmp_path / "t")]) == 0
     assert fig_5_10.main(["--quick", "--out", str(tmp_path / "f")]) == 0
-    assert (tmp_path / "f" / "fig-5.10.png").stat().st_size > 10_000
+    assert (tmp_path / "f" / "fig-5.10-quick.png").stat().st_size > 10_000
 
 
 def test_fig_5_10_draws_the_sets_table_5_1_registers(tmp_path):
@@ -86,17 +86,17 @@ def test_report_index_and_computed_explanations(tmp_path):
     text = path.read_text()
     assert "## table-2.1" in text and "0.83 | 0.83" in text  # closeness of node b, ours | thesis
     assert (
-        "| fig. 5.10 | Sample point-sets of 495 database used | [fig-5.10/fig-5.10.png](fig-5.10/fig-5.10.png) |"
-        in text
+        "| fig. 5.10 | Sample point-sets of 495 database used | "
+        "[fig-5.10/fig-5.10-quick.png](fig-5.10/fig-5.10-quick.png) |" in text
     )
-    assert "| fig. 2.12 | A toy example for graph centralities | [table-2.1/table-2.1.png]" in text
+    assert "| fig. 2.12 | A toy example for graph centralities | [table-2.1/table-2.1-quick.png]" in text
     assert "| fig. 4.2 | Centrality distribution of graphs | **missing**" in text  # not run here, and said so
     assert "| fig. 1.1 | Scene Understanding | none:" in text
     assert "**What the numbers show.** 4 of 4 centralities equal" in text
     # the paragraph is computed from the stored result: change a number, the sentence changes
-    record = json.loads((tmp_path / "table-2.1" / "table-2.1.json").read_text())
+    record = json.loads((tmp_path / "table-2.1" / "table-2.1-quick.json").read_text())
     record["claims"]["degree equals Table 2.1 to two decimals"] = False
-    (tmp_path / "table-2.1" / "table-2.1.json").write_text(json.dumps(record))
+    (tmp_path / "table-2.1" / "table-2.1-quick.json").write_text(json.dumps(record))
     text = write_report(tmp_path, ["table-2.1"], quick=True, seed=0).read_text()
     assert "3 of 4 centralities equal" in text and "degree differ" in text
 
@@ -113,23 +113,53 @@ def test_report_says_why_an_experiment_did_not_run(tmp_path, monkeypatch):
     assert "**Not run here.** fig-5.5 needs the CPD face (test)" in text
 
 
-def test_report_takes_the_files_of_its_own_run_when_quick_and_full_share_a_folder(tmp_path):
-    # table-5.1 writes table-5.1-quick.* in quick runs beside a full run's table-5.1.*; the
-    # report took the first name in sorted order, the quick one, for a full report
+def test_quick_and_full_runs_share_a_folder_and_the_report_takes_only_its_own_runs_files(tmp_path):
+    # a quick run wrote the same names as a full run (overwriting its tables and figures), and
+    # the report listed every .txt/.png in the folder: the other run's, and stale ones
     from centrality_vision.experiments.report import run_all, write_report
 
-    run_all(tmp_path, quick=True, only=["table-2.1"])
+    run_all(tmp_path, quick=False, only=["table-2.1"])
     folder = tmp_path / "table-2.1"
+    full_files = {path.name: path.read_bytes() for path in folder.iterdir()}
     record = json.loads((folder / "table-2.1.json").read_text())
-    (folder / "table-2.1-quick.json").write_text(json.dumps(record))
-    (folder / "table-2.1-quick.txt").write_text("QUICK TABLE\n")
     record["claims"]["degree equals Table 2.1 to two decimals"] = False
     (folder / "table-2.1.json").write_text(json.dumps(record))
+    run_all(tmp_path, quick=True, only=["table-2.1"])
+    # the full run's files are all still there, unchanged but for the edit above
+    assert {"table-2.1.txt", "table-2.1.png", "table-2.1.files.json"} <= set(full_files)
+    for name, content in full_files.items():
+        assert name == "table-2.1.json" or (folder / name).read_bytes() == content, name
+    assert {"table-2.1-quick.txt", "table-2.1-quick.json", "table-2.1-quick.png"} <= {p.name for p in folder.iterdir()}
+    # files left by hand (or by an older version) are in no report
+    (folder / "table-2.1-old.png").write_bytes((folder / "table-2.1.png").read_bytes())
+    (folder / "table-2.1-quick-notes.txt").write_text("STALE TABLE\n")
     full = write_report(tmp_path, ["table-2.1"], quick=False, seed=0).read_text()
-    assert "3 of 4 centralities equal" in full and "QUICK TABLE" not in full
     quick = write_report(tmp_path, ["table-2.1"], quick=True, seed=0).read_text()
-    assert "4 of 4 centralities equal" in quick and "QUICK TABLE" in quick
-    assert quick.count("```text") == 1  # the full run's table-2.1.txt has a quick twin: not shown
+    assert "3 of 4 centralities equal" in full and "4 of 4 centralities equal" in quick
+    for text, other in ((full, "-quick"), (quick, "table-2.1.png")):
+        assert "STALE TABLE" not in text and "table-2.1-old.png" not in text and other not in text
+        assert text.count("```text") == 1
+
+
+def test_a_run_that_fails_while_writing_changes_nothing_in_its_folder(tmp_path):
+    from centrality_vision.experiments._common import outputs_of, run_outputs
+
+    with run_outputs(tmp_path, "fig-0", quick=False) as stage:
+        (stage / "fig-0.txt").write_text("first")
+    before = {path.name: path.read_bytes() for path in tmp_path.iterdir()}
+    with pytest.raises(RuntimeError, match="plot failed"):
+        with run_outputs(tmp_path, "fig-0", quick=False) as stage:
+            (stage / "fig-0.txt").write_text("second")
+            raise RuntimeError("plot failed")
+    assert {path.name: path.read_bytes() for path in tmp_path.iterdir()} == before
+    assert [path.read_text() for path in outputs_of(tmp_path, "fig-0", quick=False)] == ["first"]
+    # a staging folder left by a killed run is cleared by the next run
+    (tmp_path / ".writing-fig-0").mkdir()
+    (tmp_path / ".writing-fig-0" / "fig-9.png").write_text("debris")
+    with run_outputs(tmp_path, "fig-0", quick=False) as stage:
+        (stage / "fig-0.txt").write_text("third")
+    assert [path.name for path in outputs_of(tmp_path, "fig-0", quick=False)] == ["fig-0.txt"]
+    assert not (tmp_path / ".writing-fig-0").exists() and not (tmp_path / "fig-9.png").exists()
 
 
 def test_fig_4_2_closeness_tied_with_another_centrality_does_not_change_least():

@@ -109,10 +109,16 @@ def test_main_writes_files(tmp_path, capsys):
     assert (
         table_4_1.main(["--quick", "--no-forest", "--out", str(tmp_path), "--seeds", "1", "--scheduler", "serial"]) == 0
     )
-    assert {p.name for p in tmp_path.iterdir()} == {"table-4.1.txt", "table-4.1.json", "fig-4.8.png", "cache"}
+    assert {p.name for p in tmp_path.iterdir()} == {
+        "table-4.1-quick.txt",
+        "table-4.1-quick.json",
+        "fig-4.8-quick.png",
+        "table-4.1-quick.files.json",
+        "cache",
+    }
     out = capsys.readouterr().out
     assert "NB closeness" in out and "held-out 10%" in out and "train 10%" in out
-    record = json.loads((tmp_path / "table-4.1.json").read_text())
+    record = json.loads((tmp_path / "table-4.1-quick.json").read_text())
     assert record["seeds"] == [0] and all(cell["n"] == 1 for cell in record["odds"].values())
 
 

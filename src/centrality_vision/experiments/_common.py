@@ -9,8 +9,11 @@ interval for the share of draws in which the claim holds, beside the thesis' own
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import math
+import os
+import shutil
 from pathlib import Path
 
 from ._runner import MAX_WORKERS
@@ -22,6 +25,8 @@ __all__ = [
     "experiment_parser",
     "prepare_out",
     "save_outputs",
+    "run_outputs",
+    "outputs_of",
     "claim_lines",
     "seed_list",
     "wilson_interval",
@@ -180,6 +185,68 @@ def save_outputs(out: Path, stem: str, text: str, result) -> None:
     (out / f"{stem}.txt").write_text(text + "\n")
     record = result if isinstance(result, str) else json.dumps(result, indent=1)
     (out / f"{stem}.json").write_text(record + "\n")
+
+
+def _run_stem(name: str, quick: bool) -> str:
+    return f"{name}-quick" if quick else name
+
+
+def _quick_name(filename: str, quick: bool) -> str:
+    if not quick:
+        return filename
+    path = Path(filename)
+    return f"{path.stem}-quick{path.suffix}"
+
+
+@contextlib.contextmanager
+def run_outputs(out: Path, name: str, *, quick: bool):
+    """A staging folder for the tables and figures of one run of experiment ``name``.
+
+    Write the run's files into the yielded folder. When the block ends without an error they
+    are moved into ``out``, a quick run's with ``-quick`` before the suffix (``fig-5.3.png`` ->
+    ``fig-5.3-quick.png``), so a quick and a full run can share one folder without either
+    overwriting the other's files. Their names are then listed in ``out/<name>[-quick].files.json``,
+    which :func:`outputs_of` (and the report) read: a file left in ``out`` by another run or by
+    hand is never taken for this run's. When the block raises, nothing in ``out`` changes.
+
+    >>> import tempfile
+    >>> out = Path(tempfile.mkdtemp())
+    >>> with run_outputs(out, "fig-0", quick=True) as stage:
+    ...     _ = (stage / "fig-0.txt").write_text("table")
+    >>> [path.name for path in outputs_of(out, "fig-0", quick=True)]
+    ['fig-0-quick.txt']
+    >>> outputs_of(out, "fig-0", quick=False) is None  # no full run here
+    True
+    """
+    stage = out / f".writing-{_run_stem(name, quick)}"
+    if stage.exists():  # left by a run that was killed
+        shutil.rmtree(stage)
+    stage.mkdir()
+    try:
+        yield stage
+        manifest = out / f"{_run_stem(name, quick)}.files.json"
+        manifest.unlink(missing_ok=True)  # never a list that names files of two runs
+        names = []
+        for path in sorted(stage.iterdir()):
+            final = _quick_name(path.name, quick)
+            os.replace(path, out / final)
+            names.append(final)
+        manifest.write_text(json.dumps({"experiment": name, "quick": quick, "files": names}, indent=1) + "\n")
+    finally:
+        shutil.rmtree(stage, ignore_errors=True)
+
+
+def outputs_of(out, name: str, *, quick: bool) -> list[Path] | None:
+    """The tables, results and figures the last quick (or full) run of ``name`` wrote into
+    ``out`` (see :func:`run_outputs`), or None when no such run finished there."""
+    manifest = Path(out) / f"{_run_stem(name, quick)}.files.json"
+    try:
+        names = json.loads(manifest.read_text())["files"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    if not isinstance(names, list) or not all(isinstance(n, str) and n and Path(n).name == n for n in names):
+        return None
+    return [Path(out) / n for n in names if (Path(out) / n).is_file()]
 
 
 def with_drawn_seed(seed: int, seeds) -> list[int]:

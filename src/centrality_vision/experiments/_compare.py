@@ -151,7 +151,7 @@ def comparison_main(
     ``add_options(parser)`` adds the experiment's own options; ``options(args)`` turns them
     into keyword arguments of ``run`` and ``seed_unit`` (it may raise before anything is written).
     """
-    from ._common import experiment_parser, prepare_out, run_seed_units, save_outputs, seed_list, tally
+    from ._common import experiment_parser, prepare_out, run_outputs, run_seed_units, save_outputs, seed_list, tally
 
     parser = experiment_parser(module, doc, name)
     if add_options is not None:
@@ -172,8 +172,9 @@ def comparison_main(
         **kwargs,
     )
     result.update(seeds=seeds, per_seed=records, odds=tally([r["claims"] for r in records]))
-    save_outputs(out, name, format_table(result), result)
-    plot(result, out)
+    with run_outputs(out, name, quick=args.quick) as stage:
+        save_outputs(stage, name, format_table(result), result)
+        plot(result, stage)
     return 0
 
 

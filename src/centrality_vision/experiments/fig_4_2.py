@@ -249,7 +249,7 @@ def plot(result: dict, folder, *, cache_dir=None) -> list[Path]:
 
 
 def main(argv=None) -> int:
-    from ._common import experiment_parser, prepare_out, save_outputs
+    from ._common import experiment_parser, prepare_out, run_outputs, save_outputs
 
     parser = experiment_parser(
         "fig_4_2",
@@ -267,8 +267,9 @@ def main(argv=None) -> int:
     result = run(
         quick=args.quick, seed=args.seed, cache_dir=cache, scheduler=args.scheduler, workers=args.workers, out=out
     )
-    save_outputs(out, "fig-4.2", format_table(result), result)
-    plot(result, out, cache_dir=cache)
+    with run_outputs(out, "fig-4.2", quick=args.quick) as stage:
+        save_outputs(stage, "fig-4.2", format_table(result), result)
+        plot(result, stage, cache_dir=cache)
     return 0
 
 

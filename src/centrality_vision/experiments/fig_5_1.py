@@ -237,7 +237,7 @@ def plot(result: dict, folder) -> list[Path]:
 
 
 def main(argv=None) -> int:
-    from ._common import experiment_parser, prepare_out, save_outputs
+    from ._common import experiment_parser, prepare_out, run_outputs, save_outputs
 
     args = experiment_parser(
         "fig_5_1",
@@ -249,8 +249,9 @@ def main(argv=None) -> int:
     ).parse_args(argv)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
-    save_outputs(out, "fig-5.1", format_table(result), result)
-    plot(result, out)
+    with run_outputs(out, "fig-5.1", quick=args.quick) as stage:
+        save_outputs(stage, "fig-5.1", format_table(result), result)
+        plot(result, stage)
     return 0
 
 

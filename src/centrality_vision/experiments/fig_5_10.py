@@ -63,7 +63,7 @@ def plot(result: dict, path) -> Path:
 
 
 def main(argv=None) -> int:
-    from ._common import experiment_parser, int_in, prepare_out, save_outputs
+    from ._common import experiment_parser, int_in, prepare_out, run_outputs, save_outputs
     from .table_5_1 import SETS_PER_CLASS
 
     parser = experiment_parser(
@@ -83,8 +83,9 @@ def main(argv=None) -> int:
     args = parser.parse_args(argv)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed, index=args.index)
-    save_outputs(out, "fig-5.10", format_table(result), result)
-    plot(result, out / "fig-5.10.png")
+    with run_outputs(out, "fig-5.10", quick=args.quick) as stage:
+        save_outputs(stage, "fig-5.10", format_table(result), result)
+        plot(result, stage / "fig-5.10.png")
     return 0
 
 

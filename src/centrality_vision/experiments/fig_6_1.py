@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
+from ._common import claim_lines, experiment_parser, prepare_out, run_outputs, save_outputs
 
 __all__ = ["SIX_POINTS", "TABLE_6_1", "THESIS", "run", "claims", "explain", "format_table", "plot", "main"]
 
@@ -170,8 +170,9 @@ def main(argv=None) -> int:
     ).parse_args(argv)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
-    save_outputs(out, "fig-6.1", format_table(result), result)
-    plot(result, out / "fig-6.1.png")
+    with run_outputs(out, "fig-6.1", quick=args.quick) as stage:
+        save_outputs(stage, "fig-6.1", format_table(result), result)
+        plot(result, stage / "fig-6.1.png")
     return 0
 
 

@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import claims_block, experiment_parser, prepare_out, save_outputs, seed_list, with_drawn_seed
+from ._common import claims_block, experiment_parser, prepare_out, run_outputs, save_outputs, seed_list, with_drawn_seed
 
 __all__ = ["NOISE", "METHODS", "CLAIMS", "run", "claims", "explain", "format_table", "plot", "main"]
 
@@ -270,8 +270,9 @@ def main(argv=None) -> int:
         scheduler=args.scheduler,
         workers=args.workers,
     )
-    save_outputs(out, "fig-6.4", format_table(result), result)
-    plot(result, out / "fig-6.4.png", seed=args.seed)
+    with run_outputs(out, "fig-6.4", quick=args.quick) as stage:
+        save_outputs(stage, "fig-6.4", format_table(result), result)
+        plot(result, stage / "fig-6.4.png", seed=args.seed)
     return 0
 
 

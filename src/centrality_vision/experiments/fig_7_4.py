@@ -26,7 +26,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import claims_block, experiment_parser, prepare_out, save_outputs, seed_list, with_drawn_seed
+from ._common import claims_block, experiment_parser, prepare_out, run_outputs, save_outputs, seed_list, with_drawn_seed
 
 __all__ = [
     "GRAPHS",
@@ -496,11 +496,12 @@ def main(argv=None) -> int:
         scheduler=args.scheduler,
         workers=args.workers,
     )
-    save_outputs(out, "fig-7.4", format_table(result), result)
-    plot_boxplots(result, out / "fig-7.4.png")
-    plot_mstme(out / "fig-7.2.png")
-    plot_noise_levels("cow1", out / "fig-7.3-cow1.png", seed=args.seed)
-    plot_perturbed("dog1", 3, out / "fig-7.5-dog1.png", seed=args.seed, n_copies=result["n_copies"])
+    with run_outputs(out, "fig-7.4", quick=args.quick) as stage:
+        save_outputs(stage, "fig-7.4", format_table(result), result)
+        plot_boxplots(result, stage / "fig-7.4.png")
+        plot_mstme(stage / "fig-7.2.png")
+        plot_noise_levels("cow1", stage / "fig-7.3-cow1.png", seed=args.seed)
+        plot_perturbed("dog1", 3, stage / "fig-7.5-dog1.png", seed=args.seed, n_copies=result["n_copies"])
     print(f"wrote {out}/ ({result['seconds']:.0f} s)", file=sys.stderr)
     return 0
 

@@ -21,7 +21,7 @@ from importlib import import_module
 from pathlib import Path
 
 from . import REGISTRY, RUNNER_EXPERIMENTS, experiment_argv
-from ._common import make_out_folder
+from ._common import make_out_folder, outputs_of
 
 __all__ = ["run_all", "write_report", "figure_index", "THESIS_FIGURES", "RUNNER_EXPERIMENTS"]
 
@@ -94,33 +94,41 @@ def _owner(label: str):
     return next((e.name for e in REGISTRY.values() if label in e.reproduces), None)
 
 
-def _files_for(out: Path, label: str) -> list[Path]:
-    """Our files for a thesis figure or table: ``fig-<n>.png`` (or ``fig-<n>-*.png``) anywhere
-    under ``out``; otherwise the figures (tables: text files) of the experiment that reproduces it."""
+def _files_for(outputs: Mapping[str, list[Path]], label: str) -> list[Path]:
+    """Our files for a thesis figure or table: ``fig-<n>.png`` (or ``fig-<n>-*.png``) among the
+    run's files; otherwise the figures (tables: text files) of the experiment that reproduces it."""
     kind, number = label.split()
     if kind == "fig.":
         stem = f"fig-{number}"
-        exact = sorted(p for p in out.glob(f"*/{stem}*.png") if p.stem == stem or p.stem.startswith(stem + "-"))
+        exact = sorted(
+            path
+            for files in outputs.values()
+            for path in files
+            if path.suffix == ".png" and (_plain_stem(path) == stem or _plain_stem(path).startswith(stem + "-"))
+        )
         if exact:
             return exact
     owner = _owner(label)
-    if owner is None:
-        return []
-    return sorted((out / owner).glob("*.png" if kind == "fig." else "*.txt"))
+    return [path for path in outputs.get(owner, []) if path.suffix == (".png" if kind == "fig." else ".txt")]
 
 
-def figure_index(out) -> list[str]:
-    """Markdown lines: every figure and table of the thesis' lists -> our file, or why there is none."""
+def _plain_stem(path: Path) -> str:
+    return path.stem.removesuffix("-quick")
+
+
+def figure_index(out, outputs: Mapping[str, list[Path]]) -> list[str]:
+    """Markdown lines: every figure and table of the thesis' lists -> our file among
+    ``outputs`` (``{experiment: the files its run wrote}``), or why there is none."""
     out = Path(out)
     lines = ["| thesis | title | ours |", "|---|---|---|"]
     for label, (title, reason) in THESIS_FIGURES.items():
         if reason is not None:
             cell = f"none: {reason}"
         else:
-            files = _files_for(out, label)
+            files = _files_for(outputs, label)
             cell = ", ".join(f"[{p.relative_to(out).as_posix()}]({p.relative_to(out).as_posix()})" for p in files)
             if not files:
-                owner = next((e.name for e in REGISTRY.values() if label in e.reproduces), None)
+                owner = _owner(label)
                 cell = "**missing**: not written by this run" + (f" (`reproduce {owner}` draws it)" if owner else "")
         lines.append(f"| {label} | {title} | {cell} |")
     return lines
@@ -199,25 +207,16 @@ def _check_seeds(seeds, names) -> dict:
     return {name: seeds.get(name) for name in names}
 
 
-def _of_this_run(files, quick: bool) -> list[Path]:
-    """The files of a quick or a full run: a ``-quick`` stem is a quick run's, and its
-    twin without ``-quick`` is the full run's (both may share one ``--out`` folder)."""
-    files = sorted(files)
-    stems = {path.stem for path in files}
-    if quick:
-        return [path for path in files if path.stem.endswith("-quick") or f"{path.stem}-quick" not in stems]
-    return [path for path in files if not path.stem.endswith("-quick")]
+def _result(files: list[Path], name: str):
+    """The result record among a run's files (``<name>.json`` or ``<name>-quick.json``)."""
+    records = [path for path in files if path.suffix == ".json" and _plain_stem(path) == name]
+    return json.loads(records[0].read_text()) if records else None
 
 
-def _result(folder: Path, name: str, quick: bool):
-    files = _of_this_run([path for path in folder.glob("*.json") if path.stem in (name, f"{name}-quick")], quick)
-    return json.loads(files[0].read_text()) if files else None
-
-
-def _explanation(name: str, folder: Path, quick: bool) -> str | None:
+def _explanation(name: str, files: list[Path]) -> str | None:
     module = import_module(f"{__package__}.{REGISTRY[name].module}")
     explain = getattr(module, "explain", None)
-    result = _result(folder, name, quick)
+    result = _result(files, name)
     if explain is None or result is None:
         return None
     return explain(result)
@@ -228,9 +227,12 @@ def _evidence(out: Path, word: str) -> list[Path]:
 
 
 def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None, timings=None, skipped=None) -> Path:
-    """``out/report.md`` from the ``.txt`` tables, ``.json`` results and ``.png`` figures under ``out/<name>/``."""
+    """``out/report.md`` from the ``.txt`` tables, ``.json`` results and ``.png`` figures that the
+    last quick (or full, by ``quick``) run of each experiment wrote under ``out/<name>/``: the files
+    listed by :func:`~._common.run_outputs`, never others left in the folder."""
     out = Path(out)
     skipped = skipped or {}
+    outputs = {name: outputs_of(out / name, name, quick=quick) or [] for name in names if name not in skipped}
     from .. import __version__
 
     if isinstance(seeds, Mapping):
@@ -241,7 +243,7 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
         )
     checked = []
     for name in names:
-        result = _result(out / name, name, quick)
+        result = _result(outputs.get(name, []), name)
         if isinstance(result, dict) and result.get("seeds"):
             checked.append(f"{name} {len(result['seeds'])}")
     lines = [
@@ -258,12 +260,11 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
         "",
         "## Index of the thesis' figures and tables",
         "",
-        *figure_index(out),
+        *figure_index(out, outputs),
         "",
     ]
     for name in names:
         entry = REGISTRY[name]
-        folder = out / name
         lines.append(f"## {name}: {entry.title}")
         lines.append("")
         lines.append(
@@ -274,7 +275,10 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
         if name in skipped:
             lines += [f"**Not run here.** {skipped[name]}", ""]
             continue
-        text = _explanation(name, folder, quick)
+        if not outputs[name]:
+            lines += [f"**Not run here.** No {'quick' if quick else 'full'} run of {name} finished in `{name}/`.", ""]
+            continue
+        text = _explanation(name, outputs[name])
         if text:
             lines += [f"**What the numbers show.** {text}", ""]
         if name == "table-4.1":
@@ -286,9 +290,9 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
                     + ".",
                     "",
                 ]
-        for table in _of_this_run(folder.glob("*.txt"), quick):
+        for table in (path for path in outputs[name] if path.suffix == ".txt"):
             lines += ["```text", table.read_text().rstrip(), "```", ""]
-        for figure in _of_this_run(folder.glob("*.png"), quick):
+        for figure in (path for path in outputs[name] if path.suffix == ".png"):
             lines.append(f"![{figure.stem}]({figure.relative_to(out).as_posix()})")
             lines.append("")
     path = out / "report.md"

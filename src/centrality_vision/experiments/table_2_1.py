@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._common import claim_lines, experiment_parser, prepare_out, save_outputs
+from ._common import claim_lines, experiment_parser, prepare_out, run_outputs, save_outputs
 
 __all__ = ["NODES", "EDGES", "THESIS", "graph", "run", "format_table", "explain", "plot", "main"]
 
@@ -110,8 +110,9 @@ def main(argv=None) -> int:
     ).parse_args(argv)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed)
-    save_outputs(out, "table-2.1", format_table(result), result)
-    plot(result, out / "table-2.1.png")
+    with run_outputs(out, "table-2.1", quick=args.quick) as stage:
+        save_outputs(stage, "table-2.1", format_table(result), result)
+        plot(result, stage / "table-2.1.png")
     return 0
 
 

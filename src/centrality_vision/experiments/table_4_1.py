@@ -36,6 +36,9 @@ from ._common import (
     check_run,
     int_in,
     make_out_folder,
+    outputs_of,
+    run_outputs,
+    save_outputs,
     scheduler_arg,
 )
 
@@ -519,12 +522,11 @@ def main(argv=None) -> int:
     result.seeds = seeds
     result.per_seed = [by_seed[s] for s in seeds]
     result.odds = tally([p["claims"] for p in result.per_seed])
-    text = format_table(result)
-    print(text)
-    (out / "table-4.1.txt").write_text(text + "\n")
-    (out / "table-4.1.json").write_text(result.to_json() + "\n")
-    plot_confusion(result, out / "fig-4.8.png")
-    print(f"wrote {out}/table-4.1.txt, table-4.1.json, fig-4.8.png ({result.seconds['total']:.0f} s)", file=sys.stderr)
+    with run_outputs(out, "table-4.1", quick=args.quick) as stage:
+        save_outputs(stage, "table-4.1", format_table(result), result.to_json())
+        plot_confusion(result, stage / "fig-4.8.png")
+    written = ", ".join(path.name for path in outputs_of(out, "table-4.1", quick=args.quick))
+    print(f"wrote {out}/: {written} ({result.seconds['total']:.0f} s)", file=sys.stderr)
     return 0
 
 

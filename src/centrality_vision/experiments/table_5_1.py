@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..exceptions import InputError
-from ._common import experiment_parser, prepare_out, save_outputs
+from ._common import experiment_parser, prepare_out, run_outputs, save_outputs
 
 __all__ = ["CLASSES", "METHODS", "CLAIMS", "make_set", "register_set", "run", "format_table", "explain", "plot", "main"]
 
@@ -452,9 +452,9 @@ def main(argv=None) -> int:
     out = prepare_out(args)
     seeds = seed_list(args.seed, args.seeds, args.quick)
     result = run(quick=args.quick, seed=args.seed, seeds=seeds, out=out, scheduler=args.scheduler, workers=args.workers)
-    name = "table-5.1-quick" if args.quick else "table-5.1"
-    save_outputs(out, name, format_table(result), result)
-    plot(result, out / f"{name}.png")
+    with run_outputs(out, "table-5.1", quick=args.quick) as stage:
+        save_outputs(stage, "table-5.1", format_table(result), result)
+        plot(result, stage / "table-5.1.png")
     return 0
 
 
