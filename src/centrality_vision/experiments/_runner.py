@@ -208,7 +208,9 @@ def load_results(path) -> dict:
 
     Only whole lines that hold a record with a string key, a result and that record's
     checksum are read: a torn last line (a crash mid-write), bytes that are not UTF-8 text,
-    other JSON and a record edited by hand are skipped (their units are recomputed)."""
+    other JSON and a record edited by hand are skipped (their units are recomputed). The
+    checksum guards against damage and stray edits, not forgery: a record whose checksum was
+    recomputed after an edit is taken as it stands."""
     path = Path(path)
     out = {}
     if not path.exists():
