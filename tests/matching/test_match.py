@@ -7,7 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from centrality_vision.exceptions import MatchingWarning
+from centrality_vision.exceptions import InputError, MatchingWarning
 from centrality_vision.matching import METHODS, MatchResult, match, mwme_match
 
 
@@ -178,7 +178,7 @@ def test_option_errors(kwargs, error, text):
         (np.vstack([FIXED, FIXED[:1]]), "robust", "duplicate"),
         (np.where(np.arange(N)[:, None] == 3, np.nan, FIXED), "robust", "finite"),
         (FIXED[:30], "mwme", "same shape"),
-        (np.array([[0, 0], [1e-200, 0], [1, 0], [0, 1], [1, 1.0]]), "robust", "`moving` has points closer"),
+        (np.array([[0, 0], [1e-200, 0], [1, 0], [0, 1], [1, 1.0]]), "robust", "`moving`: rows 0 and 1 are 1e-200 apart"),
     ],
 )
 def test_data_errors(moving, method, text):
@@ -252,3 +252,38 @@ def test_rigid_copies_with_noise_and_missing_parts_do_not_warn(seed):
         warnings.simplefilter("error", MatchingWarning)
         result = match(moving, fixed, scale=False)
     assert result.transform.rotation == pytest.approx(rot, abs=0.05)
+
+
+def test_cpd_refinement_that_collapses_is_dropped_with_a_warning():
+    # fuzz round 6: outlier_weight 0.99 let CPD shrink an exact similar copy onto a few fixed
+    # points (1 of 40 right, n_matched 40), sometimes without a warning
+    rng = np.random.default_rng(3)
+    fixed = rng.random((40, 2))
+    perm = rng.permutation(40)
+    moving = fixed[perm] * 2 + 1
+    with pytest.warns(MatchingWarning, match="`refine='cpd'` with `outlier_weight=0.99`.*consensus pose kept"):
+        result = match(moving, fixed, refine="cpd", outlier_weight=0.99)
+    assert not result.info["cpd_kept"] and result.info["cpd_consensus"] < 0.75 * result.info["refined_consensus"]
+    np.testing.assert_array_equal(result.correspondence, perm)
+    assert result.transform.scale == pytest.approx(0.5, rel=1e-9)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        kept = match(moving, fixed, refine="cpd", outlier_weight=0.3)
+    assert kept.info["cpd_kept"]
+    np.testing.assert_array_equal(kept.correspondence, perm)
+
+
+def test_mwme_exact_limit_names_mwme_method():
+    points = np.random.default_rng(0).random((25, 2))
+    with pytest.raises(InputError, match=r"`mwme_method='exact'` solves sets of up to 20 .* `mwme_method='local'`"):
+        match(points, points[::-1], method="mwme", mwme_method="exact")
+
+
+@pytest.mark.parametrize("method", ["robust", "mwme"])
+def test_points_distinct_only_beyond_float64_resolution_are_named_by_rows(method):
+    # the mwme path blamed `points` (an internal name) and printed normalised coordinates
+    # never passed in; the robust path put the spacing at "0 of" the extent
+    moving = np.array([[2.0**62, 0.0], [0.0, 2.0**62], [1.0, 1.0], [5.0, 7.0], [9.0, 3.0]])
+    fixed = np.random.default_rng(1).random((5, 2))
+    with pytest.raises(InputError, match=r"^`moving`: rows \d and \d are [\d.]+ apart, at coordinates up to 4.61e\+18"):
+        match(moving, fixed, method=method)

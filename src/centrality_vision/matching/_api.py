@@ -7,26 +7,16 @@ import numpy as np
 from .._validation import as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import InputError, MatchingWarning
 from ..transforms import RigidTransform, SimilarityTransform
-from ._common import MatchResult, check_rigid_extents, fit_pairs, normalise, similarity_to_units
+from ._common import (
+    MatchResult,
+    check_resolution,
+    check_rigid_extents,
+    fit_pairs,
+    normalise,
+    similarity_to_units,
+)
 
 __all__ = ["METHODS", "match"]
-
-#: Smallest distance between two points, relative to the set's extent, that ``match`` accepts:
-#: below it the local graphs' squared distances underflow.
-MIN_RELATIVE_SPACING = 1e-150
-
-
-def _check_resolution(points, name: str) -> None:
-    """Refuse a set whose closest points coincide, or nearly, once centred and scaled to (-1, 1)."""
-    from scipy.spatial import cKDTree
-
-    spacing = float(cKDTree(points).query(points, k=2)[0][:, 1].min())
-    if not spacing > MIN_RELATIVE_SPACING:
-        raise InputError(
-            f"`{name}` has points closer than {MIN_RELATIVE_SPACING:g} times its extent "
-            f"(closest pair {spacing:.3g} of it): float64 cannot tell them apart at this dynamic range; "
-            "rescale or deduplicate the points."
-        )
 
 
 def _rigid_if_unscaled(transform, scale) -> SimilarityTransform:
@@ -113,7 +103,10 @@ def match(
         CPD suits whole sets: its mixture, centred on the moving points, is pulled towards
         fixed points that have no partner, so a part missing from ``moving`` skews the pose.
     outlier_weight : float in [0, 1), default=0.3
-        The CPD outlier weight for ``refine="cpd"``.
+        The CPD outlier weight for ``refine="cpd"``. When CPD's pose brings fewer than 3/4 as
+        many points into agreement as the consensus pose it started from (a collapse: weights
+        near 1 let CPD shrink the set onto a few points), the consensus pose is kept and a
+        ``MatchingWarning`` says so; ``info["cpd_kept"]`` records which was kept.
     mwme_method : {"local", "greedy", "exact"}, default="local"
         ``"mwme"``: the MWME solver.
 
@@ -156,9 +149,15 @@ def match(
     if outlier_weight >= 1.0:
         raise InputError(f"`outlier_weight` must be in [0, 1); got {outlier_weight!r}.")
     if method == "mwme":
+        from ..graphs._entropy import MAX_EXACT
         from ._mwme import mwme_match
 
         moving_arr = as_points(moving, name="moving", n_dims=(2, 3), min_points=3, allow_duplicates=False)
+        if mwme_method == "exact" and moving_arr.shape[0] > MAX_EXACT:
+            raise InputError(
+                f"`mwme_method='exact'` solves sets of up to {MAX_EXACT} points (time and memory grow as 2^n n); "
+                f"`moving` has {moving_arr.shape[0]}. Use `mwme_method='local'` or `mwme_method='greedy'`."
+            )
         correspondence, transform = mwme_match(moving_arr, fixed, method=mwme_method, scale=bool(scale))
         transform = _rigid_if_unscaled(transform, scale)
         return MatchResult(correspondence, transform, method, int(moving_arr.shape[0]), {"mwme_method": mwme_method})
@@ -166,7 +165,7 @@ def match(
     fixed = as_points(fixed, name="fixed", n_dims=(2,), min_points=4, allow_duplicates=False)
     norm_m, norm_f = normalise(moving), normalise(fixed)
     for name, norm in (("moving", norm_m), ("fixed", norm_f)):
-        _check_resolution(norm.points, name)
+        check_resolution(norm.points, name, original=moving if name == "moving" else fixed)
     if not scale:
         check_rigid_extents(norm_m, norm_f)
     # scale 1 in the caller's units (used by rigid fits only; with scale=True it may overflow)
@@ -208,4 +207,15 @@ def match(
     transform = _rigid_if_unscaled(similarity_to_units(rot, t, s, norm_m, norm_f), scale)
     if method == "robust" and not scale:
         _warn_if_scaled(info)
+    if method == "robust" and refine == "cpd" and not info["cpd_kept"]:
+        import warnings
+
+        warnings.warn(
+            f"`refine='cpd'` with `outlier_weight={outlier_weight:g}` ended in a pose that brings "
+            f"{info['cpd_consensus']:.1f} points into agreement where the consensus pose it started from "
+            f"brings {info['refined_consensus']:.1f}: CPD's result was dropped and the consensus pose kept. "
+            "A lower `outlier_weight` lets CPD refine it.",
+            MatchingWarning,
+            stacklevel=2,
+        )
     return MatchResult(correspondence, transform, method, int(np.sum(correspondence >= 0)), info)

@@ -73,6 +73,38 @@ def normalise(points: np.ndarray) -> Normalised:
     return Normalised(np.ldexp(centred, -second), centre, first, second)
 
 
+#: Smallest distance between two points, relative to the set's extent, that matching accepts:
+#: below it the local graphs' squared distances underflow.
+MIN_RELATIVE_SPACING = 1e-150
+
+
+def check_resolution(points: np.ndarray, name: str, *, original: np.ndarray) -> None:
+    """Refuse a set whose closest points coincide, or nearly, once centred and scaled to
+    (-1, 1) (``points``, from :func:`normalise`); ``original``: the set as given, for the message."""
+    dist, index = cKDTree(points).query(points, k=2)
+    row = int(np.argmin(dist[:, 1]))
+    spacing = float(dist[row, 1])
+    if spacing > MIN_RELATIVE_SPACING:
+        return
+    other = int(index[row, 1]) if index[row, 1] != row else int(index[row, 0])  # ties at 0: either order
+    i, j = sorted((row, other))
+    if spacing == 0.0:  # distinct as given (duplicates are refused before), equal once centred
+        step = np.abs(original[i] - original[j])
+        gap = float(step.max() * np.linalg.norm(step / step.max()))  # no underflow of tiny squares
+        magnitude = float(np.abs(original).max())
+        raise InputError(
+            f"`{name}`: rows {i} and {j} are {gap:.3g} apart, at coordinates up to {magnitude:.3g} in size "
+            f"(a relative spacing of {gap / magnitude:.1e}); once the set is centred, float64 (resolution about "
+            "2e-16 of that size) cannot tell them apart. Drop one of them, or, if the whole set lies far from "
+            "the origin, subtract a point near it from all coordinates first."
+        )
+    raise InputError(
+        f"`{name}` has points closer than {MIN_RELATIVE_SPACING:g} times its extent "
+        f"(rows {i} and {j}: {spacing:.3g} of it): float64 cannot tell them apart at this dynamic range; "
+        "rescale or deduplicate the points."
+    )
+
+
 def similarity_to_units(rotation, translation, scale, moving: Normalised, fixed: Normalised) -> SimilarityTransform:
     """The transform in the caller's units from ``f = s R m + t`` fitted between normalised sets.
 

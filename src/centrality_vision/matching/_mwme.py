@@ -11,7 +11,7 @@ from .._validation import as_points, check_bool
 from ..exceptions import InputError, MatchingWarning
 from ..graphs import mwme_graph
 from ..transforms import SimilarityTransform
-from ._common import check_rigid_extents, fit_pairs, normalise, similarity_to_units
+from ._common import check_resolution, check_rigid_extents, fit_pairs, normalise, similarity_to_units
 
 __all__ = ["mwme_match"]
 
@@ -81,6 +81,8 @@ def mwme_match(
     check_bool(scale, name="scale")
     n = moving.shape[0]
     norm_m, norm_f = normalise(moving), normalise(fixed)
+    check_resolution(norm_m.points, "moving", original=moving)
+    check_resolution(norm_f.points, "fixed", original=fixed)
     if not scale:  # else both candidates' residuals overflow and the first one wins, right or not
         check_rigid_extents(norm_m, norm_f)
     graph_m = mwme_graph(norm_m.points, method=method)

@@ -22,7 +22,8 @@ conclusion proposes matching local regions of maximal entropy instead. This modu
 3. **Refinement.** The best hypotheses are refined by trimmed nearest-neighbour
    similarity fits (pairs within ``tau``), the best refined pose optionally by
    similarity CPD with an outlier weight (:class:`~centrality_vision.registration.RigidCPD`)
-   started from it; then each moving point takes its nearest fixed point within ``tau``,
+   started from it, whose pose is kept unless it loses a quarter of the consensus (a
+   collapse); then each moving point takes its nearest fixed point within ``tau``,
    else -1.
 """
 
@@ -79,6 +80,12 @@ PREFILTER_ABOVE = 256
 PREFILTER = 64
 #: At most this many hypotheses (the most alike pairs) are scored.
 MAX_HYPOTHESES = 3000
+#: ``refine="cpd"`` keeps CPD's pose unless it brings fewer points into agreement than this
+#: share of the consensus pose it started from. Measured on the fish and on random sets with
+#: noise up to 0.03 of their extent: CPD's polish costs at most 7% of the consensus with
+#: outlier weights up to 0.9; a collapse (w = 0.99 shrinks the set onto a few points) costs
+#: 30-95%.
+CPD_KEEPS = 0.75
 
 
 def _chamfer(block: np.ndarray, others: np.ndarray) -> np.ndarray:
@@ -258,7 +265,12 @@ def robust_pose(
         )
         info.update(similarity_scale=float(s_sim / unit_ratio), similarity_consensus=score_sim)
     if refine == "cpd":
-        rot_b, t_b, s_b = _cpd_refine(moving, fixed, rot_b, t_b, s_b, scale=scale, outlier_weight=outlier_weight)
+        rot_c, t_c, s_c = _cpd_refine(moving, fixed, rot_b, t_b, s_b, scale=scale, outlier_weight=outlier_weight)
+        d, j = fixed_tree.query(s_c * moving @ rot_c.T + t_c, distance_upper_bound=tau)
+        info["cpd_consensus"] = float(_distinct_score(d[None], j[None], fixed_tree.n, tau)[0])
+        info["cpd_kept"] = info["cpd_consensus"] >= CPD_KEEPS * score_b
+        if info["cpd_kept"]:
+            rot_b, t_b, s_b = rot_c, t_c, s_c
     correspondence = assign_nearest(s_b * moving @ rot_b.T + t_b, fixed_tree, tau)
     return rot_b, t_b, s_b, correspondence, info
 
