@@ -178,7 +178,7 @@ def test_option_errors(kwargs, error, text):
         (np.vstack([FIXED, FIXED[:1]]), "robust", "duplicate"),
         (np.where(np.arange(N)[:, None] == 3, np.nan, FIXED), "robust", "finite"),
         (FIXED[:30], "mwme", "same shape"),
-        (np.array([[0, 0], [1e-200, 0], [1, 0], [0, 1], [1, 1.0]]), "robust", "`moving`: rows 0 and 1 are 1e-200 apart"),
+        (np.array([[0, 0], [1e-200, 0], [1, 0], [0, 1], [1, 1.0]]), "robust", "rows 0 and 1 are 1e-200 apart"),
     ],
 )
 def test_data_errors(moving, method, text):
