@@ -917,3 +917,42 @@ def test_an_option_the_run_would_ignore_is_refused(tmp_path, capsys, argv, messa
     assert main([*argv, "--out", str(out)]) == 2
     assert message in _one_line_error(capsys)
     assert not out.exists() or (out.is_dir() and not any(out.iterdir()))
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["graph", "{p}", "--kind", "delaunay", "--k", "3"], "--k is an option of --kind knn; got --kind delaunay"),
+        (["graph", "{p}", "--kind", "emst", "--lam", "0.9"], "--lam is an option of --kind mstme; got --kind emst"),
+        (["centrality", "{p}", "--graph", "gabriel", "--k", "3"], "--k is an option of --graph knn"),
+        (["centrality", "{p}", "--norm", "log"], "--norm is the colour scale of --plot"),
+        (["centrality", "{p}", "--measure", "degree", "--weights"], "--weights is an option of --measure betweenness"),
+        (["centrality", "{p}", "--measure", "closeness", "--strengths"], "--strengths is an option of --measure degree"),
+    ],
+)
+def test_graph_and_centrality_refuse_options_the_run_would_not_use(tmp_path, capsys, argv, message):
+    # fuzz round 6: each exited 0 and ignored the option without a word
+    np.savetxt(tmp_path / "p.txt", np.random.default_rng(0).random((12, 2)))
+    argv = [part.format(p=tmp_path / "p.txt") for part in argv] + ["--out", str(tmp_path / "o.json")]
+    assert main(argv) == 2
+    assert message in capsys.readouterr().err and not (tmp_path / "o.json").exists()
+
+
+def test_options_that_apply_are_taken(tmp_path):
+    np.savetxt(tmp_path / "p.txt", np.random.default_rng(0).random((12, 2)))
+    p = str(tmp_path / "p.txt")
+    assert main(["graph", p, "--kind", "knn", "--k", "3", "--out", str(tmp_path / "g.json")]) == 0
+    argv = ["centrality", p, "--measure", "all", "--weights", "--strengths", "--out", str(tmp_path / "c.json")]
+    assert main(argv) == 0
+
+
+def test_the_mstme_lam_default_is_the_librarys():
+    import inspect
+
+    from centrality_vision.cli import build_parser
+    from centrality_vision.graphs import mstme_graph
+
+    library = inspect.signature(mstme_graph).parameters["lam"].default
+    for command in ("graph", "centrality"):
+        args = build_parser().parse_args([command, "p.txt", "--out", "x.json"])
+        assert args.lam == library

@@ -379,9 +379,13 @@ def add_graph_options(parser: argparse.ArgumentParser, flag: str, *, help_text: 
     parser.add_argument(
         "--lam",
         type=number(float, low=0),
-        default=0.5,
+        default=1.0,  # mstme_graph's default (a test holds them equal)
         help="weight of the degree entropy for the mstme graph; 0 gives the EMST (default: %(default)s)",
     )
+
+
+#: which ``--kind``/``--graph`` uses ``--k`` and ``--lam``
+GRAPH_OPTION_KINDS = {"k": ("knn",), "lam": ("mstme",)}
 
 
 def edge_list(points, graph):

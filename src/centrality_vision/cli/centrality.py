@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ._common import (
     CENTRALITY_NAMES,
+    GRAPH_OPTION_KINDS,
     POINT_FILES,
     add_graph_options,
     add_out,
@@ -15,10 +16,12 @@ from ._common import (
     add_point_options,
     add_progress,
     data_graph,
+    given,
     options,
     progress_on,
     pyplot,
     read_point_file,
+    refuse_unused,
     say,
     subparser,
     suffix,
@@ -27,6 +30,7 @@ from ._output import parameters_block, write_output
 
 NAME = "centrality"
 _WITH_PROGRESS = ("betweenness", "closeness", "harmonic", "eccentricity")
+_DEGREE_LIKE = ("degree", "eigenvector", "pagerank", "katz")  # the measures that take --strengths
 _PROGRESS_FROM = 2000  # nodes; smaller graphs finish before a progress bar is useful
 
 
@@ -135,6 +139,14 @@ def run(args: argparse.Namespace) -> int:
         )
     is_image = kind in IMAGE_SUFFIXES
     _refuse_options_of_the_other_input(args, is_image)
+    applies = {
+        "weights": ("measure", (*_WITH_PROGRESS, "all")),
+        "strengths": ("measure", (*_DEGREE_LIKE, "all")),
+        **{dest: ("graph", kinds) for dest, kinds in GRAPH_OPTION_KINDS.items()},
+    }
+    refuse_unused(args, applies, vars(args))
+    if given(args, "norm") and args.plot is None:
+        raise InputError(f"--norm is the colour scale of --plot; got --norm {args.norm} without --plot.")
     if is_image:
         from ..graphs import pixel_graph
 

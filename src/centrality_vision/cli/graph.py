@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 from ._common import (
+    GRAPH_OPTION_KINDS,
     POINT_FILES,
     add_graph_options,
     add_out,
@@ -19,6 +20,7 @@ from ._common import (
     progress_on,
     pyplot,
     read_point_file,
+    refuse_unused,
     say,
     subparser,
     suffix,
@@ -54,6 +56,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     started = time.perf_counter()
+    refuse_unused(args, {dest: ("kind", kinds) for dest, kinds in GRAPH_OPTION_KINDS.items()}, vars(args))
     points = read_point_file(args.points, args)
     say(f"read {points.shape[0]} points in {points.shape[1]}D from {args.points}")
     graph, extra = data_graph(points, args.kind, k=args.k, lam=args.lam, source=args.points, progress=progress_on(args))
