@@ -471,7 +471,7 @@ def test_coordinates_beyond_what_matplotlib_can_lay_out_are_named():
     with pytest.raises(ValueError, match=r"`points` must lie within \+-1e\+307"):
         plot_graph(x * 1.7e308, sparse.csr_array((5, 5)))
     with pytest.raises(ValueError, match=r"`moving` must lie within"):
-        plot_registration(x, x * 1.7e308)
+        plot_registration(x * 1.7e308, x)
     with pytest.raises(ValueError, match=r"`snapshots\['A'\]\[0\]` must lie within"):
         plot_registration_snapshots(x, {"A": {0: x * 1.7e308, 1: x}})
     plot_graph(x * 1e306, sparse.csr_array((5, 5)))  # large but drawable
@@ -610,3 +610,16 @@ def test_float32_background_and_all_zero_errors_draw_without_warnings():
         ax.figure.canvas.draw()
         assert ax.get_yscale() == "linear"
     plt.close("all")
+
+
+def test_plot_registration_takes_moving_then_fixed_like_every_fit():
+    # audit: it took (fixed, moving), the one function in the package that did, so
+    # plot_registration(*load_fish()) swapped the two sets' labels and markers without a word
+    from centrality_vision.plotting import plot_registration
+
+    rng = np.random.default_rng(2)
+    moving, fixed = rng.random((7, 2)), rng.random((9, 2)) + 3.0
+    ax = plot_registration(moving, fixed)
+    by_label = {c.get_label(): np.asarray(c.get_offsets()) for c in ax.collections}
+    np.testing.assert_array_equal(by_label["moving"], moving)
+    np.testing.assert_array_equal(by_label["fixed"], fixed)

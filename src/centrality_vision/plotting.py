@@ -248,8 +248,6 @@ def plot_graph(
 
     Examples
     --------
-    >>> import matplotlib
-    >>> matplotlib.use("Agg")
     >>> import matplotlib.pyplot as plt
     >>> from scipy import sparse
     >>> points = [[0, 0], [1, 0], [0, 1]]
@@ -429,8 +427,6 @@ def plot_centrality_image(
 
     Examples
     --------
-    >>> import matplotlib
-    >>> matplotlib.use("Agg")
     >>> import matplotlib.pyplot as plt
     >>> ax = plot_centrality_image([0.5, 1.0, 0.5], [1, 4, 7], (3, 3), label="closeness")
     >>> ax.images[0].get_array()
@@ -507,8 +503,6 @@ def save_figure(fig, path: str | os.PathLike, *, dpi: float = 150) -> Path:
 
     Examples
     --------
-    >>> import matplotlib
-    >>> matplotlib.use("Agg")
     >>> import tempfile, pathlib
     >>> ax = plot_centrality_image([1.0, 2.0], [0, 3], (2, 2))
     >>> with tempfile.TemporaryDirectory() as folder:
@@ -593,8 +587,6 @@ def plot_matching(
 
     Examples
     --------
-    >>> import matplotlib
-    >>> matplotlib.use("Agg")
     >>> x = np.random.default_rng(0).random((10, 2))
     >>> ax = plot_matching(x, x[::-1], np.arange(10)[::-1], max_lines=4)
     >>> len(ax.collections[0].get_segments())  # four of the ten matches drawn as lines
@@ -691,21 +683,25 @@ def plot_matching(
 
 
 def plot_registration(
-    fixed, moving, *, ax=None, title=None, fixed_label="fixed", moving_label="moving", legend=True, rowcol=False
+    moving, fixed, *, ax=None, title=None, moving_label="moving", fixed_label="fixed", legend=True, rowcol=False
 ):
-    """One panel of a registration: the fixed set (red stars) and the moving set (blue circles).
+    """One panel of a registration: the moving set (blue circles) and the fixed set (red stars).
 
     Use it twice for a before/after pair. 2D panels have equal aspect; 3D panels (a 3D
     Axes, created when ``ax`` is None) have the same scale on every axis and small
-    markers.
+    markers. The sets come in the order of every ``fit(moving, fixed)``.
+
+    .. versionchanged:: 0.1.0
+       The order was ``(fixed, moving)``; it is now ``(moving, fixed)``, as everywhere else.
 
     Parameters
     ----------
-    fixed : array_like of shape (N, D), D in {2, 3}
-    moving : array_like of shape (M, D)
+    moving : array_like of shape (M, D), D in {2, 3}
         E.g. the moving set before registration, or ``estimator.moving_transformed_``.
+    fixed : array_like of shape (N, D)
     ax : matplotlib Axes, optional
-    title, fixed_label, moving_label : str, optional
+    title : str, optional
+    moving_label, fixed_label : str, default="moving", "fixed"
     legend : bool, default=True
     rowcol : bool, default=False
         2D (row, col) pixel coordinates: drawn with row 0 at the top.
@@ -716,17 +712,15 @@ def plot_registration(
 
     Examples
     --------
-    >>> import matplotlib
-    >>> matplotlib.use("Agg")
     >>> x = np.random.default_rng(0).random((20, 3))
-    >>> ax = plot_registration(x, x + 0.1, title="before")
+    >>> ax = plot_registration(x + 0.1, x, title="before")
     >>> ax.name, len(ax.collections)
     ('3d', 2)
     """
     import matplotlib.pyplot as plt
 
-    fixed = _plot_points(fixed, name="fixed", n_dims=(2, 3), rowcol=rowcol)
-    moving = _plot_points(moving, name="moving", n_dims=(fixed.shape[1],), rowcol=rowcol)
+    moving = _plot_points(moving, name="moving", n_dims=(2, 3), rowcol=rowcol)
+    fixed = _plot_points(fixed, name="fixed", n_dims=(moving.shape[1],), rowcol=rowcol)
     three_d = fixed.shape[1] == 3
     if ax is None:
         fig = plt.figure(figsize=(4.5, 4.2), layout="constrained")
@@ -792,8 +786,6 @@ def plot_registration_snapshots(fixed, snapshots, *, iterations=None, fig=None, 
 
     Examples
     --------
-    >>> import matplotlib
-    >>> matplotlib.use("Agg")
     >>> x = np.random.default_rng(0).random((20, 2))
     >>> fig = plot_registration_snapshots(x, {"CPD": {0: x + 0.2, 1: x + 0.1, 2: x}, "GPD": {0: x + 0.2, 1: x}})
     >>> len(fig.axes)  # rows: iteration 0 (recorded by both) and the final states; two columns
@@ -935,8 +927,6 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
 
     Examples
     --------
-    >>> import matplotlib
-    >>> matplotlib.use("Agg")
     >>> ax = plot_alignment_errors({"CPD": [4.0, 2.0, 1.0], "GPD (closeness)": [4.0, 1.0, 0.5]}, n_points=4)
     >>> len(ax.lines), ax.get_yscale(), ax.lines[0].get_ydata().tolist()
     (2, 'log', [2.0, 1.0, 0.5])

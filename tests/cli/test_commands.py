@@ -927,7 +927,10 @@ def test_an_option_the_run_would_ignore_is_refused(tmp_path, capsys, argv, messa
         (["centrality", "{p}", "--graph", "gabriel", "--k", "3"], "--k is an option of --graph knn"),
         (["centrality", "{p}", "--norm", "log"], "--norm is the colour scale of --plot"),
         (["centrality", "{p}", "--measure", "degree", "--weights"], "--weights is an option of --measure betweenness"),
-        (["centrality", "{p}", "--measure", "closeness", "--strengths"], "--strengths is an option of --measure degree"),
+        (
+            ["centrality", "{p}", "--measure", "closeness", "--strengths"],
+            "--strengths is an option of --measure degree",
+        ),
     ],
 )
 def test_graph_and_centrality_refuse_options_the_run_would_not_use(tmp_path, capsys, argv, message):

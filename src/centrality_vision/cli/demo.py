@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
     for k, (title, points) in enumerate(panels, start=1):
         ax = fig.add_subplot(1, 3, k)
         done = "" if title == "before" else f", {runs[title]['estimator'].n_iter_} iterations"
-        plot_registration(target, points, ax=ax, title=title + done, legend=k == 1)
+        plot_registration(points, target, ax=ax, title=title + done, legend=k == 1)
         ax.set_xlim(low[0], high[0])  # the same frame in the three panels
         ax.set_ylim(low[1], high[1])
     fig.suptitle("Fish under a rotation of 50 degrees and scale 1.5: registered by CPD and by GPD")

@@ -431,16 +431,16 @@ def _plot(args, fixed, before, after, rms, label) -> None:
     kw = {"projection": "3d"} if three_d else {}
     axes = [fig.add_subplot(1, n_panels, k + 1, **kw) for k in range(2)]
     plot_registration(
-        fixed,
         before,
+        fixed,
         ax=axes[0],
         title="before",
         moving_label=f"moving ({Path(args.moving).name})",
         fixed_label=f"fixed ({Path(args.fixed).name})",
     )
     plot_registration(
-        fixed,
         after,
+        fixed,
         ax=axes[1],
         title="after",
         moving_label="moving, aligned",
