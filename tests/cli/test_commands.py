@@ -850,9 +850,9 @@ def test_the_before_panel_shows_the_moving_file_as_given(tmp_path, monkeypatch):
     drawn = {}
     real = plotting.plot_registration
 
-    def spy(fixed, moving, **kwargs):
+    def spy(moving, fixed, **kwargs):
         drawn[kwargs.get("title")] = np.array(moving)
-        return real(fixed, moving, **kwargs)
+        return real(moving, fixed, **kwargs)
 
     monkeypatch.setattr(plotting, "plot_registration", spy)
     moving = _points(15, seed=6)

@@ -226,6 +226,22 @@ def test_gpd_duplicates_are_named_by_file_and_row(tmp_path, capsys, fish):
 
 
 def test_library_settings_read_as_options(tmp_path, capsys, fish):
-    # "max_iter=1 ... tol=1e-05" in the library is "--max-iter 1 ... --tol 1e-05" here
+    # "max_iter=1 ... tol=1e-06" in the library is "--max-iter 1 ... --tol 1e-06" here
     _register(tmp_path, fish, fish[::-1] + 0.1, "--method", "icp", "--max-iter", "1")
-    assert "warning: ICP stopped at --max-iter 1 before meeting --tol 1e-05." in capsys.readouterr().err
+    assert "warning: ICP stopped at --max-iter 1 before meeting --tol 1e-06." in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("method", "estimator"), [("icp", "ICP"), ("cpd", "RigidCPD")])
+def test_iteration_limits_default_to_the_methods_own(tmp_path, method, estimator):
+    # audit F19: --max-iter 150 and --tol 1e-5 (CPD's) were passed to ICP, whose own are 100 and 1e-6
+    import inspect
+
+    from centrality_vision import registration
+
+    signature = inspect.signature(getattr(registration, estimator)).parameters
+    fixed = np.random.default_rng(0).random((30, 2))
+    record = _register(tmp_path, fixed + 0.01, fixed, "--method", method, "--transform", "rigid")
+    assert record["parameters"]["max_iter"] == signature["max_iter"].default
+    assert record["parameters"]["tol"] == signature["tol"].default
+    given = _register(tmp_path, fixed + 0.01, fixed, "--method", method, "--transform", "rigid", "--max-iter", "7")
+    assert given["parameters"]["max_iter"] == 7

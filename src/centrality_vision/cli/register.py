@@ -143,13 +143,17 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "(default: point_to_point)",
     )
     parser.add_argument(
-        "--max-iter", type=number(int, low=1), default=150, help="most iterations (default: %(default)s)"
+        "--max-iter",
+        type=number(int, low=1),
+        default=None,
+        help="most iterations (default: the method's own, 150 for CPD and GPD, 100 for ICP)",
     )
     parser.add_argument(
         "--tol",
         type=number(float, low=0, low_open=True),
-        default=1e-5,
-        help="stop when the objective changes by less than this, relatively (default: %(default)s)",
+        default=None,
+        help="stop when the objective changes by less than this, relatively (default: the method's own, "
+        "1e-5 for CPD and GPD, 1e-6 for ICP)",
     )
     parser.add_argument(
         "--beta",
@@ -195,6 +199,19 @@ _APPLIES = {
     **dict.fromkeys(("max_distance", "trim", "metric"), ("method", ("icp",))),
     **dict.fromkeys(("beta", "lam"), ("transform", ("nonrigid",))),
 }
+
+
+def _method_defaults(args: argparse.Namespace) -> None:
+    """``--max-iter`` and ``--tol`` not given: the estimator's own defaults (ICP's differ from
+    CPD's; one CLI default for both ran ICP with CPD's limits), kept in ``args`` for the record."""
+    import inspect
+
+    from ..registration import ICP, RigidCPD
+
+    signature = inspect.signature(ICP if args.method == "icp" else RigidCPD).parameters
+    for name in ("max_iter", "tol"):
+        if getattr(args, name) is None:
+            setattr(args, name, signature[name].default)
 
 
 def _estimator(args: argparse.Namespace, callback):
@@ -313,6 +330,7 @@ def run(args: argparse.Namespace) -> int:
     from ..exceptions import InputError
 
     started = time.perf_counter()
+    _method_defaults(args)
     _estimator(args, None)  # a bad combination fails before any reading
     moving = read_point_file(args.moving, args)
     fixed = read_point_file(args.fixed, args)
