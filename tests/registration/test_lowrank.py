@@ -158,6 +158,24 @@ def test_multiscale_rejects_bad_parameters(kwargs, match):
         MultiscaleCPD(RigidCPD(), **kwargs).fit(y, y)
 
 
+def test_multiscale_takes_random_state_as_the_cpd_estimators_do():
+    # audit F11: None and a Generator raised "must be an int", where RigidCPD takes both
+    rng = np.random.default_rng(8)
+    y = rng.random((300, 2))
+    x = y @ _rotation(0.3).T
+    fits = {
+        "seed": MultiscaleCPD(RigidCPD(), sizes=(100, 300), random_state=5).fit(y, x),
+        "again": MultiscaleCPD(RigidCPD(), sizes=(100, 300), random_state=5).fit(y, x),
+        "generator": MultiscaleCPD(RigidCPD(), sizes=(100, 300), random_state=np.random.default_rng(5)).fit(y, x),
+        "none": MultiscaleCPD(RigidCPD(), sizes=(100, 300), random_state=None).fit(y, x),
+    }
+    for fit in fits.values():
+        np.testing.assert_allclose(fit.moving_transformed_, x, atol=1e-6)
+    # an int and a Generator seeded with it draw the same subsamples
+    np.testing.assert_array_equal(fits["seed"].moving_transformed_, fits["again"].moving_transformed_)
+    np.testing.assert_array_equal(fits["seed"].moving_transformed_, fits["generator"].moving_transformed_)
+
+
 def test_multiscale_rejects_a_non_cpd_estimator_and_unfitted_use():
     with pytest.raises(TypeError, match="estimator"):
         MultiscaleCPD(object()).fit(np.zeros((5, 2)), np.zeros((5, 2)))

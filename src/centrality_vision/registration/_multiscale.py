@@ -31,6 +31,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from .._seeding import as_generator
 from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import ConvergenceWarning, InputError
 from ..transforms import NonRigidTransform, RigidTransform
@@ -132,8 +133,9 @@ class MultiscaleCPD(BaseEstimator):
         Measurements at 10^5 and 10^6 points: ``benchmarks/registration_large.py``.
     refine_iter : int, default=10
         ``max_iter`` of every level after the first.
-    random_state : int, default=0
-        Seed of the subsamples.
+    random_state : int, Generator or None, default=0
+        Seed of the subsamples, as the CPD estimators take it (None: fresh entropy; a
+        Generator is drawn from, so two fits with one Generator take other subsamples).
 
     Attributes
     ----------
@@ -181,7 +183,7 @@ class MultiscaleCPD(BaseEstimator):
         if not sizes or sorted(sizes) != sizes or len(set(sizes)) != len(sizes):
             raise InputError(f"`MultiscaleCPD.sizes` must be non-empty and strictly increasing; got {self.sizes!r}.")
         check_int(self.refine_iter, name="MultiscaleCPD.refine_iter", low=1)
-        check_int(self.random_state, name="MultiscaleCPD.random_state", low=0, high=2**128)
+        as_generator(self.random_state, name="MultiscaleCPD.random_state")  # checked before any work
         return sizes, isinstance(self.estimator, NonRigidCPD)
 
     def fit(self, moving, fixed):
@@ -189,7 +191,7 @@ class MultiscaleCPD(BaseEstimator):
         sizes, nonrigid = self._check()
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
         fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
-        rng = np.random.default_rng(self.random_state)
+        rng = as_generator(self.random_state, name="MultiscaleCPD.random_state")
         largest = max(moving.shape[0], fixed.shape[0])
         # every level up to the first that covers both sets whole
         levels = [s for s in sizes if s < largest] + [s for s in sizes if s >= largest][:1]
