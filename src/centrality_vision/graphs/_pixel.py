@@ -151,17 +151,20 @@ def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, thre
     Parameters
     ----------
     image : array_like of shape (n_rows, n_cols) or (n_planes, n_rows, n_cols)
-        Boolean mask, or an array holding only 0 and 1 (1 = foreground), or (2D) a grey
-        image split as :func:`centrality_vision.io.load_image` does, or any numeric
-        image together with ``threshold`` (foreground is ``image > threshold``).
+        Boolean mask, or an array holding only 0 and 1 (1 = foreground), or any other
+        numeric image, split at ``threshold``.
     connectivity : {8, 4} in 2D, {26, 18, 6} in 3D, optional
         Neighbourhood; the default is the full one (8 in 2D, the thesis' choice; 26 in 3D).
     spacing : sequence of float, optional
         Distance between pixel centres along each axis (default 1 everywhere), e.g. the
         voxel size of an anisotropic scan.
     threshold : float, optional
-        Foreground is ``image > threshold``. Invert dark-on-light images first
-        (:func:`centrality_vision.datasets.load_kimia99` already returns masks).
+        Grey level that splits a numeric image. 2D: as
+        :func:`centrality_vision.io.read_shape` with ``foreground="auto"`` splits it (default
+        half the image's range; the shape is the side that touches fewer border pixels, so
+        dark shapes on white and white shapes on black both come out as the shape); pass a
+        boolean mask to choose the side yourself. 3D: the foreground is ``image > threshold``.
+        (:func:`centrality_vision.datasets.load_kimia99` already returns masks.)
 
     Returns
     -------
