@@ -157,11 +157,11 @@ def test_mwme_match_1e155_is_matched():
     [
         ({"method": "best"}, ValueError, "`method`"),
         ({"scale": "yes"}, TypeError, "`scale`"),
-        ({"n_neighbours": 2}, ValueError, "`n_neighbours`"),
-        ({"n_neighbours": 20}, ValueError, "`n_neighbours`"),
+        ({"n_neighbors": 2}, ValueError, "`n_neighbors`"),
+        ({"n_neighbors": 20}, ValueError, "`n_neighbors`"),
         ({"n_candidates": 0}, ValueError, "`n_candidates`"),
         ({"refine": "none"}, ValueError, "`refine`"),
-        ({"outlier_weight": 1.0}, ValueError, "`outlier_weight`"),
+        ({"w": 1.0}, ValueError, "`w`"),
     ],
 )
 def test_option_errors(kwargs, error, text):
@@ -255,20 +255,20 @@ def test_rigid_copies_with_noise_and_missing_parts_do_not_warn(seed):
 
 
 def test_cpd_refinement_that_collapses_is_dropped_with_a_warning():
-    # fuzz round 6: outlier_weight 0.99 let CPD shrink an exact similar copy onto a few fixed
+    # fuzz round 6: w (then outlier_weight) 0.99 let CPD shrink an exact similar copy onto a few fixed
     # points (1 of 40 right, n_matched 40), sometimes without a warning
     rng = np.random.default_rng(3)
     fixed = rng.random((40, 2))
     perm = rng.permutation(40)
     moving = fixed[perm] * 2 + 1
-    with pytest.warns(MatchingWarning, match="`refine='cpd'` with `outlier_weight=0.99`.*consensus pose kept"):
-        result = match(moving, fixed, refine="cpd", outlier_weight=0.99)
+    with pytest.warns(MatchingWarning, match="`refine='cpd'` with `w=0.99`.*consensus pose kept"):
+        result = match(moving, fixed, refine="cpd", w=0.99)
     assert not result.info["cpd_kept"] and result.info["cpd_consensus"] < 0.75 * result.info["refined_consensus"]
     np.testing.assert_array_equal(result.correspondence, perm)
     assert result.transform.scale == pytest.approx(0.5, rel=1e-9)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        kept = match(moving, fixed, refine="cpd", outlier_weight=0.3)
+        kept = match(moving, fixed, refine="cpd", w=0.3)
     assert kept.info["cpd_kept"]
     np.testing.assert_array_equal(kept.correspondence, perm)
 
@@ -287,3 +287,19 @@ def test_points_distinct_only_beyond_float64_resolution_are_named_by_rows(method
     fixed = np.random.default_rng(1).random((5, 2))
     with pytest.raises(InputError, match=r"^`moving`: rows \d and \d are [\d.]+ apart, at coordinates up to 4.61e\+18"):
         match(moving, fixed, method=method)
+
+
+def test_former_names_n_neighbours_and_outlier_weight_still_work_with_a_warning():
+    # API audit F3/F4: match spelled CPD's w and the package's n_neighbors its own way
+    rng = np.random.default_rng(4)
+    fixed = rng.random((30, 2))
+    moving = fixed[::-1] * 1.5
+    new = match(moving, fixed, n_neighbors=6, refine="cpd", w=0.2)
+    with pytest.warns(FutureWarning, match="`n_neighbours` of match\\(\\) is renamed `n_neighbors`"):
+        old = match(moving, fixed, n_neighbours=6, refine="cpd", w=0.2)
+    np.testing.assert_array_equal(old.correspondence, new.correspondence)
+    with pytest.warns(FutureWarning, match="`outlier_weight` of match\\(\\) is renamed `w`"):
+        old = match(moving, fixed, n_neighbors=6, refine="cpd", outlier_weight=0.2)
+    np.testing.assert_array_equal(old.correspondence, new.correspondence)
+    with pytest.raises(TypeError, match="`outlier_weight` is the former name of `w`; give `w` only"):
+        match(moving, fixed, w=0.2, outlier_weight=0.2)

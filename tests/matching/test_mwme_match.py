@@ -144,10 +144,10 @@ def test_a_scale_beyond_float64_is_a_named_error_without_a_warning_first(pair):
 @pytest.mark.parametrize(
     ("method", "options", "error"),
     [
-        ("mwme", {"n_neighbours": None}, TypeError),
+        ("mwme", {"n_neighbors": None}, TypeError),
         ("mwme", {"n_candidates": -5}, InputError),
         ("mwme", {"refine": "nonsense"}, InputError),
-        ("mwme", {"outlier_weight": np.nan}, InputError),
+        ("mwme", {"w": np.nan}, InputError),
         ("robust", {"mwme_method": "nonsense"}, InputError),
         ("shape-context", {"mwme_method": 3}, InputError),
     ],

@@ -49,6 +49,18 @@ def _warn_if_scaled(info: dict) -> None:
         )
 
 
+def _renamed(old_value, old: str, new_value, new: str, default):
+    """``new_value``, or ``old_value`` given under the parameter's former name (with a FutureWarning)."""
+    if old_value is None:
+        return new_value
+    if new_value != default:
+        raise TypeError(f"`{old}` is the former name of `{new}`; give `{new}` only; got both.")
+    import warnings
+
+    warnings.warn(f"`{old}` of match() is renamed `{new}`; the old name will be removed.", FutureWarning, stacklevel=3)
+    return old_value
+
+
 def match(
     moving,
     fixed,
@@ -56,11 +68,13 @@ def match(
     *,
     method: str = "robust",
     scale: bool = True,
-    n_neighbours: int = 8,
+    n_neighbors: int = 8,
     n_candidates: int = 6,
     refine: str = "icp",
-    outlier_weight: float = 0.3,
+    w: float = 0.3,
     mwme_method: str = "local",
+    n_neighbours=None,
+    outlier_weight=None,
 ) -> MatchResult:
     """Correspondences from ``moving`` to ``fixed`` and the similarity transform between them.
 
@@ -90,23 +104,26 @@ def match(
         similarity hypotheses and a ``MatchingWarning`` says so when one at a scale more than
         5% from 1 brings 10% more points into agreement (measured: copies scaled by 0.7, 1.1
         and 1.5 warn; 30 rigid copies with noise up to 0.02 and up to a third missing do not).
-    n_neighbours : int in [3, 19], default=8
+    n_neighbors : int in [3, 19], default=8
         ``"robust"``: neighbours in each local MWME graph. Each signature is an exact
-        MWME graph of ``n_neighbours + 1`` points, whose cost doubles with every
+        MWME graph of ``n_neighbors + 1`` points, whose cost doubles with every
         neighbour: two 40-point sets take about 0.3 s at 8 and 20 s at 19 (measured
         on 2 cores).
     n_candidates : int >= 1, default=6
         ``"robust"``: likely partners (hence hypotheses) per moving point.
     refine : {"icp", "cpd"}, default="icp"
         ``"robust"``: the refinement after consensus: trimmed nearest-neighbour similarity
-        fits alone, or followed by similarity CPD with outlier weight ``outlier_weight``.
+        fits alone, or followed by similarity CPD with outlier weight ``w``.
         CPD suits whole sets: its mixture, centred on the moving points, is pulled towards
         fixed points that have no partner, so a part missing from ``moving`` skews the pose.
-    outlier_weight : float in [0, 1), default=0.3
-        The CPD outlier weight for ``refine="cpd"``. When CPD's pose brings fewer than 3/4 as
+    w : float in [0, 1), default=0.3
+        The CPD outlier weight for ``refine="cpd"`` (``w`` of
+        :class:`~centrality_vision.registration.RigidCPD`). When CPD's pose brings fewer than 3/4 as
         many points into agreement as the consensus pose it started from (a collapse: weights
         near 1 let CPD shrink the set onto a few points), the consensus pose is kept and a
         ``MatchingWarning`` says so; ``info["cpd_kept"]`` records which was kept.
+    n_neighbours, outlier_weight
+        Former names of ``n_neighbors`` and ``w``; giving them warns (FutureWarning).
     mwme_method : {"local", "greedy", "exact"}, default="local"
         ``"mwme"``: the MWME solver.
 
@@ -142,12 +159,14 @@ def match(
     check_bool(scale, name="scale")
     # every option is checked whatever the method, so a typo is caught before it matters
     mwme_method = check_choice(mwme_method, ("local", "greedy", "exact"), name="mwme_method")
-    n_neighbours = check_int(n_neighbours, name="n_neighbours", low=3, high=19)
+    n_neighbors = _renamed(n_neighbours, "n_neighbours", n_neighbors, "n_neighbors", 8)
+    w = _renamed(outlier_weight, "outlier_weight", w, "w", 0.3)
+    n_neighbors = check_int(n_neighbors, name="n_neighbors", low=3, high=19)
     n_candidates = check_int(n_candidates, name="n_candidates", low=1)
     refine = check_choice(refine, ("icp", "cpd"), name="refine")
-    outlier_weight = check_float(outlier_weight, name="outlier_weight", low=0.0, high=1.0)
-    if outlier_weight >= 1.0:
-        raise InputError(f"`outlier_weight` must be in [0, 1); got {outlier_weight!r}.")
+    w = check_float(w, name="w", low=0.0, high=1.0)
+    if w >= 1.0:
+        raise InputError(f"`w` must be in [0, 1); got {w!r}.")
     if method == "mwme":
         from ..graphs._entropy import MAX_EXACT
         from ._mwme import mwme_match
@@ -176,12 +195,12 @@ def match(
         rot, t, s, correspondence, info = robust_pose(
             norm_m.points,
             norm_f.points,
-            n_neighbours=n_neighbours,
+            n_neighbours=n_neighbors,
             n_candidates=n_candidates,
             refine=refine,
             scale=bool(scale),
             unit_ratio=unit_ratio,
-            outlier_weight=outlier_weight,
+            outlier_weight=w,
         )
     else:
         from ._shape_context import shape_context_assignment
@@ -211,10 +230,10 @@ def match(
         import warnings
 
         warnings.warn(
-            f"`refine='cpd'` with `outlier_weight={outlier_weight:g}` ended in a pose that brings "
+            f"`refine='cpd'` with `w={w:g}` ended in a pose that brings "
             f"{info['cpd_consensus']:.1f} points into agreement where the consensus pose it started from "
             f"brings {info['refined_consensus']:.1f}: CPD's result was dropped and the consensus pose kept. "
-            "A lower `outlier_weight` lets CPD refine it.",
+            "A lower `w` lets CPD refine it.",
             MatchingWarning,
             stacklevel=2,
         )
