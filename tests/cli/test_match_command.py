@@ -133,3 +133,19 @@ def test_scale_advice_names_the_transform_option():
     args = parser.parse_args(["m.txt", "f.txt", "--out", "x.json"])
     said = _in_cli_words("not reliable; use `scale=True`. From Python, try this.", parser, args)
     assert said == "not reliable; use --transform similarity."
+
+
+def test_no_match_leaves_the_rms_out_of_npz_rather_than_nan(tmp_path, capsys, monkeypatch):
+    # fuzz round 6: the .npz stored rms_residual = nan (the .json stores null)
+    from centrality_vision.matching import _shape_context
+
+    monkeypatch.setattr(_shape_context, "shape_context_assignment", lambda m, f: (np.full(len(m), -1), {}))
+    np.savetxt(tmp_path / "line.txt", np.c_[np.arange(30.0), np.zeros(30)])
+    np.savetxt(tmp_path / "cloud.txt", np.random.default_rng(0).random((30, 2)))
+    argv = ["match", str(tmp_path / "line.txt"), str(tmp_path / "cloud.txt"), "--method", "shape-context"]
+    assert main([*argv, "--out", str(tmp_path / "m.npz")]) == 0
+    stored = np.load(tmp_path / "m.npz")
+    assert int(stored["n_matched"]) == 0 and "rms_residual" not in stored.files
+    assert all(np.all(np.isfinite(stored[key])) for key in stored.files if stored[key].dtype.kind == "f")
+    err = capsys.readouterr().err
+    assert "paired 0 point" in err and "no RMS residual (no point matched)" in err

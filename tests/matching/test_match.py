@@ -303,3 +303,12 @@ def test_former_names_n_neighbours_and_outlier_weight_still_work_with_a_warning(
     np.testing.assert_array_equal(old.correspondence, new.correspondence)
     with pytest.raises(TypeError, match="`outlier_weight` is the former name of `w`; give `w` only"):
         match(moving, fixed, w=0.2, outlier_weight=0.2)
+
+
+def test_match_results_compare_and_hash_without_raising():
+    # fuzz round 6: == and `in` raised "truth value of an array is ambiguous", hash() TypeError
+    points = np.random.default_rng(5).random((20, 2))
+    a, b = match(points, points), match(points, points)
+    assert a == a and a != b and a in [b, a] and b not in [a]
+    assert len({a, b}) == 2
+    np.testing.assert_array_equal(a.correspondence, b.correspondence)

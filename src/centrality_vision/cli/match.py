@@ -125,7 +125,11 @@ def run(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - started
     say(
         f"matched {int(matched.sum())} of {len(correspondence)} points in {seconds:.2f} s; "
-        f"RMS residual of the matched points under the fitted {args.transform} transform: {rms:.6g}"
+        + (
+            f"RMS residual of the matched points under the fitted {args.transform} transform: {rms:.6g}"
+            if matched.any()
+            else "no RMS residual (no point matched)"
+        )
     )
     transform_parts = transform_record(transform)
     record = {
@@ -146,9 +150,10 @@ def run(args: argparse.Namespace) -> int:
         correspondence=correspondence,
         n_matched=int(matched.sum()),
         moving_transformed=moved,
-        rms_residual=rms,
         seconds=record["seconds"],
     )
+    if matched.any():  # .npz has no null: the key is left out when no point matched (not NaN)
+        arrays["rms_residual"] = rms
     written = write_output(args.out, record, arrays=arrays)
     if args.plot:
         from ..plotting import plot_matching, save_figure

@@ -13,11 +13,12 @@ from ..transforms import SimilarityTransform, least_squares_similarity
 __all__ = ["MatchResult", "Normalised", "normalise", "similarity_to_units", "assign_nearest"]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class MatchResult:
     """Correspondences from ``moving`` to ``fixed`` and the similarity transform they give.
 
-    Unpacks as ``correspondence, transform = match(moving, fixed)``.
+    Unpacks as ``correspondence, transform = match(moving, fixed)``. Two results compare
+    (``==``) and hash by identity; compare their arrays to compare what they hold.
 
     Attributes
     ----------
