@@ -53,7 +53,8 @@ def _renamed(old_value, old: str, new_value, new: str, default):
     """``new_value``, or ``old_value`` given under the parameter's former name (with a FutureWarning)."""
     if old_value is None:
         return new_value
-    if new_value != default:
+    left_at_default = isinstance(new_value, (int, float)) and not isinstance(new_value, bool) and new_value == default
+    if not left_at_default:
         raise TypeError(f"`{old}` is the former name of `{new}`; give `{new}` only; got both.")
     import warnings
 

@@ -192,10 +192,13 @@ def _trimmed_refine(moving, fixed, fixed_tree, rot, t, s, tau, *, scale: bool, u
         rot, t, s = r2, t2, s2
         if done:
             break
-    moved = s * moving @ rot.T + t
-    d, j = fixed_tree.query(moved, distance_upper_bound=tau)
-    score = float(_distinct_score(d[None], j[None], fixed_tree.n, tau)[0])
-    return rot, t, s, score
+    return rot, t, s, _pose_score(moving, fixed_tree, rot, t, s, tau)
+
+
+def _pose_score(moving, fixed_tree, rot, t, s, tau) -> float:
+    """Consensus score (see :func:`_distinct_score`) of one pose."""
+    d, j = fixed_tree.query(s * moving @ rot.T + t, distance_upper_bound=tau)
+    return float(_distinct_score(d[None], j[None], fixed_tree.n, tau)[0])
 
 
 def _global_hypotheses(moving, fixed, *, scale: bool, unit_ratio: float, n_angles: int = 36):
@@ -266,8 +269,7 @@ def robust_pose(
         info.update(similarity_scale=float(s_sim / unit_ratio), similarity_consensus=score_sim)
     if refine == "cpd":
         rot_c, t_c, s_c = _cpd_refine(moving, fixed, rot_b, t_b, s_b, scale=scale, outlier_weight=outlier_weight)
-        d, j = fixed_tree.query(s_c * moving @ rot_c.T + t_c, distance_upper_bound=tau)
-        info["cpd_consensus"] = float(_distinct_score(d[None], j[None], fixed_tree.n, tau)[0])
+        info["cpd_consensus"] = _pose_score(moving, fixed_tree, rot_c, t_c, s_c, tau)
         info["cpd_kept"] = info["cpd_consensus"] >= CPD_KEEPS * score_b
         if info["cpd_kept"]:
             rot_b, t_b, s_b = rot_c, t_c, s_c
