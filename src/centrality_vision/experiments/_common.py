@@ -187,7 +187,9 @@ def save_outputs(out: Path, stem: str, text: str, result) -> None:
     (out / f"{stem}.json").write_text(record + "\n")
 
 
-def _run_stem(name: str, quick: bool) -> str:
+def run_stem(name: str, quick: bool) -> str:
+    """``name``, with ``-quick`` for a quick run: the one rule by which quick and full runs'
+    files (tables, figures, kept units) keep apart in a shared folder."""
     return f"{name}-quick" if quick else name
 
 
@@ -218,13 +220,13 @@ def run_outputs(out: Path, name: str, *, quick: bool):
     >>> outputs_of(out, "fig-0", quick=False) is None  # no full run here
     True
     """
-    stage = out / f".writing-{_run_stem(name, quick)}"
+    stage = out / f".writing-{run_stem(name, quick)}"
     if stage.exists():  # left by a run that was killed
         shutil.rmtree(stage)
     stage.mkdir()
     try:
         yield stage
-        manifest = out / f"{_run_stem(name, quick)}.files.json"
+        manifest = out / f"{run_stem(name, quick)}.files.json"
         manifest.unlink(missing_ok=True)  # never a list that names files of two runs
         names = []
         for path in sorted(stage.iterdir()):
@@ -239,7 +241,7 @@ def run_outputs(out: Path, name: str, *, quick: bool):
 def outputs_of(out, name: str, *, quick: bool) -> list[Path] | None:
     """The tables, results and figures the last quick (or full) run of ``name`` wrote into
     ``out`` (see :func:`run_outputs`), or None when no such run finished there."""
-    manifest = Path(out) / f"{_run_stem(name, quick)}.files.json"
+    manifest = Path(out) / f"{run_stem(name, quick)}.files.json"
     try:
         names = json.loads(manifest.read_text())["files"]
     except (OSError, ValueError, KeyError, TypeError):
@@ -396,7 +398,7 @@ def run_kept_units(units, out, name: str, *, quick: bool, scheduler, workers, pr
 
     with tempfile.TemporaryDirectory() as scratch:
         folder = Path(out) if out is not None else Path(scratch)
-        path = folder / f"{name}{'-quick' if quick else ''}.jsonl"
+        path = folder / f"{run_stem(name, quick)}.jsonl"
         return run_units(units, path, scheduler=scheduler, workers=workers, progress=progress, desc=desc)
 
 

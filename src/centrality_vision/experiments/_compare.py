@@ -151,7 +151,16 @@ def comparison_main(
     ``add_options(parser)`` adds the experiment's own options; ``options(args)`` turns them
     into keyword arguments of ``run`` and ``seed_unit`` (it may raise before anything is written).
     """
-    from ._common import experiment_parser, prepare_out, run_outputs, run_seed_units, save_outputs, seed_list, tally
+    from ._common import (
+        experiment_parser,
+        prepare_out,
+        run_outputs,
+        run_seed_units,
+        run_stem,
+        save_outputs,
+        seed_list,
+        tally,
+    )
 
     parser = experiment_parser(module, doc, name)
     if add_options is not None:
@@ -164,7 +173,7 @@ def comparison_main(
     records = run_seed_units(
         seed_unit,
         seeds,
-        out / f"{name}-seeds{'-quick' if args.quick else ''}.jsonl",
+        out / f"{run_stem(f'{name}-seeds', args.quick)}.jsonl",
         quick=args.quick,
         scheduler=args.scheduler,
         workers=args.workers,

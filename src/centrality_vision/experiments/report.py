@@ -213,10 +213,9 @@ def _result(files: list[Path], name: str):
     return json.loads(records[0].read_text()) if records else None
 
 
-def _explanation(name: str, files: list[Path]) -> str | None:
+def _explanation(name: str, result) -> str | None:
     module = import_module(f"{__package__}.{REGISTRY[name].module}")
     explain = getattr(module, "explain", None)
-    result = _result(files, name)
     if explain is None or result is None:
         return None
     return explain(result)
@@ -241,9 +240,9 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
         command = f"centrality-vision reproduce all{' --quick' if quick else ''} --seed {seed}" + (
             f" --seeds {seeds}" if seeds else ""
         )
+    results = {name: _result(files, name) for name, files in outputs.items()}
     checked = []
-    for name in names:
-        result = _result(outputs.get(name, []), name)
+    for name, result in results.items():
         if isinstance(result, dict) and result.get("seeds"):
             checked.append(f"{name} {len(result['seeds'])}")
     lines = [
@@ -278,7 +277,7 @@ def write_report(out, names, *, quick: bool, seed: int, seeds: int | None = None
         if not outputs[name]:
             lines += [f"**Not run here.** No {'quick' if quick else 'full'} run of {name} finished in `{name}/`.", ""]
             continue
-        text = _explanation(name, outputs[name])
+        text = _explanation(name, results[name])
         if text:
             lines += [f"**What the numbers show.** {text}", ""]
         if name == "table-4.1":

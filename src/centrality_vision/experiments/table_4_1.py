@@ -38,6 +38,7 @@ from ._common import (
     make_out_folder,
     outputs_of,
     run_outputs,
+    run_stem,
     save_outputs,
     scheduler_arg,
 )
@@ -504,7 +505,7 @@ def main(argv=None) -> int:
         run_seed_units(
             seed_unit,
             others,
-            out / f"table-4.1-seeds{'-quick' if args.quick else ''}.jsonl",
+            out / f"{run_stem('table-4.1-seeds', args.quick)}.jsonl",
             quick=args.quick,
             forest=not args.no_forest,
             scaling=args.scaling,
