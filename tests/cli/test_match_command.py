@@ -133,6 +133,9 @@ def test_scale_advice_names_the_transform_option():
     args = parser.parse_args(["m.txt", "f.txt", "--out", "x.json"])
     said = _in_cli_words("not reliable; use `scale=True`. From Python, try this.", parser, args)
     assert said == "not reliable; use --transform similarity."
+    # fuzz round 6: the rigid limit named the library's `scale=False`
+    said = _in_cli_words("`scale=False` needs `moving` and `fixed` of comparable extent.", parser, args)
+    assert said == "--transform rigid needs MOVING (m.txt) and FIXED (f.txt) of comparable extent."
 
 
 def test_no_match_leaves_the_rms_out_of_npz_rather_than_nan(tmp_path, capsys, monkeypatch):

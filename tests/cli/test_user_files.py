@@ -257,6 +257,36 @@ def test_an_unknown_input_kind_names_both_lists(tmp_path, capsys):
     assert "an image (.png" in err and "or a point set (.txt" in err
 
 
+def test_centrality_names_its_input_not_the_library_parameter(tmp_path, capsys):
+    # fuzz round 6: centrality's errors named the library's `points` and `image`, and
+    # said "or None" of --threshold, which the command line cannot pass
+    points = RNG.random((12, 2))
+    np.savetxt(tmp_path / "dup.txt", np.vstack([points, points[:1]]))
+    assert main(["centrality", str(tmp_path / "dup.txt"), "--out", str(tmp_path / "c.json")]) == 2
+    err = capsys.readouterr().err
+    assert f"INPUT ({tmp_path / 'dup.txt'}) must not contain duplicate points" in err and "`" not in err
+    image = np.zeros((20, 20), np.uint8)
+    image[5:15, 5:15] = 200
+    from skimage.io import imsave
+
+    imsave(tmp_path / "shape.png", image, check_contrast=False)
+    for threshold, said in [("300", "in INPUT ("), ("nan", "--threshold must be a finite real number; got nan.")]:
+        argv = ["centrality", str(tmp_path / "shape.png"), "--threshold", threshold, "--out", str(tmp_path / "c.json")]
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert said in err and "`" not in err and "None" not in err
+
+
+@pytest.mark.parametrize("command", ["graph", "centrality", "match", "register", "classify"])
+def test_an_empty_input_path_is_refused_by_name(command, tmp_path, capsys):
+    # fuzz round 6: graph "" read Path(""), the current folder, and said ".: is a folder"
+    argv = [command, ""] + (["x.txt"] if command in ("match", "register") else [])
+    with pytest.raises(SystemExit) as exit_:
+        main([*argv, "--out", str(tmp_path / ("o" if command == "classify" else "o.json"))])
+    assert exit_.value.code == 2
+    assert "expected a file or folder path; got an empty string" in capsys.readouterr().err
+
+
 def test_the_library_does_not_switch_the_backend():
     import pathlib
 

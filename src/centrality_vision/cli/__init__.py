@@ -139,7 +139,9 @@ def _in_cli_words(message: str, parser, args: argparse.Namespace | None = None) 
       settings the command spells otherwise (``match``: ```scale=True``` is
       ``--transform similarity``).
     - An input file's parameter (```moving```) becomes its argument and the file given
-      (``MOVING (scan.ply)``).
+      (``MOVING (scan.ply)``); so do the library names in a command's ``_cli_aliases``
+      (``{library name: argument}``: ```points``` and ```image``` are ``centrality``'s
+      INPUT).
     - A sentence that starts "From Python, " is advice only a Python caller can follow
       (``moving_graph``, say), and is left out.
     """
@@ -147,6 +149,7 @@ def _in_cli_words(message: str, parser, args: argparse.Namespace | None = None) 
         return message
     for phrase, replacement in getattr(args, "_cli_phrases", {}).items():
         message = message.replace(phrase, replacement)
+    aliases = getattr(args, "_cli_aliases", {})
     for action in parser._actions:
         longs = [option for option in action.option_strings if option.startswith("--")]
         if longs:
@@ -159,7 +162,8 @@ def _in_cli_words(message: str, parser, args: argparse.Namespace | None = None) 
             message = message.replace(f"`{action.dest}`", longs[0])
         elif not action.option_strings and isinstance(getattr(args, action.dest, None), str):
             metavar = action.metavar or action.dest.upper()
-            message = message.replace(f"`{action.dest}`", f"{metavar} ({getattr(args, action.dest)})")
+            for name in (action.dest, *(name for name, dest in aliases.items() if dest == action.dest)):
+                message = message.replace(f"`{name}`", f"{metavar} ({getattr(args, action.dest)})")
     sentences = re.split(r"(?<=[.!?])\s+(?=[A-Z(])", message)
     return " ".join(sentence for sentence in sentences if not sentence.startswith("From Python, "))
 

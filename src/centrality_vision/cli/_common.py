@@ -244,6 +244,14 @@ def add_seed(parser: argparse.ArgumentParser, what: str) -> None:
     )
 
 
+def in_path(text: str) -> str:
+    """A positional input path: refused by argparse when empty (``Path("")`` is the
+    current folder, which the readers then reported as ".: is a folder")."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError("expected a file or folder path; got an empty string")
+    return text
+
+
 def _column_list(text: str) -> str:
     """--columns: comma-separated names or indices, none of them empty (checked by argparse)."""
     if not text.strip() or any(not item.strip() for item in text.split(",")):

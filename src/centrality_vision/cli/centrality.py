@@ -17,6 +17,7 @@ from ._common import (
     add_progress,
     data_graph,
     given,
+    in_path,
     options,
     progress_on,
     pyplot,
@@ -50,7 +51,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         example="centrality-vision centrality fish.txt --measure closeness --out fish_closeness.csv\n"
         "centrality-vision centrality cow1.png --measure all --out cow1.json --plot cow1.png",
     )
-    parser.add_argument("input", metavar="INPUT", help="point-set file or image")
+    parser.add_argument("input", type=in_path, metavar="INPUT", help="point-set file or image")
     parser.add_argument(
         "--measure",
         choices=CENTRALITY_NAMES + ("all",),
@@ -100,7 +101,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "values span orders of magnitude, linear for the others (default: %(default)s)",
     )
     add_progress(parser)
-    parser.set_defaults(run=run, _parser=parser)
+    parser.set_defaults(
+        run=run,
+        _parser=parser,
+        # the library's names for INPUT, and its wording for an unset --threshold
+        _cli_aliases={"points": "input", "image": "input"},
+        _cli_phrases={"a finite real number or None": "a finite real number"},
+    )
     return parser
 
 

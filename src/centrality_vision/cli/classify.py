@@ -14,6 +14,7 @@ from ._common import (
     add_plot,
     add_progress,
     add_seed,
+    in_path,
     number,
     options,
     progress_on,
@@ -46,7 +47,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         example="centrality-vision classify kimia99/ --labels kimia99/labels.csv --centrality closeness \\\n"
         "    --classifier svm --out kimia.json --plot kimia_confusion.png",
     )
-    parser.add_argument("images_dir", metavar="IMAGES_DIR", help="folder of silhouette images")
+    parser.add_argument("images_dir", type=in_path, metavar="IMAGES_DIR", help="folder of silhouette images")
     parser.add_argument("--labels", metavar="FILE.csv", help="CSV with columns file,label (instead of the file names)")
     parser.add_argument(
         "--centrality",

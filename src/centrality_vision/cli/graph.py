@@ -16,6 +16,7 @@ from ._common import (
     add_progress,
     data_graph,
     edge_list,
+    in_path,
     options,
     progress_on,
     pyplot,
@@ -42,7 +43,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "mwme and mstme are the thesis' maximum-entropy graphs (ch. 6, 7).",
         example="centrality-vision graph fish.txt --kind delaunay --out fish_delaunay.json --plot fish.png",
     )
-    parser.add_argument("points", metavar="POINTS", help="point-set file")
+    parser.add_argument("points", type=in_path, metavar="POINTS", help="point-set file")
     add_point_options(parser)
     add_graph_options(parser, "--kind", help_text="which graph")
     add_out(parser, ".json", ".npz", ".csv")

@@ -11,6 +11,7 @@ from ._common import (
     add_out,
     add_plot,
     add_point_options,
+    in_path,
     options,
     pyplot,
     read_point_file,
@@ -46,8 +47,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "truly belong to gets that one (several may share it); judge by the transform.",
         example="centrality-vision match moving.txt fixed.txt --method robust --out matching.json --plot matching.png",
     )
-    parser.add_argument("moving", metavar="MOVING", help="point-set file")
-    parser.add_argument("fixed", metavar="FIXED", help="point-set file (same size for --method mwme)")
+    parser.add_argument("moving", type=in_path, metavar="MOVING", help="point-set file")
+    parser.add_argument("fixed", type=in_path, metavar="FIXED", help="point-set file (same size for --method mwme)")
     add_point_options(parser)
     parser.add_argument("--method", choices=METHODS, default="robust", help="matching method (default: %(default)s)")
     parser.add_argument(
@@ -73,6 +74,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     # the library's advice in this command's options
     phrases = {
         "`scale=True`": "--transform similarity",
+        "`scale=False`": "--transform rigid",
         "`method='local'`": "--mwme-method local",
         "`method='exact'`": "--mwme-method exact",
     }

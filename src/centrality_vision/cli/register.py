@@ -17,6 +17,7 @@ from ._common import (
     add_progress,
     add_seed,
     given,
+    in_path,
     number,
     options,
     progress_on,
@@ -63,8 +64,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "centrality-vision register scan.ply model.ply --method cpd --transform rigid --init global \\\n"
         "    --w auto --out aligned.ply",
     )
-    parser.add_argument("moving", metavar="MOVING", help="point set to move")
-    parser.add_argument("fixed", metavar="FIXED", help="point set to align onto")
+    parser.add_argument("moving", type=in_path, metavar="MOVING", help="point set to move")
+    parser.add_argument("fixed", type=in_path, metavar="FIXED", help="point set to align onto")
     add_point_options(parser)
     parser.add_argument(
         "--method", choices=("cpd", "gpd", "icp"), default="cpd", help="registration method (default: %(default)s)"
