@@ -429,6 +429,13 @@ def check_int(value, *, name: str, low: int | None = None, high: int | None = No
     return value
 
 
+def shown_bound(value: float) -> str:
+    """A range's end as a reader writes it: 0, 1e+06, 4294967295 (not 0.0, 1000000.0 or
+    4.29497e+09)."""
+    short = f"{value:g}"
+    return short if float(short) == value else repr(value)
+
+
 def check_float(
     value,
     *,
@@ -454,7 +461,7 @@ def check_float(
     if bad:
         lb = "(" if low_open else "["
         rb = ")" if high_open else "]"
-        lo = "-inf" if low is None else low
-        hi = "inf" if high is None else high
+        lo = "-inf" if low is None else shown_bound(low)
+        hi = "inf" if high is None else shown_bound(high)
         raise InputError(f"`{name}` must be a finite number in {lb}{lo}, {hi}{rb}; got {shown or repr(value)}.")
     return value

@@ -548,9 +548,25 @@ def test_choice_lists_match_the_library():
     assert set(cli.GPD_GRAPHS) == set(GRAPHS) - {"edgeless"}
     from centrality_vision.cli import _common
     from centrality_vision.registration._cpd import KERNEL_RANGE
+    from centrality_vision.graphs._entropy import LAM_MAX
     from centrality_vision.shapes._histogram import MAX_BINS
 
-    assert _common.MAX_BINS == MAX_BINS and _common.KERNEL_RANGE == KERNEL_RANGE
+    assert _common.MAX_BINS == MAX_BINS and _common.KERNEL_RANGE == KERNEL_RANGE and _common.LAM_MAX == LAM_MAX
+
+
+def test_option_ranges_are_the_library_ranges(tmp_path, capsys):
+    # fuzz round 6: --lam was checked against [0, inf) and then failed in the library at
+    # 1e308; w's message gave [0.0, 1.0] for the range [0, 1)
+    np.savetxt(tmp_path / "p.txt", np.random.default_rng(0).random((8, 2)))
+    with pytest.raises(SystemExit):
+        main(["graph", str(tmp_path / "p.txt"), "--kind", "mstme", "--lam", "1e308", "--out", str(tmp_path / "g.json")])
+    assert "--lam: must be in [0, 1e+300]; got 1e308" in capsys.readouterr().err
+    from centrality_vision.matching import match
+
+    with pytest.raises(ValueError, match=r"`w` must be a finite number in \[0, 1\); got 1\.0"):
+        match(np.eye(3), np.eye(3), w=1.0)
+    with pytest.raises(ValueError, match=r"`w` must be a finite number in \[0, 1\); got 5\.0"):
+        match(np.eye(3), np.eye(3), w=np.uint8(5))
 
 
 def test_reproduce_runs_an_experiment_and_resumes_with_a_scheduler(tmp_path, capsys):

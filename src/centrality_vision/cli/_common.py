@@ -42,9 +42,10 @@ GPD_GRAPHS = ("delaunay", "gabriel", "emst", "knn", "complete")
 CENTRALITY_NAMES = ("degree", "betweenness", "closeness", "harmonic", "eigenvector", "eccentricity", "pagerank", "katz")
 FIGURE_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 # Bounds spelled out for the same reason, checked against centrality_vision.shapes' MAX_BINS
-# and NonRigidCPD's KERNEL_RANGE (its beta and lam)
+# and NonRigidCPD's KERNEL_RANGE (its beta and lam), and mstme_graph's largest lam
 MAX_BINS = 100_000
 KERNEL_RANGE = (1e-150, 1e150)
+LAM_MAX = 1e300
 POINT_FILES = ".csv, .txt, .xyz, .npy, .mat, .ply, .pcd or .obj"
 
 
@@ -119,9 +120,11 @@ def number(kind, *, low=None, low_open=False, high=None, high_open=False):
         too_low = low is not None and (value <= low if low_open else value < low)
         too_high = high is not None and (value >= high if high_open else value > high)
         if too_low or too_high:
+            from .._validation import shown_bound
+
             left = "(" if low_open or low is None else "["  # an infinite end is open
             right = ")" if high_open or high is None else "]"
-            span = f"{left}{'-inf' if low is None else low}, {'inf' if high is None else high}{right}"
+            span = f"{left}{'-inf' if low is None else shown_bound(low)}, {'inf' if high is None else shown_bound(high)}{right}"
             raise argparse.ArgumentTypeError(f"must be in {span}; got {text}")
         return value
 
@@ -386,7 +389,7 @@ def add_graph_options(parser: argparse.ArgumentParser, flag: str, *, help_text: 
     )
     parser.add_argument(
         "--lam",
-        type=number(float, low=0),
+        type=number(float, low=0, high=LAM_MAX),
         default=1.0,  # mstme_graph's default (a test holds them equal)
         help="weight of the degree entropy for the mstme graph; 0 gives the EMST (default: %(default)s)",
     )

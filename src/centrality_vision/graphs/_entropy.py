@@ -29,7 +29,7 @@ from . import _entropy_kernels as _k
 from ._pointsets import edges_to_graph
 
 # mstme_graph's largest lam: lam times an entropy of 64 bits (n < 2^64) stays finite
-_LAM_MAX = 1e300
+LAM_MAX = 1e300
 
 __all__ = ["nhdd_joining", "nhdd_graph", "MWMEResult", "mwme_graph", "mwme_degrees", "MSTMEResult", "mstme_graph"]
 
@@ -472,7 +472,7 @@ def mstme_graph(
     """
     from scipy.sparse.csgraph import minimum_spanning_tree
 
-    lam = check_float(lam, name="lam", low=0.0, high=_LAM_MAX)
+    lam = check_float(lam, name="lam", low=0.0, high=LAM_MAX)
     method = check_choice(method, ("greedy", "exchange"), name="method")
     max_passes = check_int(max_passes, name="max_passes", low=1)
     normalize = _normalization(normalize)

@@ -165,9 +165,7 @@ def match(
     n_neighbors = check_int(n_neighbors, name="n_neighbors", low=3, high=19)
     n_candidates = check_int(n_candidates, name="n_candidates", low=1)
     refine = check_choice(refine, ("icp", "cpd"), name="refine")
-    w = check_float(w, name="w", low=0.0, high=1.0)
-    if w >= 1.0:
-        raise InputError(f"`w` must be in [0, 1); got {w!r}.")
+    w = check_float(w, name="w", low=0.0, high=1.0, high_open=True)
     if method == "mwme":
         from ..graphs._entropy import MAX_EXACT
         from ._mwme import mwme_match
