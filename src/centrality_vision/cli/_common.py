@@ -124,7 +124,8 @@ def number(kind, *, low=None, low_open=False, high=None, high_open=False):
 
             left = "(" if low_open or low is None else "["  # an infinite end is open
             right = ")" if high_open or high is None else "]"
-            span = f"{left}{'-inf' if low is None else shown_bound(low)}, {'inf' if high is None else shown_bound(high)}{right}"
+            ends = ("-inf" if low is None else shown_bound(low), "inf" if high is None else shown_bound(high))
+            span = f"{left}{ends[0]}, {ends[1]}{right}"
             raise argparse.ArgumentTypeError(f"must be in {span}; got {text}")
         return value
 
