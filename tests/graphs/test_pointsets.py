@@ -198,10 +198,9 @@ def test_input_not_modified():
 @pytest.mark.parametrize(
     ("points", "match"),
     [
-        ([[0, 0], [1, 1]], "at least 3 points"),
+        ([[0, 0]], "at least [23] points"),
         ([[0, 0], [1, 1], [np.nan, 2]], "finite"),
         ([[0, 0], [1, 1], [1, 1], [0, 1]], "duplicate"),
-        ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], "at least 4 points in 3D"),
         (np.zeros((5, 4)), r"shape \(n_points, 2 or 3\)"),
         (np.zeros(5), "shape"),
     ],
@@ -209,6 +208,26 @@ def test_input_not_modified():
 def test_bad_point_sets(builder, points, match):
     with pytest.raises(ValueError, match=match):
         builder(points)
+
+
+@pytest.mark.parametrize(
+    ("points", "match"),
+    [([[0, 0], [1, 1]], "at least 3 points"), ([[0, 0, 0], [1, 0, 0], [0, 1, 0]], "at least 4 points in 3D")],
+)
+def test_a_triangulation_needs_one_point_more_than_the_dimension(points, match):
+    with pytest.raises(ValueError, match=match):
+        delaunay_graph(points)
+
+
+@pytest.mark.parametrize("builder", [gabriel_graph, emst_graph])
+def test_gabriel_graph_and_emst_of_two_points_and_of_a_3d_triangle(builder):
+    # fuzz round 6 (L9): the EMST of two points, their one edge, was refused as "at least
+    # 3 points"; so was a triangle in 3D (at least 4), although both graphs take flat sets
+    for points in ([[0.0, 0.0], [3.0, 4.0]], [[0.0, 0.0, 0.0], [3.0, 4.0, 0.0]]):
+        np.testing.assert_array_equal(builder(points).toarray(), [[0, 5], [5, 0]])
+    triangle = np.array([[0.0, 0.0, 1.0], [4.0, 0.0, 1.0], [0.0, 3.0, 1.0]])  # right angle at node 0
+    edges = {(int(i), int(j)) for i, j in zip(*sparse.triu(builder(triangle)).nonzero())}
+    assert edges == {(0, 1), (0, 2)}  # the hypotenuse's circle holds node 0; it is also the longest
 
 
 @pytest.mark.parametrize(

@@ -112,10 +112,11 @@ def _lengths(points: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return _scaled_lengths(_robust_norms(unit[lo] - unit[hi]), scale)
 
 
-def _triangulable_points(points) -> np.ndarray:
-    """Validated float64 points for a Delaunay-based graph: 2D or 3D, D+1 or more, distinct."""
-    points = as_points(points, name="points", n_dims=(2, 3), min_points=3, allow_duplicates=False)
-    if points.shape[0] < points.shape[1] + 1:
+def _triangulable_points(points, *, flat: bool = False) -> np.ndarray:
+    """Validated float64 points for a Delaunay-based graph: 2D or 3D, D+1 or more, distinct;
+    with ``flat`` (graphs that take points on a line or a plane), 2 or more."""
+    points = as_points(points, name="points", n_dims=(2, 3), min_points=2 if flat else 3, allow_duplicates=False)
+    if not flat and points.shape[0] < points.shape[1] + 1:
         raise InputError(
             f"`points` must have at least {points.shape[1] + 1} points in {points.shape[1]}D; got {points.shape[0]}."
         )
@@ -260,9 +261,10 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     Parameters
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
-        As for :func:`delaunay_graph`, except that points on a line, or in 3D on a plane
-        (to within 1e-12 of their extent), are accepted: for points exactly on a line the
-        graph is the path along it; within the plane, the Gabriel graph there.
+        At least 2 distinct points. As for :func:`delaunay_graph`, except that points on
+        a line, or in 3D on a plane (to within 1e-12 of their extent), are accepted (so 2
+        points, and 3 in 3D): for points exactly on a line the graph is the path along it;
+        within the plane, the Gabriel graph there.
 
     Returns
     -------
@@ -279,7 +281,7 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     >>> gabriel_graph([[0, 0], [2, 0], [1, 0.2]]).nnz // 2  # Delaunay has 3 edges
     2
     """
-    points = _triangulable_points(points)
+    points = _triangulable_points(points, flat=True)
     rows, cols = _gabriel_candidates(points)
     keep = _gabriel_mask(points, rows, cols)
     # Within the data's precision a point beside an end point can sit "on" the circles of
@@ -377,9 +379,9 @@ def emst_graph(points, /) -> sparse.csr_array:
     Parameters
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
-        As for :func:`delaunay_graph`, except that points on a line, or in 3D on a plane
-        (to within 1e-12 of their extent), are accepted: for points exactly on a line the
-        tree is the path along it (a cluster across the line below the coordinates'
+        At least 2 distinct points. As for :func:`delaunay_graph`, except that points on
+        a line, or in 3D on a plane (to within 1e-12 of their extent), are accepted (so 2
+        points, and 3 in 3D): for points exactly on a line the tree is the path along it (a cluster across the line below the coordinates'
         precision is joined by its own tree); on a plane, the tree within it.
 
     Returns
@@ -393,7 +395,7 @@ def emst_graph(points, /) -> sparse.csr_array:
     >>> tree.nnz // 2, round(float(tree.sum()) / 2, 3)  # 1 + 2 + sqrt(10)
     (3, 6.162)
     """
-    points = _triangulable_points(points)
+    points = _triangulable_points(points, flat=True)
     rows, cols = _gabriel_candidates(points)
     tree = _spanning_tree(edges_to_graph(points.shape[0], rows, cols, points))
     return edges_to_graph(points.shape[0], tree.row, tree.col, lengths=tree.data)
