@@ -271,8 +271,8 @@ def add_point_options(parser: argparse.ArgumentParser) -> None:
         "--columns",
         type=_column_list,
         metavar="COLS",
-        help="coordinate columns of text, PLY and PCD files, by name or 0-based index, e.g. x,y,z or 1,2 "
-        "(default: the columns named x, y[, z], else all columns but an index column)",
+        help="coordinate columns of the point file, by 0-based index (any format) or by name (text with a header, "
+        "PLY, PCD), e.g. x,y,z or 1,2 (default: the columns named x, y[, z], else all columns but an index column)",
     )
     parser.add_argument(
         "--variable", metavar="NAME", help="the array to read from .mat files (default: the only 2D array)"
