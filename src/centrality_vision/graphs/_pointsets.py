@@ -381,8 +381,9 @@ def emst_graph(points, /) -> sparse.csr_array:
     points : array_like of shape (n_points, 2) or (n_points, 3)
         At least 2 distinct points. As for :func:`delaunay_graph`, except that points on
         a line, or in 3D on a plane (to within 1e-12 of their extent), are accepted (so 2
-        points, and 3 in 3D): for points exactly on a line the tree is the path along it (a cluster across the line below the coordinates'
-        precision is joined by its own tree); on a plane, the tree within it.
+        points, and 3 in 3D): for points exactly on a line the tree is the path along it
+        (a cluster across the line below the coordinates' precision is joined by its own
+        tree); on a plane, the tree within it.
 
     Returns
     -------
