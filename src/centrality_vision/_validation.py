@@ -44,6 +44,13 @@ def _describe(value) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+def is_real_dtype(dtype, *, bool_ok: bool = True) -> bool:
+    """Whether values of ``dtype`` are real numbers: integers and floats, and booleans
+    where ``bool_ok``; not complex numbers, durations (timedelta64 counts as a numpy
+    number), dates, text or objects."""
+    return np.dtype(dtype).kind in ("biuf" if bool_ok else "iuf")
+
+
 def as_real_array(value, *, name: str, shape: str = "an array") -> np.ndarray:
     """``value`` as a numpy array of real numbers (not copied; any shape).
 
@@ -58,10 +65,10 @@ def as_real_array(value, *, name: str, shape: str = "an array") -> np.ndarray:
         arr = np.asarray(value)
     except (TypeError, ValueError) as exc:  # ragged nested lists
         raise InputError(f"`{name}` must be {shape}; got {_describe(value)} ({exc}).") from None
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
-        raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
     if np.iscomplexobj(arr):
         raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
+    if not is_real_dtype(arr.dtype):
+        raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
     return arr
 
 
@@ -321,10 +328,10 @@ def as_binary_image(
     if not isinstance(foreground, str) or foreground not in FOREGROUNDS:
         raise InputError(f"`foreground` must be one of {', '.join(map(repr, FOREGROUNDS))}; got {foreground!r}.")
     arr = np.asarray(image)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
-        raise TypeError(f"`{name}` must be a numeric or boolean 2D array; got {_describe(arr)}.")
     if np.iscomplexobj(arr):
         raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
+    if not is_real_dtype(arr.dtype):
+        raise TypeError(f"`{name}` must be a numeric or boolean 2D array; got {_describe(arr)}.")
     if arr.ndim != 2:
         raise InputError(f"`{name}` must be a 2D array; got shape {arr.shape}.")
     if arr.size == 0:

@@ -15,7 +15,16 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import sparse
 
-from ._validation import _describe, as_graph, as_points, check_bool, check_float, check_int, nearest_existing
+from ._validation import (
+    _describe,
+    as_graph,
+    as_points,
+    check_bool,
+    check_float,
+    check_int,
+    is_real_dtype,
+    nearest_existing,
+)
 from .exceptions import InputError
 
 __all__ = [
@@ -151,10 +160,10 @@ def _as_values(values, *, n: int, other: str, name: str = "values") -> np.ndarra
         arr = np.asarray(values)
     except (TypeError, ValueError):  # ragged nested lists: numpy's "inhomogeneous shape"
         raise InputError(f"`{name}` must be an array of shape ({n},); got {_describe(values)}.") from None
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
-        raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
     if np.iscomplexobj(arr):
         raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
+    if not is_real_dtype(arr.dtype):
+        raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
     if arr.shape != (n,):
         raise InputError(f"`{name}` must have shape ({n},), one value per row of `{other}`; got shape {arr.shape}.")
     arr = arr.astype(np.float64)  # always a copy

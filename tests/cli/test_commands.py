@@ -547,8 +547,8 @@ def test_choice_lists_match_the_library():
     assert cli.CENTRALITY_NAMES == tuple(CENTRALITIES)
     assert set(cli.GPD_GRAPHS) == set(GRAPHS) - {"edgeless"}
     from centrality_vision.cli import _common
-    from centrality_vision.registration._cpd import KERNEL_RANGE
     from centrality_vision.graphs._entropy import LAM_MAX
+    from centrality_vision.registration._cpd import KERNEL_RANGE
     from centrality_vision.shapes._histogram import MAX_BINS
 
     assert _common.MAX_BINS == MAX_BINS and _common.KERNEL_RANGE == KERNEL_RANGE and _common.LAM_MAX == LAM_MAX

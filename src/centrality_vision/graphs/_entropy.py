@@ -23,7 +23,7 @@ from scipy import sparse
 from scipy.spatial.distance import pdist, squareform
 
 from .._parallel import run_chunks
-from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
+from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int, is_real_dtype
 from ..exceptions import InputError
 from . import _entropy_kernels as _k
 from ._pointsets import edges_to_graph
@@ -179,7 +179,7 @@ def _precomputed(distances) -> _Distances:
         arr = np.asarray(distances)
     except (TypeError, ValueError) as exc:
         raise InputError(f"`points` (metric='precomputed') must be a square distance matrix; got {exc}.") from None
-    if arr.dtype == object or np.iscomplexobj(arr) or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool):
+    if not is_real_dtype(arr.dtype):
         raise TypeError(f"`points` (metric='precomputed') must hold real numbers; got dtype {arr.dtype}.")
     arr = np.array(arr, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.shape[0] < 3:

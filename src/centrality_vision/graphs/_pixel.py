@@ -9,7 +9,7 @@ from numba import njit
 from scipy import sparse
 
 from .._seeding import as_generator
-from .._validation import as_binary_image, check_float
+from .._validation import as_binary_image, check_float, is_real_dtype
 from ..exceptions import InputError
 from ._pointsets import _robust_norms
 
@@ -118,7 +118,7 @@ def _csr_is_grid(indptr, indices, data, raster, node_of, offs, lengths):
 def _volume_mask(image, threshold) -> np.ndarray:
     """Boolean mask of a 3D image: a boolean or 0/1 array, or ``image > threshold``."""
     arr = np.asarray(image)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+    if not is_real_dtype(arr.dtype):
         raise TypeError(f"`image` must be a real numeric or boolean array; got dtype {arr.dtype}.")
     if arr.size == 0:
         raise InputError(f"`image` must not be empty; got shape {arr.shape}.")

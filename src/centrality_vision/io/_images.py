@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import as_binary_image
+from .._validation import as_binary_image, is_real_dtype
 from ..exceptions import InputError
 from ._points import _existing_file, _first_line
 
@@ -66,10 +66,10 @@ def read_image(path, /) -> np.ndarray:
         kind = path.suffix.lower().lstrip(".").upper()
         raise InputError(f"{path}: not a readable {kind} image ({type(exc).__name__}: {_first_line(exc)}).") from None
     kind = path.suffix.lower().lstrip(".").upper()
-    if pixels.dtype == object or not (np.issubdtype(pixels.dtype, np.number) or pixels.dtype == bool):
-        raise InputError(f"{path}: not a readable {kind} image (pixel type {pixels.dtype}).")
     if np.iscomplexobj(pixels):  # a grey value has no imaginary part to drop silently
         raise InputError(f"{path}: the image has complex pixels ({pixels.dtype}); expected real grey or colour values.")
+    if not is_real_dtype(pixels.dtype):
+        raise InputError(f"{path}: not a readable {kind} image (pixel type {pixels.dtype}).")
     if pixels.size == 0:
         raise InputError(f"{path}: not a readable {kind} image (it decodes to no pixels, shape {pixels.shape}).")
     stacked = pixels.ndim == 4 or (pixels.ndim == 3 and pixels.shape[2] not in (1, 2, 3, 4))

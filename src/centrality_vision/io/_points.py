@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import _describe, check_bool
+from .._validation import _describe, check_bool, is_real_dtype
 from ..exceptions import InputError
 
 __all__ = ["POINT_SUFFIXES", "WRITE_SUFFIXES", "read_points", "write_points"]
@@ -86,7 +86,8 @@ def read_points(
         A MATLAB file up to v7 (v7.3 is HDF5 and refused). Level-5 files (MATLAB 5 to
         7) are parsed here, every byte count checked, because :func:`scipy.io.loadmat`
         can crash the interpreter on a damaged one; level-4 files are read by
-        :func:`scipy.io.loadmat`. Real numeric and logical 2D arrays are candidates;
+        :func:`scipy.io.loadmat`. Real numeric 2D arrays are candidates (logical ones,
+        masks, are not coordinates);
         ``variable`` names the array, needed only when the file holds more than one.
     ``.ply``
         The vertex element of an ASCII or binary PLY file (both parsed here); its scalar
@@ -402,10 +403,12 @@ def _read_npy(path: Path) -> _Table:
         except Exception as exc:  # ValueError, EOFError, SyntaxError, tokenize.TokenError, ...
             raise InputError(f"{path}: not a readable .npy array ({_first_line(exc)}).") from None
         offset = handle.tell()
-    if dtype.hasobject or not (np.issubdtype(dtype, np.number) or dtype.kind == "b"):
-        raise InputError(f"{path}: must hold a numeric array; got dtype {dtype}.")
+    if dtype.kind == "b":  # as the API refuses boolean coordinates
+        raise InputError(f"{path}: must hold coordinates (real numbers); got dtype bool (a mask?).")
     if np.issubdtype(dtype, np.complexfloating):
         raise InputError(f"{path}: must hold real numbers; got dtype {dtype}.")
+    if not is_real_dtype(dtype):
+        raise InputError(f"{path}: must hold a numeric array; got dtype {dtype}.")
     if len(shape) != 2:
         raise InputError(f"{path}: must hold a 2D array (one point per row); got shape {shape}.")
     needed = math.prod(shape) * dtype.itemsize
@@ -426,7 +429,7 @@ def _read_npy(path: Path) -> _Table:
 # compiled reader trusts the byte counts and flags of a file, so a damaged one (a complex
 # flag with no imaginary part, an unknown data type, a count past the end) crashes the
 # interpreter; about one in 300 random byte edits of a small file did. This reader takes
-# what read_points needs (real numeric and logical arrays), names every other variable,
+# what read_points needs (real numeric arrays), names every other variable,
 # and checks every count against the bytes there are. Level 4 files go to loadmat, whose
 # level-4 reader is plain Python.
 
@@ -562,7 +565,7 @@ class _Mat5:
                 values = np.frombuffer(buffer, self.order + _MI_NUMERIC[kind], n_values, start).reshape(
                     shape, order="F"
                 )
-                return _MatVariable(name, what, values != 0 if logical else values.astype(np.float64))
+                return _MatVariable(name, what, None if logical else values.astype(np.float64))
         return _MatVariable(name, what, None)
 
     def name(self, buffer: bytes, kind: int, start: int, size: int, where: str) -> str:
@@ -594,8 +597,8 @@ def _read_mat(path: Path, variable: str | None) -> _Table:
         found = {}
         for key, value in contents.items():
             if not key.startswith("__"):
-                readable = isinstance(value, np.ndarray) and value.ndim == 2 and not np.iscomplexobj(value)
-                readable = readable and (np.issubdtype(value.dtype, np.number) or value.dtype == bool)
+                readable = isinstance(value, np.ndarray) and value.ndim == 2
+                readable = readable and is_real_dtype(value.dtype, bool_ok=False)
                 found[key] = _MatVariable(key, _describe(value), value if readable else None)
     arrays = {name: v.values for name, v in found.items() if v.values is not None}
     if variable is not None:
@@ -988,7 +991,7 @@ def write_points(path, points, /) -> Path:
     if suffix not in WRITE_SUFFIXES:
         raise InputError(f"`path` must end in one of {', '.join(WRITE_SUFFIXES)}; got {str(path)!r}.")
     arr = np.asarray(points)
-    if arr.dtype == object or not (np.issubdtype(arr.dtype, np.number) or arr.dtype == bool) or np.iscomplexobj(arr):
+    if not is_real_dtype(arr.dtype):
         raise TypeError(f"`points` must be a real numeric array; got {_describe(arr)}.")
     if arr.ndim != 2 or arr.shape[1] < 1:
         raise InputError(f"`points` must have shape (n_points, n_dims); got shape {arr.shape}.")

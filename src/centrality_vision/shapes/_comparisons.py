@@ -9,7 +9,7 @@ from scipy import ndimage
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 
 from .._seeding import as_generator
-from .._validation import check_choice, check_float, check_int
+from .._validation import check_choice, check_float, check_int, is_real_dtype
 from ..exceptions import InputError
 from ._histogram import ShapeInputMixin, resolve_centralities
 
@@ -23,7 +23,7 @@ def _check_map_inputs(mask, values, nodes):
     values = np.asarray(values)
     nodes = np.asarray(nodes)
     n = int(np.count_nonzero(mask))
-    if not np.issubdtype(values.dtype, np.number) or np.iscomplexobj(values):
+    if not is_real_dtype(values.dtype, bool_ok=False):
         raise TypeError(f"`values` must hold real numbers; got dtype {values.dtype}.")
     if values.shape != (n,):
         raise InputError(
