@@ -88,3 +88,20 @@ def test_job_counts_and_resolutions_beyond_c_and_memory_are_named():
         pairwise_shape_distances([SQUARE, SQUARE], n_points=8, resolution=8, n_jobs=10**20)  # OverflowError
     with pytest.raises(ValueError, match=r"`resolution` must be an int in \[1, 32768\]"):
         normalize_shape(SQUARE, resolution=10**12)  # numpy's "array is too big"
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda bad: graphs.delaunay_graph(bad),
+        lambda bad: mwme_graph(bad),
+        lambda bad: pixel_graph(np.tile(bad[:, :1], (1, 6))),
+        lambda bad: __import__("centrality_vision.matching", fromlist=["match"]).match(bad, POINTS),
+    ],
+)
+def test_durations_are_not_coordinates_or_pixel_values(call):
+    # fuzz round 6 (L7): numpy counts timedelta64 as a number, so durations were read as
+    # coordinates (datetime64 was refused)
+    durations = (POINTS * 1000).astype("m8[ms]")
+    with pytest.raises(TypeError, match=r"`(points|image|moving)` must .*timedelta64"):
+        call(durations)

@@ -166,7 +166,7 @@ def test_mat_written_by_scipy_with_a_named_variable(tmp_path):
 
 # Level-5 MAT files are parsed by centrality-vision itself (scipy's loadmat can crash on a
 # damaged file), so each array must come back exactly as loadmat reads it.
-_MAT_DTYPES = ["f8", "f4", "i1", "u1", "i2", "u2", "i4", "u4", "i8", "u8", "bool"]
+_MAT_DTYPES = ["f8", "f4", "i1", "u1", "i2", "u2", "i4", "u4", "i8", "u8"]
 
 
 @settings(max_examples=60, deadline=None)
@@ -184,13 +184,11 @@ def test_mat_arrays_of_every_type_read_as_loadmat_reads_them(tmp_path_factory, d
     elements = (
         st.integers(int(info.min), int(info.max))
         if info
-        else st.booleans()
-        if dtype == "bool"
         else st.floats(width=32 if dtype == "f4" else 64, allow_nan=False, allow_infinity=False)
     )
     points = data.draw(arrays(np.dtype(dtype), (n_rows, n_dims), elements=elements))
     others = {"note": "fish", "cell": np.array([np.ones(2), "ab"], dtype=object), "st": {"x": np.ones((2, 2))}}
-    others |= {"cube": np.ones((2, 2, 2)), "z": np.array([[1 + 2j]])}  # not 2D real: not candidates
+    others |= {"cube": np.ones((2, 2, 2)), "z": np.array([[1 + 2j]]), "mask": np.eye(2, dtype=bool)}  # not candidates
     path = tmp_path_factory.mktemp("mat") / "p.mat"
     savemat(path, {"P": points, **others}, do_compression=compressed)
     read = read_points(path)
@@ -206,6 +204,7 @@ def test_mat_arrays_of_every_type_read_as_loadmat_reads_them(tmp_path_factory, d
         ("st", "a MATLAB struct of shape \\(1, 1\\)"),
         ("cube", "a MATLAB double array of shape \\(2, 2, 2\\)"),
         ("z", "a MATLAB complex double array of shape \\(1, 1\\)"),
+        ("mask", "a MATLAB logical array of shape \\(2, 2\\)"),  # a mask, not coordinates (as in the API)
     ],
 )
 def test_a_mat_variable_that_is_not_a_2d_real_array_is_named_in_the_error(tmp_path, variable, what):
@@ -213,6 +212,7 @@ def test_a_mat_variable_that_is_not_a_2d_real_array_is_named_in_the_error(tmp_pa
 
     contents = {"P": FLAT, "note": "fish", "cell": np.array([np.ones(2), "ab"], dtype=object)}
     contents |= {"st": {"x": np.ones((2, 2))}, "cube": np.ones((2, 2, 2)), "z": np.array([[1 + 2j]])}
+    contents |= {"mask": np.eye(2, dtype=bool)}
     savemat(tmp_path / "p.mat", contents)
     with pytest.raises(InputError, match=f"variable '{variable}' must be a 2D real numeric array; got {what}"):
         read_points(tmp_path / "p.mat", variable=variable)
@@ -244,12 +244,13 @@ def test_mat_files_written_by_matlab_read_as_loadmat_reads_them():
                 reference = loadmat(path)
         except Exception:  # a file scipy's own tests expect to fail
             continue
-        ours = {v.name: v.values for v in _Mat5(path, path.read_bytes()).variables() if v.name}
+        ours = {v.name: v for v in _Mat5(path, path.read_bytes()).variables() if v.name}
         assert set(ours) == {key for key in reference if not key.startswith("__")}, path.name
-        for name, values in ours.items():
-            ref = reference[name]
+        for name, variable in ours.items():
+            ref, values = reference[name], variable.values
             readable = isinstance(ref, np.ndarray) and ref.ndim == 2 and not np.iscomplexobj(ref)
-            readable = readable and (np.issubdtype(ref.dtype, np.number) or ref.dtype == bool)
+            # logical arrays (loadmat gives them as uint8) are masks, not coordinates
+            readable = readable and np.issubdtype(ref.dtype, np.number) and "logical" not in variable.what
             assert readable == (values is not None), (path.name, name)
             if readable:
                 assert np.array_equal(values.astype(np.float64), ref.astype(np.float64)), (path.name, name)
@@ -607,3 +608,18 @@ def test_digit_separators_and_other_scripts_digits_are_not_numbers(tmp_path, wor
         read_points(path)
     path.write_text(body.replace(word, "1000") + "\n", encoding="utf-8")
     assert read_points(path)[0, 0] == 1000
+
+
+@pytest.mark.parametrize(
+    ("array", "said"),
+    [
+        (np.eye(3, dtype=bool), "must hold coordinates \\(real numbers\\); got dtype bool \\(a mask\\?\\)"),
+        (np.arange(6).reshape(3, 2).astype("m8[s]"), "must hold a numeric array; got dtype timedelta64"),
+        (np.arange(6).reshape(3, 2).astype("M8[D]"), "must hold a numeric array; got dtype datetime64"),
+    ],
+)
+def test_an_npy_of_masks_or_times_is_not_read_as_coordinates(tmp_path, array, said):
+    # fuzz round 6 (L7): a bool .npy was read as 0/1 points, which the API refuses
+    np.save(tmp_path / "p.npy", array)
+    with pytest.raises(InputError, match=said):
+        read_points(tmp_path / "p.npy")
