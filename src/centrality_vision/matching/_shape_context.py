@@ -57,10 +57,21 @@ def shape_context(points: np.ndarray) -> np.ndarray:
     return hist / np.maximum(hist.sum(axis=1, keepdims=True), 1.0)
 
 
+_CHUNK_VALUES = 1 << 22  # histogram bins per temporary block (32 MB of float64)
+
+
 def _chi2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    num = (a[:, None, :] - b[None, :, :]) ** 2
-    den = a[:, None, :] + b[None, :, :]
-    return 0.5 * np.sum(np.divide(num, den, out=np.zeros_like(num), where=den > 0), axis=2)
+    """Chi-squared costs between the rows of ``a`` and of ``b``, in blocks of rows of ``a``
+    so that the temporaries stay near 32 MB each (all pairs at once took 1.7 GB for 1000
+    points against 1000); each row's sum is the same as without blocks."""
+    out = np.empty((a.shape[0], b.shape[0]))
+    step = max(1, _CHUNK_VALUES // max(1, b.size))
+    for start in range(0, a.shape[0], step):
+        block = a[start : start + step, None, :]
+        num = (block - b[None, :, :]) ** 2
+        den = block + b[None, :, :]
+        out[start : start + step] = 0.5 * np.sum(np.divide(num, den, out=np.zeros_like(num), where=den > 0), axis=2)
+    return out
 
 
 def shape_context_assignment(moving: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, dict]:
