@@ -74,6 +74,15 @@ def _chi2(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+_TIE_BREAK = 1e-9
+
+
+def _radial(points: np.ndarray) -> np.ndarray:
+    """Each point's distance to the set's centroid over the mean such distance."""
+    radius = np.hypot(*(points - points.mean(axis=0)).T)
+    return radius / max(float(radius.mean()), np.finfo(float).tiny)
+
+
 def shape_context_assignment(moving: np.ndarray, fixed: np.ndarray) -> tuple[np.ndarray, dict]:
     """One-to-one assignment of least chi-squared cost, dummies at ``DUMMY_COST``.
 
@@ -84,7 +93,14 @@ def shape_context_assignment(moving: np.ndarray, fixed: np.ndarray) -> tuple[np.
     cost = _chi2(shape_context(moving), shape_context(fixed))
     m, f = cost.shape
     padded = np.full((m + f, f + m), DUMMY_COST)
-    padded[:m, :f] = cost
+    # Costs of counted histograms tie exactly (several assignments of one total), and the
+    # Hungarian algorithm then picks by row order: permuting the inputs changed the pairs
+    # (13 of 100 noisy sets). A tie goes to the pairs whose distances to their set's
+    # centroid, in units of the set's mean, are closest in the squared sense: invariant to
+    # order, pose and scale, and too small (1e-9) to overturn a real difference of counted
+    # costs. (Not the absolute difference: its sum is the same for both ways of pairing
+    # two and two points on either side of each other, and 8 of the 100 still tied.)
+    padded[:m, :f] = cost + _TIE_BREAK * (_radial(moving)[:, None] - _radial(fixed)[None, :]) ** 2
     padded[m:, f:] = 0.0  # dummy-to-dummy is free
     rows, cols = linear_sum_assignment(padded)
     correspondence = np.full(m, -1, dtype=np.int64)
