@@ -258,6 +258,12 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     points, and it is a subgraph of every Delaunay triangulation and a supergraph of every
     Euclidean minimum spanning tree.
 
+    The precision is that of the coordinates as given, so it follows their magnitude, not
+    the set's extent: a unit-size set at an offset of 1e12 (where float64 keeps about four
+    decimals) treats a point within about 4e-3 of an edge's circle as on it, and drops
+    that edge (8 of 67 edges of 40 random points; at an offset of 1e6, points within
+    4e-9). Subtract the offset first when the coordinates are exact at that size.
+
     Parameters
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
