@@ -75,7 +75,7 @@ def main() -> None:
     print(f"cores={os.cpu_count()} n_jobs={args.n_jobs}")
     print(load_line("timings are inflated by the other processes"))
     kimia = load_kimia99()
-    kimia_score = lambda d: int(retrieval_counts(d, kimia.labels, k=10).sum())  # noqa: E731
+    kimia_score = lambda d: int(retrieval_counts(d, kimia.labels, top=10).sum())  # noqa: E731
     distances, seconds = {"kimia": {}, "mpeg7": {}}, {"kimia": {}, "mpeg7": {}}
     for name in args.methods:
         t = time.perf_counter()
@@ -132,7 +132,7 @@ def main() -> None:
     rows = [[name, *counts, sum(counts)] for name, counts in PUBLISHED_KIMIA99]
     for name in args.methods:
         for tag, matrix in reranked("kimia", name):
-            counts = retrieval_counts(matrix, kimia.labels, k=10).tolist()
+            counts = retrieval_counts(matrix, kimia.labels, top=10).tolist()
             timing = f" ({seconds['kimia'][name]:.0f} s)" if matrix is distances["kimia"][name] else ""
             rows.append([f"ours: {tag}{timing}", *counts, sum(counts)])
     print("\nKimia-99: queries (of 99) with a same-class shape at each rank; total of 990")

@@ -236,3 +236,29 @@ def test_fit_similarity_without_scale_is_a_rigid_transform():
     assert type(rigid) is RigidTransform and rigid == RigidTransform(rigid.rotation, rigid.translation)
     np.testing.assert_allclose(rigid.rotation, rotation, atol=1e-12)
     assert type(fit_similarity(source, 2 * source, scale=True)) is SimilarityTransform
+
+
+def test_fit_similarity_takes_moving_and_fixed_and_its_former_names_with_a_warning():
+    # API audit F2: the only public functions that said source/target
+    import warnings
+
+    from centrality_vision.transforms import fit_similarity, least_squares_similarity
+
+    rng = np.random.default_rng(5)
+    moving = rng.random((12, 3))
+    fixed = 1.5 * moving @ random_rotation(3, seed=1).T + [1.0, 2.0, 3.0]
+    new = fit_similarity(moving=moving, fixed=fixed)
+    with pytest.warns(FutureWarning, match=r"`source` and `target` of fit_similarity\(\) are renamed `moving` and `fixed`;"):
+        old = fit_similarity(source=moving, target=fixed)
+    np.testing.assert_array_equal(old.matrix, new.matrix)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        positional = least_squares_similarity(moving, fixed, scale=True)
+    with pytest.warns(FutureWarning, match=r"`target` of least_squares_similarity\(\) is renamed `fixed`"):
+        keyword = least_squares_similarity(moving, target=fixed, scale=True)
+    for a, b in zip(positional, keyword):
+        np.testing.assert_array_equal(a, b)
+    with pytest.raises(TypeError, match="`source` is the former name of `moving`; give `moving` only"):
+        fit_similarity(fixed=fixed, moving=moving, source=moving)
+    with pytest.raises(ValueError, match="`moving` and `fixed` must have the same shape"):
+        fit_similarity(moving, fixed[:5])

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._deprecation import renamed_parameters
 from ._validation import as_points, as_real_array, check_bool, check_float, check_int
 from .exceptions import InputError
 
@@ -418,11 +419,30 @@ def random_rotation(n_dims: int, seed=None) -> np.ndarray:
     return q
 
 
-def fit_similarity(source, target, *, scale: bool = True) -> SimilarityTransform:
+@renamed_parameters(source="moving", target="fixed")
+def fit_similarity(moving, fixed, *, scale: bool = True) -> SimilarityTransform:
     """Least-squares similarity (or, with ``scale=False``, a :class:`RigidTransform`) taking
-    ``source`` onto ``target``.
+    ``moving`` onto ``fixed``, row ``i`` onto row ``i``.
 
     Minimises ``sum |s R x_i + t - y_i|^2`` over proper rotations (Umeyama's closed form).
+
+    Parameters
+    ----------
+    moving, fixed : array_like of shape (n_points, 2) or (n_points, 3)
+        Paired points (at least 2 rows), ``moving[i]`` to go onto ``fixed[i]``.
+    scale : bool, default=True
+        Fit the scale ``s`` (a :class:`SimilarityTransform`), or keep ``s = 1`` (a
+        :class:`RigidTransform`).
+
+    Returns
+    -------
+    SimilarityTransform or RigidTransform
+
+    Notes
+    -----
+    .. versionchanged:: 0.1.0
+       The points are ``moving`` and ``fixed``, as everywhere in the package; the former
+       names ``source`` and ``target`` still work, with a FutureWarning.
 
     References
     ----------
@@ -440,11 +460,11 @@ def fit_similarity(source, target, *, scale: bool = True) -> SimilarityTransform
     (2.0, True)
     """
     check_bool(scale, name="scale")
-    source = as_points(source, name="source", n_dims=(2, 3), min_points=2)
-    target = as_points(target, name="target", n_dims=(source.shape[1],), min_points=2)
-    if source.shape != target.shape:
-        raise InputError(f"`source` and `target` must have the same shape; got {source.shape} and {target.shape}.")
-    rotation, translation, s = least_squares_similarity(source, target, scale=scale)
+    moving = as_points(moving, name="moving", n_dims=(2, 3), min_points=2)
+    fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],), min_points=2)
+    if moving.shape != fixed.shape:
+        raise InputError(f"`moving` and `fixed` must have the same shape; got {moving.shape} and {fixed.shape}.")
+    rotation, translation, s = least_squares_similarity(moving, fixed, scale=scale)
     return SimilarityTransform(rotation, translation, s) if scale else RigidTransform(rotation, translation)
 
 
@@ -553,8 +573,9 @@ def _centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return mean * unit, (scaled - mean) * unit
 
 
+@renamed_parameters(source="moving", target="fixed")
 def least_squares_similarity(
-    source: np.ndarray, target: np.ndarray, *, scale: bool
+    moving: np.ndarray, fixed: np.ndarray, *, scale: bool
 ) -> tuple[np.ndarray, np.ndarray, float]:
     """``(rotation, translation, s)`` minimising ``sum |s R x_i + t - y_i|^2`` for paired rows
     (``s = 1`` without ``scale``, or when the sets are degenerate); inputs must be finite.
@@ -565,28 +586,28 @@ def least_squares_similarity(
 
     Examples
     --------
-    >>> source = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    >>> moving = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
     >>> quarter_turn = np.array([[0.0, -1.0], [1.0, 0.0]])
-    >>> rotation, translation, s = least_squares_similarity(source, 2 * source @ quarter_turn.T + [3, 4], scale=True)
+    >>> rotation, translation, s = least_squares_similarity(moving, 2 * moving @ quarter_turn.T + [3, 4], scale=True)
     >>> np.allclose(rotation, quarter_turn), np.allclose(translation, [3, 4]), round(s, 12)
     (True, True, 2.0)
     """
-    source, target = _finite_array(source, "source"), _finite_array(target, "target")
-    if source.shape != target.shape or source.shape[0] == 0:
+    moving, fixed = _finite_array(moving, "moving"), _finite_array(fixed, "fixed")
+    if moving.shape != fixed.shape or moving.shape[0] == 0:
         raise InputError(
-            f"`source` and `target` must be paired rows of one shape (n >= 1, D); got {source.shape} and "
-            f"{target.shape}."
+            f"`moving` and `fixed` must be paired rows of one shape (n >= 1, D); got {moving.shape} and "
+            f"{fixed.shape}."
         )
-    mu_s, xs = _centred(source)
-    mu_t, xt = _centred(target)
+    mu_s, xs = _centred(moving)
+    mu_t, xt = _centred(fixed)
     a, b = _unit(xs), _unit(xt)
     xs, xt = xs / a, xt / b
     rotation, trace = proper_rotation(xt.T @ xs)
     var = float(np.sum(xs * xs))
     s = (trace / var) * (b / a) if scale and var > 0 and trace > 0 else 1.0
     if not np.isfinite(s) or s <= 0:
-        raise InputError(f"The least-squares scale between `source` and `target` is not representable (got {s!r}).")
+        raise InputError(f"The least-squares scale between `moving` and `fixed` is not representable (got {s!r}).")
     translation = mu_t - s * rotation @ mu_s
     if not np.all(np.isfinite(translation)):
-        raise InputError("The least-squares translation between `source` and `target` overflows float64.")
+        raise InputError("The least-squares translation between `moving` and `fixed` overflows float64.")
     return rotation, translation, s

@@ -146,12 +146,12 @@ def test_scores_by_hand():
     d, labels = _blocks()
     assert bullseye_score(d, labels, top=4) == 1.0
     assert bullseye_score(d, labels, top=8) == 1.0  # capped at the class size
-    np.testing.assert_array_equal(retrieval_counts(d, labels, k=4), [12, 12, 12, 0])
+    np.testing.assert_array_equal(retrieval_counts(d, labels, top=4), [12, 12, 12, 0])
     assert nearest_neighbour_accuracy(d, labels, n_train=2, n_splits=4) == 1.0
     swapped = labels.copy()
     swapped[[0, 4]] = swapped[[4, 0]]  # two shapes in the wrong block
     # rank 1 (ties to the lower index): queries 0, 1, 4 and 5 find the wrong class
-    assert retrieval_counts(d, swapped, k=1)[0] == 8
+    assert retrieval_counts(d, swapped, top=1)[0] == 8
     # top 4, query included: 1 + 3 + 3 + 3 in each of the first two blocks, 16 in the last
     assert bullseye_score(d, swapped, top=4) == pytest.approx(36 / 48)
 
@@ -174,7 +174,7 @@ def test_rerank_pulls_a_chain_together():
     r = diffusion_rerank(d, n_neighbors=3, bandwidth=2)
     np.testing.assert_allclose(r, r.T)
     assert np.all(np.diag(r) == 0)
-    assert retrieval_counts(r, labels, k=5).sum() == 60
+    assert retrieval_counts(r, labels, top=5).sum() == 60
 
 
 def test_rerank_of_huge_finite_distances_stays_finite():
@@ -183,7 +183,7 @@ def test_rerank_of_huge_finite_distances_stays_finite():
     d = np.abs(np.subtract.outer(x, x))
     r = diffusion_rerank(d, n_neighbors=2, bandwidth=1)
     assert np.all(np.isfinite(r))
-    assert retrieval_counts(r, np.repeat([0, 1], 4), k=3).sum() == 24
+    assert retrieval_counts(r, np.repeat([0, 1], 4), top=3).sum() == 24
     # a factor d / s_i beyond float64 (1e300 / 1e-300) is an affinity of 0, without a warning
     d = np.array([[0, 1e-300, 1e300], [1e-300, 0, 1e300], [1e300, 1e300, 0]])
     with warnings.catch_warnings():
@@ -223,7 +223,7 @@ def test_rerank_of_shapes_with_exact_copies_keeps_the_classes_apart():
         (lambda: nearest_neighbour_accuracy(np.zeros((4, 4)), [0, 0, 1, 1], n_train=2), ValueError, "`n_train`"),
         (lambda: diffusion_rerank(np.zeros((3, 3)), n_neighbors=5), ValueError, "`n_neighbors`"),
         # found by a fuzz run: labels numpy merged or NaN that matched no class
-        (lambda: retrieval_counts(_D4, [1, "1", 2, "2"], k=1), TypeError, "all strings or all numbers; got a mix"),
+        (lambda: retrieval_counts(_D4, [1, "1", 2, "2"], top=1), TypeError, "all strings or all numbers; got a mix"),
         (lambda: bullseye_score(_D4, [np.nan, np.nan, 1.0, 1.0], top=2), ValueError, "must not hold NaN or None"),
         (lambda: bullseye_score(_D4, [None, None, "b", "b"], top=2), TypeError, "got NoneType, str"),
         (lambda: nearest_neighbour_accuracy(_D4, [np.nan] * 2 + [1.0] * 2, n_train=1), ValueError, "NaN or None"),
@@ -281,3 +281,13 @@ def test_centrality_cache_checks_its_arguments(kwargs, error, message):
 
     with pytest.raises(error, match=message):
         CentralityCache(**kwargs)
+
+
+def test_retrieval_counts_former_k_still_works_with_a_warning():
+    # API audit F9: bullseye_score said top, retrieval_counts k, for the ranks inspected
+    d = abs(np.subtract.outer([0.0, 1, 10, 11, 12], [0.0, 1, 10, 11, 12]))
+    labels = ["a", "a", "b", "b", "b"]
+    with pytest.warns(FutureWarning, match=r"`k` of retrieval_counts\(\) is renamed `top`"):
+        old = retrieval_counts(d, labels, k=3)
+    np.testing.assert_array_equal(old, retrieval_counts(d, labels, top=3))
+    np.testing.assert_array_equal(old, [5, 3, 0])  # rank 2: the three b only

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._deprecation import renamed_parameters
 from .._validation import as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import InputError, MatchingWarning
 from ..transforms import RigidTransform, SimilarityTransform
@@ -49,19 +50,7 @@ def _warn_if_scaled(info: dict) -> None:
         )
 
 
-def _renamed(old_value, old: str, new_value, new: str, default):
-    """``new_value``, or ``old_value`` given under the parameter's former name (with a FutureWarning)."""
-    if old_value is None:
-        return new_value
-    left_at_default = isinstance(new_value, (int, float)) and not isinstance(new_value, bool) and new_value == default
-    if not left_at_default:
-        raise TypeError(f"`{old}` is the former name of `{new}`; give `{new}` only; got both.")
-    import warnings
-
-    warnings.warn(f"`{old}` of match() is renamed `{new}`; the old name will be removed.", FutureWarning, stacklevel=3)
-    return old_value
-
-
+@renamed_parameters(n_neighbours="n_neighbors", outlier_weight="w")
 def match(
     moving,
     fixed,
@@ -74,8 +63,6 @@ def match(
     refine: str = "icp",
     w: float = 0.3,
     mwme_method: str = "local",
-    n_neighbours=None,
-    outlier_weight=None,
 ) -> MatchResult:
     """Correspondences from ``moving`` to ``fixed`` and the similarity transform between them.
 
@@ -126,8 +113,6 @@ def match(
         many points into agreement as the consensus pose it started from (a collapse: weights
         near 1 let CPD shrink the set onto a few points), the consensus pose is kept and a
         ``MatchingWarning`` says so; ``info["cpd_kept"]`` records which was kept.
-    n_neighbours, outlier_weight
-        Former names of ``n_neighbors`` and ``w``; giving them warns (FutureWarning).
     mwme_method : {"local", "greedy", "exact"}, default="local"
         ``"mwme"``: the MWME solver.
 
@@ -137,6 +122,12 @@ def match(
         Unpacks as ``correspondence, transform``: ``moving[i]`` matches
         ``fixed[correspondence[i]]`` (-1: unmatched), and ``transform`` takes ``moving``
         onto ``fixed``.
+
+    Notes
+    -----
+    .. versionchanged:: 0.1.0
+       ``n_neighbours`` and ``outlier_weight`` are now ``n_neighbors`` and ``w``, the
+       estimators' names; the former names still work, with a FutureWarning.
 
     Examples
     --------
@@ -163,8 +154,6 @@ def match(
     check_bool(scale, name="scale")
     # every option is checked whatever the method, so a typo is caught before it matters
     mwme_method = check_choice(mwme_method, ("local", "greedy", "exact"), name="mwme_method")
-    n_neighbors = _renamed(n_neighbours, "n_neighbours", n_neighbors, "n_neighbors", 8)
-    w = _renamed(outlier_weight, "outlier_weight", w, "w", 0.3)
     n_neighbors = check_int(n_neighbors, name="n_neighbors", low=3, high=19)
     n_candidates = check_int(n_candidates, name="n_candidates", low=1)
     refine = check_choice(refine, ("icp", "cpd"), name="refine")
@@ -197,12 +186,12 @@ def match(
         rot, t, s, correspondence, info = robust_pose(
             norm_m.points,
             norm_f.points,
-            n_neighbours=n_neighbors,
+            n_neighbors=n_neighbors,
             n_candidates=n_candidates,
             refine=refine,
             scale=bool(scale),
             unit_ratio=unit_ratio,
-            outlier_weight=w,
+            w=w,
         )
     else:
         from ._shape_context import shape_context_assignment

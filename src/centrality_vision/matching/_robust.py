@@ -222,19 +222,19 @@ def robust_pose(
     moving: np.ndarray,
     fixed: np.ndarray,
     *,
-    n_neighbours: int,
+    n_neighbors: int,
     n_candidates: int,
     refine: str,
     scale: bool,
     unit_ratio: float,
-    outlier_weight: float,
+    w: float,
 ):
     """Pose and correspondence of normalised 2D sets; see the module docstring.
 
     ``unit_ratio`` is the scale that means 1 in the caller's units (used when ``scale`` is
     False). Returns ``(rotation, translation, s, correspondence, info)``.
     """
-    k = min(n_neighbours, moving.shape[0] - 1, fixed.shape[0] - 1)
+    k = min(n_neighbors, moving.shape[0] - 1, fixed.shape[0] - 1)
     sig_m, sig_f = local_signatures(moving, k), local_signatures(fixed, k)
     pairs_m, pairs_f, signs, alike = _candidates(sig_m, sig_f, n_candidates)
     if pairs_m.size > MAX_HYPOTHESES:
@@ -268,7 +268,7 @@ def robust_pose(
         )
         info.update(similarity_scale=float(s_sim / unit_ratio), similarity_consensus=score_sim)
     if refine == "cpd":
-        rot_c, t_c, s_c = _cpd_refine(moving, fixed, rot_b, t_b, s_b, scale=scale, outlier_weight=outlier_weight)
+        rot_c, t_c, s_c = _cpd_refine(moving, fixed, rot_b, t_b, s_b, scale=scale, w=w)
         info["cpd_consensus"] = _pose_score(moving, fixed_tree, rot_c, t_c, s_c, tau)
         info["cpd_kept"] = info["cpd_consensus"] >= CPD_KEEPS * score_b
         if info["cpd_kept"]:
@@ -277,12 +277,12 @@ def robust_pose(
     return rot_b, t_b, s_b, correspondence, info
 
 
-def _cpd_refine(moving, fixed, rot, t, s, *, scale: bool, outlier_weight: float):
+def _cpd_refine(moving, fixed, rot, t, s, *, scale: bool, w: float):
     """Similarity (or rigid) CPD from the consensus pose; returns the composed pose."""
     from ..registration import RigidCPD
 
     start = s * moving @ rot.T + t
-    reg = RigidCPD(scale=scale, w=outlier_weight, max_iter=100, tol=1e-6).fit(start, fixed)
+    reg = RigidCPD(scale=scale, w=w, max_iter=100, tol=1e-6).fit(start, fixed)
     tr = reg.transform_
     r2 = np.asarray(tr.rotation) @ rot
     s2 = float(tr.scale) * s

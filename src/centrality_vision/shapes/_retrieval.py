@@ -26,6 +26,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import ndimage
 
+from .._deprecation import renamed_parameters
 from .._validation import as_binary_image, as_real_array, check_bool, check_choice, check_int
 from ..exceptions import InputError
 from ._cache import as_shape_images
@@ -611,23 +612,44 @@ def bullseye_score(distances, labels, /, *, top: int = 40) -> float:
     return hits / int(np.minimum(counts[inverse], top).sum())
 
 
-def retrieval_counts(distances, labels, /, *, k: int = 10) -> np.ndarray:
-    """How many queries have a same-class shape at rank 1, 2, ..., k (the query left out).
+@renamed_parameters(k="top")
+def retrieval_counts(distances, labels, /, *, top: int = 10) -> np.ndarray:
+    """How many queries have a same-class shape at rank 1, 2, ..., ``top`` (the query left out).
 
-    The Kimia-99 protocol reports these ``k=10`` counts (out of 99 each, 990 in all);
+    The Kimia-99 protocol reports these ``top=10`` counts (out of 99 each, 990 in all);
     Kimia-216 the first 11. Equal distances rank the lower index first.
+
+    Parameters
+    ----------
+    distances : array_like of shape (n_shapes, n_shapes)
+        Row ``i`` holds query ``i``'s distances to every shape.
+    labels : array_like of shape (n_shapes,)
+        Class of each shape; all strings or all numbers.
+    top : int in [1, n_shapes - 1], default=10
+        Ranks counted (as ``top`` of :func:`bullseye_score`).
+
+    Returns
+    -------
+    counts : ndarray of shape (top,), int
+        ``counts[r]``: queries whose rank-``r + 1`` shape is of their class.
+
+    Notes
+    -----
+    .. versionchanged:: 0.1.0
+       ``k`` is now ``top``, as in :func:`bullseye_score`; ``k`` still works, with a
+       FutureWarning.
 
     Examples
     --------
     >>> import numpy as np
     >>> d = abs(np.subtract.outer([0.0, 1, 10, 11], [0.0, 1, 10, 11]))
-    >>> retrieval_counts(d, ["a", "a", "b", "b"], k=3).tolist()
+    >>> retrieval_counts(d, ["a", "a", "b", "b"], top=3).tolist()
     [4, 0, 0]
     """
     d = _check_distances(distances)
     labels = _check_labels(labels, d.shape[0])
-    k = check_int(k, name="k", low=1, high=d.shape[0] - 1)
-    order = _ranking(d, include_self=False)[:, :k]
+    top = check_int(top, name="top", low=1, high=d.shape[0] - 1)
+    order = _ranking(d, include_self=False)[:, :top]
     return np.sum(labels[order] == labels[:, None], axis=0)
 
 
