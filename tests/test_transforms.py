@@ -248,7 +248,8 @@ def test_fit_similarity_takes_moving_and_fixed_and_its_former_names_with_a_warni
     moving = rng.random((12, 3))
     fixed = 1.5 * moving @ random_rotation(3, seed=1).T + [1.0, 2.0, 3.0]
     new = fit_similarity(moving=moving, fixed=fixed)
-    with pytest.warns(FutureWarning, match=r"`source` and `target` of fit_similarity\(\) are renamed `moving` and `fixed`;"):
+    said = r"`source` and `target` of fit_similarity\(\) are renamed `moving` and `fixed`;"
+    with pytest.warns(FutureWarning, match=said):
         old = fit_similarity(source=moving, target=fixed)
     np.testing.assert_array_equal(old.matrix, new.matrix)
     with warnings.catch_warnings():

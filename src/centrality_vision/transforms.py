@@ -595,8 +595,7 @@ def least_squares_similarity(
     moving, fixed = _finite_array(moving, "moving"), _finite_array(fixed, "fixed")
     if moving.shape != fixed.shape or moving.shape[0] == 0:
         raise InputError(
-            f"`moving` and `fixed` must be paired rows of one shape (n >= 1, D); got {moving.shape} and "
-            f"{fixed.shape}."
+            f"`moving` and `fixed` must be paired rows of one shape (n >= 1, D); got {moving.shape} and {fixed.shape}."
         )
     mu_s, xs = _centred(moving)
     mu_t, xt = _centred(fixed)
