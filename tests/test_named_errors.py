@@ -32,7 +32,7 @@ def _masks():
 CASES = [
     (lambda: pixel_graph(np.ones((3, 3), dtype=bool), connectivity=[8]), "`connectivity` must be 8 or 4"),
     (lambda: pixel_graph(np.arange(16.0).reshape(4, 4), threshold=10**400), "`threshold` must be a finite real"),
-    (lambda: mwme_graph(POINTS, max_passes=10**20), "`max_passes` must be an int in [1, 2^62]"),
+    (lambda: mwme_graph(POINTS, max_iter=10**20), "`max_iter` must be an int in [1, 2^62]"),
     (lambda: mwme_graph(POINTS, progress="no"), "`progress` must be True or False"),
     (lambda: nhdd_graph(10**20), "`n` must be an int in [3, 2^62]"),
     (lambda: nhdd_graph(5, connected="no"), "`connected` must be True or False"),

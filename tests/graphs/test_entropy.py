@@ -399,3 +399,14 @@ def test_mstme_ties_do_not_follow_the_row_order(method):
         shuffled = grid[rng.permutation(len(grid))]
         changed += abs(mstme_graph(grid, method=method).cost - mstme_graph(shuffled, method=method).cost) > 1e-9
     assert changed <= 3  # (where the invariant key ties too; about 70 of 300 before)
+
+
+@pytest.mark.parametrize("build", [mwme_graph, mstme_graph])
+def test_the_local_search_limit_is_max_iter_and_max_passes_still_works(build):
+    # API audit F12: the package's iteration limit is max_iter
+    points = np.random.default_rng(4).random((12, 2))
+    options = {"method": "local"} if build is mwme_graph else {"method": "exchange"}
+    new = build(points, max_iter=1, **options)
+    with pytest.warns(FutureWarning, match=rf"`max_passes` of {build.__name__}\(\) is renamed `max_iter`"):
+        old = build(points, max_passes=1, **options)
+    np.testing.assert_array_equal(old.graph.toarray(), new.graph.toarray())

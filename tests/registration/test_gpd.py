@@ -199,3 +199,15 @@ def test_spread_rules_on_centralities_bunched_within_1e_11_are_refused(rule):
     with pytest.raises(InputError, match="`bins` rule"):
         centrality_prior(v, v, bins=rule)
     assert np.all(np.isfinite(centrality_prior(v, v, bins=10).log_weight))
+
+
+def test_centrality_prior_takes_the_names_gpd_fit_uses():
+    # API audit F10: centrality_prior said v_moving/v_fixed for GPD.fit's moving_centrality/fixed_centrality
+    from centrality_vision.registration import centrality_prior
+
+    new = centrality_prior(moving_centrality=[0.0, 0.5, 1.0], fixed_centrality=[0.2, 0.9], bins=2)
+    with pytest.warns(FutureWarning, match=r"`v_moving` and `v_fixed` of centrality_prior\(\) are renamed"):
+        old = centrality_prior(v_moving=[0.0, 0.5, 1.0], v_fixed=[0.2, 0.9], bins=2)
+    np.testing.assert_array_equal(old.log_weight, new.log_weight)
+    with pytest.raises(ValueError, match="`fixed_centrality` must be normalised to"):
+        centrality_prior([0.0, 1.0], [0.0, 2.0])

@@ -23,6 +23,7 @@ from scipy import sparse
 from scipy.spatial.distance import pdist, squareform
 
 from .._parallel import run_chunks
+from .._deprecation import renamed_parameters
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int, is_real_dtype
 from ..exceptions import InputError
 from . import _entropy_kernels as _k
@@ -221,8 +222,9 @@ def _positions_graph(dist: _Distances, order: np.ndarray, joining: np.ndarray) -
     return _edges_graph(dist, lo, hi)
 
 
+@renamed_parameters(max_passes="max_iter")
 def mwme_graph(
-    points, /, *, method: str = "local", max_passes: int = 50, metric: str = "euclidean", progress: bool = False
+    points, /, *, method: str = "local", max_iter: int = 50, metric: str = "euclidean", progress: bool = False
 ) -> MWMEResult:
     """Minimum-weight maximum-entropy (MWME) graph of a point set (thesis ch. 6).
 
@@ -240,8 +242,10 @@ def mwme_graph(
         (Algorithm 6.2), corrected so that it always yields the NHDD graph, O(n^3).
         ``"local"``: the greedy result improved by exchanging the points of two
         positions while the cost drops, O(n^3) per pass.
-    max_passes : int, default=50
-        Passes of the local search.
+    max_iter : int >= 1, default=50
+        Most passes of the local search (each pass tries every exchange; the search stops
+        at the first pass that improves nothing). Formerly ``max_passes``, which still
+        works with a FutureWarning.
     metric : {"euclidean", "precomputed"}, default="euclidean"
         ``"precomputed"``: ``points`` is a symmetric (n, n) matrix of positive distances
         (zero diagonal), e.g. the worked example of the thesis' Table 6.1, which is not
@@ -272,7 +276,7 @@ def mwme_graph(
     """
     method = check_choice(method, ("local", "greedy", "exact"), name="method")
     progress = check_bool(progress, name="progress")
-    max_passes = check_int(max_passes, name="max_passes", low=1)
+    max_iter = check_int(max_iter, name="max_iter", low=1)
     metric = check_choice(metric, ("euclidean", "precomputed"), name="metric")
     distances = _precomputed(points) if metric == "precomputed" else _distance_matrix(points)
     dist = distances.scaled
@@ -296,7 +300,7 @@ def mwme_graph(
                 best_cost, best_start = cost, start
         order, cost = _k.mwme_greedy_order(dist, joining, best_start, key)
         if method == "local":
-            order, cost, _ = _k.mwme_local(dist, joining, order, max_passes)
+            order, cost, _ = _k.mwme_local(dist, joining, order, max_iter)
     order = np.asarray(order, dtype=np.int64)
     graph = _positions_graph(distances, order, joining)
     degrees = np.diff(graph.indptr).astype(np.int64)
@@ -409,8 +413,9 @@ def _edge_keys(n: int, edges: np.ndarray) -> np.ndarray:
     return np.sort(np.minimum(edges[:, 0], edges[:, 1]) * n + np.maximum(edges[:, 0], edges[:, 1]))
 
 
+@renamed_parameters(max_passes="max_iter")
 def mstme_graph(
-    points, /, *, lam: float = 1.0, normalize="tree", method: str = "greedy", max_passes: int = 20
+    points, /, *, lam: float = 1.0, normalize="tree", method: str = "greedy", max_iter: int = 20
 ) -> MSTMEResult:
     """Minimum spanning tree of maximum entropy (MSTME, thesis ch. 7, eq. 7.1).
 
@@ -444,8 +449,9 @@ def mstme_graph(
         points, so that the tree does not depend on the row order unless that ties too (on
         small integer grids, 3 of 991 sets gave another cost when permuted; 235 when the
         first edge in row order won).
-    max_passes : int, default=20
-        Passes of the exchange search.
+    max_iter : int >= 1, default=20
+        Most passes of the exchange search (it stops at the first pass that improves
+        nothing). Formerly ``max_passes``, which still works with a FutureWarning.
 
     Returns
     -------
@@ -474,7 +480,7 @@ def mstme_graph(
 
     lam = check_float(lam, name="lam", low=0.0, high=LAM_MAX)
     method = check_choice(method, ("greedy", "exchange"), name="method")
-    max_passes = check_int(max_passes, name="max_passes", low=1)
+    max_iter = check_int(max_iter, name="max_iter", low=1)
     normalize = _normalization(normalize)
     distances = _distance_matrix(points)
     dist = distances.scaled
@@ -496,7 +502,7 @@ def mstme_graph(
         key = weight.sum(axis=1)  # invariant tie-breaker: total distance to all points
         edges = _k.mstme_greedy(weight, lam, key)
         if method == "exchange":
-            edges, _, _ = _k.mstme_exchange(weight, lam, edges, max_passes, key)
+            edges, _, _ = _k.mstme_exchange(weight, lam, edges, max_iter, key)
     graph = _edges_graph(distances, edges[:, 0], edges[:, 1])
     total = float(weight[edges[:, 0], edges[:, 1]].sum())
     if not np.isfinite(total):

@@ -11,6 +11,7 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
 from .. import graphs as _graphs
+from .._deprecation import renamed_parameters
 from .._validation import ANY_DIMS, as_graph, as_points, as_real_array, check_bool, check_choice, check_float, check_int
 from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
@@ -125,7 +126,8 @@ def _rule_width(values, rule):
     return 0.0
 
 
-def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> CentralityPrior:
+@renamed_parameters(v_moving="moving_centrality", v_fixed="fixed_centrality")
+def centrality_prior(moving_centrality, fixed_centrality, *, bins=10, phi=None, kappa=None) -> CentralityPrior:
     """GPD's prior from normalised centralities of the moving and fixed sets (thesis eq. 5.10).
 
     ``h(m)`` is the share of moving points whose centrality falls in the histogram bin of
@@ -138,6 +140,34 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> Cen
     overall factor absorbed in sigma2 (which CPD re-estimates): the prior is multiplied by
     ``(1 - kappa) / kappa``, so 0.5 (or None) is the thesis' equal weighting and 1 is plain CPD.
 
+    Parameters
+    ----------
+    moving_centrality : array_like of shape (n_moving,)
+        The moving points' centralities, normalised to [0, 1]
+        (:func:`normalize_centrality`).
+    fixed_centrality : array_like of shape (n_fixed,)
+        The fixed points' centralities, normalised to [0, 1].
+    bins : int >= 1 or str, default=10
+        Equal bins on [0, 1] for ``h``, or a :func:`numpy.histogram_bin_edges` rule name
+        (``"fd"``, ``"auto"``, ...) applied to the moving centralities.
+    phi : float > 0, optional
+        Width of the Gaussian term in centrality; default: the standard deviation of the
+        fixed centralities.
+    kappa : float in (0, 1], optional
+        Weight of geometry against topology; None is 0.5, the thesis' equal weighting.
+
+    Returns
+    -------
+    CentralityPrior
+        The per-point log weights and the centralities, as CPD's shared E-step takes them
+        (``prior=`` of the posterior functions).
+
+    Notes
+    -----
+    .. versionchanged:: 0.1.0
+       ``v_moving`` and ``v_fixed`` are now ``moving_centrality`` and ``fixed_centrality``,
+       as in :meth:`GPD.fit`; the former names still work, with a FutureWarning.
+
     Examples
     --------
     >>> p = centrality_prior([0.0, 0.0, 1.0], [0.0, 1.0], bins=2)
@@ -146,9 +176,9 @@ def centrality_prior(v_moving, v_fixed, *, bins=10, phi=None, kappa=None) -> Cen
     >>> round(p.inv2phi2, 6)  # phi2 = var([0, 1]) = 0.25
     2.0
     """
-    vy = as_real_array(v_moving, name="v_moving", shape="a 1D array").astype(float)
-    vx = as_real_array(v_fixed, name="v_fixed", shape="a 1D array").astype(float)
-    for name, v in (("v_moving", vy), ("v_fixed", vx)):
+    vy = as_real_array(moving_centrality, name="moving_centrality", shape="a 1D array").astype(float)
+    vx = as_real_array(fixed_centrality, name="fixed_centrality", shape="a 1D array").astype(float)
+    for name, v in (("moving_centrality", vy), ("fixed_centrality", vx)):
         if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)):
             raise InputError(f"`{name}` must be a non-empty 1D finite array; got shape {v.shape}.")
         if v.min() < -1e-12 or v.max() > 1 + 1e-12:
