@@ -22,8 +22,8 @@ import numpy as np
 from scipy import sparse
 from scipy.spatial.distance import pdist, squareform
 
-from .._parallel import run_chunks
 from .._deprecation import renamed_parameters
+from .._parallel import run_chunks
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int, is_real_dtype
 from ..exceptions import InputError
 from . import _entropy_kernels as _k
