@@ -321,8 +321,16 @@ def test_degree_entropy_hand_cases():
 
 
 def test_unknown_centrality_name():
-    with pytest.raises(ValueError, match="`name` must be one of .*'closeness'.* got 'closness'"):
+    with pytest.raises(ValueError, match="`centrality` must be one of .*'closeness'.* got 'closness'"):
         cen.compute(_graph(2, [(0, 1)]), "closness")
+
+
+def test_compute_takes_centrality_and_its_former_name_with_a_warning():
+    # API audit F6: GPD, the histograms and the CLI say centrality; compute said name
+    graph = _graph(3, [(0, 1), (1, 2)])
+    with pytest.warns(FutureWarning, match=r"`name` of compute\(\) is renamed `centrality`"):
+        old = cen.compute(graph, name="closeness")
+    np.testing.assert_array_equal(old, cen.compute(graph, centrality="closeness"))
 
 
 def test_unknown_option():

@@ -155,7 +155,7 @@ def test_centrality_of_points_matches_the_graph(tmp_path):
             [
                 "centrality",
                 str(tmp_path / "p.csv"),
-                "--measure",
+                "--centrality",
                 "all",
                 "--out",
                 str(out),
@@ -167,7 +167,7 @@ def test_centrality_of_points_matches_the_graph(tmp_path):
     )
     lines = out.read_text().splitlines()
     parameters = json.loads((tmp_path / "c.json").read_text())["parameters"]
-    assert parameters["measure"] == "all" and parameters["graph"] == "delaunay" and parameters["seed"] is None
+    assert parameters["centrality"] == "all" and parameters["graph"] == "delaunay" and parameters["seed"] is None
     header = lines[0].split(",")
     assert header == ["node", "x", "y", *cli.CENTRALITY_NAMES]
     table = np.loadtxt(out, delimiter=",", skiprows=1)
@@ -182,7 +182,7 @@ def test_centrality_of_points_matches_the_graph(tmp_path):
             [
                 "centrality",
                 str(tmp_path / "p.csv"),
-                "--measure",
+                "--centrality",
                 "closeness",
                 "--weights",
                 "--out",
@@ -206,7 +206,7 @@ def test_centrality_of_an_image_gives_pixel_coordinates(tmp_path, capsys):
             [
                 "centrality",
                 str(tmp_path / "square.png"),
-                "--measure",
+                "--centrality",
                 "degree",
                 "--out",
                 str(out),
@@ -731,7 +731,7 @@ def test_options_of_the_other_kind_of_input_are_refused(tmp_path, capsys):
 def test_centrality_plot_of_all_measures_on_a_3d_set(tmp_path):
     # eight 3D panels in a 3 x 3 grid: the hidden ninth broke matplotlib's layout (a traceback)
     np.save(tmp_path / "p.npy", _points(20, seed=4, dim=3))
-    argv = ["centrality", str(tmp_path / "p.npy"), "--measure", "all", "--out", str(tmp_path / "c.json")]
+    argv = ["centrality", str(tmp_path / "p.npy"), "--centrality", "all", "--out", str(tmp_path / "c.json")]
     assert main([*argv, "--plot", str(tmp_path / "c.png")]) == 0
     assert (tmp_path / "c.png").stat().st_size > 20_000
 
@@ -759,7 +759,7 @@ def test_a_plot_that_cannot_be_drawn_leaves_no_output(tmp_path, capsys):
     pixels = np.full((6, 6), 255, dtype=np.uint8)
     pixels[2, 2] = pixels[3, 3] = 0  # two diagonal pixels: no betweenness above 0 under 4-neighbours
     _png(tmp_path / "diag.png", pixels)
-    argv = ["centrality", str(tmp_path / "diag.png"), "--connectivity", "4", "--measure", "betweenness"]
+    argv = ["centrality", str(tmp_path / "diag.png"), "--connectivity", "4", "--centrality", "betweenness"]
     argv += ["--norm", "log", "--plot", str(tmp_path / "d.png"), "--out", str(tmp_path / "d.json")]
     assert main(argv) == 2
     assert "'log' needs at least one value > 0" in _one_line_error(capsys)
@@ -942,10 +942,10 @@ def test_an_option_the_run_would_ignore_is_refused(tmp_path, capsys, argv, messa
         (["graph", "{p}", "--kind", "emst", "--lam", "0.9"], "--lam is an option of --kind mstme; got --kind emst"),
         (["centrality", "{p}", "--graph", "gabriel", "--k", "3"], "--k is an option of --graph knn"),
         (["centrality", "{p}", "--norm", "log"], "--norm is the colour scale of --plot"),
-        (["centrality", "{p}", "--measure", "degree", "--weights"], "--weights is an option of --measure betweenness"),
+        (["centrality", "{p}", "--centrality", "degree", "--weights"], "--weights is an option of --centrality betweenness"),
         (
-            ["centrality", "{p}", "--measure", "closeness", "--strengths"],
-            "--strengths is an option of --measure degree",
+            ["centrality", "{p}", "--centrality", "closeness", "--strengths"],
+            "--strengths is an option of --centrality degree",
         ),
     ],
 )
@@ -961,7 +961,7 @@ def test_options_that_apply_are_taken(tmp_path):
     np.savetxt(tmp_path / "p.txt", np.random.default_rng(0).random((12, 2)))
     p = str(tmp_path / "p.txt")
     assert main(["graph", p, "--kind", "knn", "--k", "3", "--out", str(tmp_path / "g.json")]) == 0
-    argv = ["centrality", p, "--measure", "all", "--weights", "--strengths", "--out", str(tmp_path / "c.json")]
+    argv = ["centrality", p, "--centrality", "all", "--weights", "--strengths", "--out", str(tmp_path / "c.json")]
     assert main(argv) == 0
 
 
@@ -975,3 +975,16 @@ def test_the_mstme_lam_default_is_the_librarys():
     for command in ("graph", "centrality"):
         args = build_parser().parse_args([command, "p.txt", "--out", "x.json"])
         assert args.lam == library
+
+
+def test_centrality_option_is_named_as_in_register_and_classify_and_measure_still_works(tmp_path):
+    # API audit F6: centrality said --measure where register and classify say --centrality
+    np.save(tmp_path / "p.npy", np.random.default_rng(1).random((15, 2)))
+    outputs = []
+    for option in ("--centrality", "--measure"):
+        out = tmp_path / f"c{option}.json"
+        assert main(["centrality", str(tmp_path / "p.npy"), option, "harmonic", "--out", str(out)]) == 0
+        record = json.loads(out.read_text())
+        assert record["parameters"]["centrality"] == "harmonic"
+        outputs.append(record["centrality"]["harmonic"])
+    assert outputs[0] == outputs[1]

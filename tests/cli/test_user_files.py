@@ -159,7 +159,7 @@ def test_every_csv_output_is_read_by_pandas_with_default_arguments(tmp_path, fis
     moving_path, fixed_path, folder = fish_files / "m.npy", fish_files / "f.npy", shapes_folder
     runs = {
         "graph.csv": ["graph", str(moving_path), "--out"],
-        "centrality.csv": ["centrality", str(moving_path), "--measure", "all", "--out"],
+        "centrality.csv": ["centrality", str(moving_path), "--centrality", "all", "--out"],
         "register.csv": ["register", str(moving_path), str(fixed_path), "--out"],
         "classify.csv": ["classify", str(folder), "--centrality", "degree", "--bins", "4", "--out"],
     }
@@ -208,7 +208,7 @@ def test_classify_classifiers_and_the_confusion_matrix_figure(tmp_path, shapes_f
 def test_no_progress_bar_text_when_stderr_is_not_a_terminal(tmp_path, capfd):
     np.save(tmp_path / "m.npy", RNG.random((2100, 2)))
     assert (
-        main(["centrality", str(tmp_path / "m.npy"), "--measure", "closeness", "--out", str(tmp_path / "c.npy")]) == 0
+        main(["centrality", str(tmp_path / "m.npy"), "--centrality", "closeness", "--out", str(tmp_path / "c.npy")]) == 0
     )
     err = capfd.readouterr().err
     assert "\r" not in err and "it/s" not in err and "source/s" not in err
@@ -217,7 +217,7 @@ def test_no_progress_bar_text_when_stderr_is_not_a_terminal(tmp_path, capfd):
             [
                 "centrality",
                 str(tmp_path / "m.npy"),
-                "--measure",
+                "--centrality",
                 "closeness",
                 "--progress",
                 "--out",

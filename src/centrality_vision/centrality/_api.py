@@ -32,6 +32,7 @@ import warnings
 import numpy as np
 from scipy import sparse
 
+from .._deprecation import renamed_parameters
 from .._parallel import run_chunks
 from .._validation import GraphInput, as_any_graph, check_bool, check_choice, check_float
 from ..exceptions import InputError
@@ -901,15 +902,21 @@ def _eccentricity_bounds(prep: _Prepared, weights: bool, budget: int | None = No
 # --- dispatch and entropy -----------------------------------------------------------------
 
 
-def compute(graph, /, name: str, **options):
-    """Compute the centrality called ``name``; ``options`` go to that function.
+@renamed_parameters(name="centrality")
+def compute(graph, /, centrality: str, **options):
+    """Compute the centrality called ``centrality``; ``options`` go to that function.
 
     Parameters
     ----------
     graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
-    name : {'degree', 'betweenness', 'closeness', 'harmonic', 'eigenvector', 'eccentricity', 'pagerank', 'katz'}
+    centrality : {'degree', 'betweenness', 'closeness', 'harmonic', 'eigenvector', 'eccentricity', 'pagerank', 'katz'}
+        Formerly ``name``, which still works with a FutureWarning.
     **options
         Keyword arguments of the chosen function (``weights``, ``normalized``, ...).
+
+    Returns
+    -------
+    values : ndarray of shape (n,)
 
     Examples
     --------
@@ -919,8 +926,8 @@ def compute(graph, /, name: str, **options):
     """
     from . import _spectral
 
-    check_choice(name, CENTRALITIES, name="name")
-    function = globals().get(name) or getattr(_spectral, name)
+    check_choice(centrality, CENTRALITIES, name="centrality")
+    function = globals().get(centrality) or getattr(_spectral, centrality)
     try:
         return function(graph, **options)
     except TypeError as exc:
@@ -929,7 +936,7 @@ def compute(graph, /, name: str, **options):
 
             known = set(inspect.signature(function).parameters)
             unknown = ", ".join(f"`{key}`" for key in options if key not in known) or "an option"
-            raise TypeError(f"{name}() got an unknown option {unknown}; it accepts: {_options(function)}.") from None
+            raise TypeError(f"{centrality}() got an unknown option {unknown}; it accepts: {_options(function)}.") from None
         raise
 
 

@@ -48,15 +48,17 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "(x, y[, z] for points; row, col for pixels, row 0 at the top), one column per centrality.\n"
         ".csv/.npy: that table (the parameters go to NAME.json beside it);\n"
         ".json/.npz: the same columns by name, plus the parameters.",
-        example="centrality-vision centrality fish.txt --measure closeness --out fish_closeness.csv\n"
-        "centrality-vision centrality cow1.png --measure all --out cow1.json --plot cow1.png",
+        example="centrality-vision centrality fish.txt --centrality closeness --out fish_closeness.csv\n"
+        "centrality-vision centrality cow1.png --centrality all --out cow1.json --plot cow1.png",
     )
     parser.add_argument("input", type=in_path, metavar="INPUT", help="point-set file or image")
     parser.add_argument(
-        "--measure",
+        "--centrality",
+        "--measure",  # its former name (register and classify say --centrality)
+        dest="centrality",
         choices=CENTRALITY_NAMES + ("all",),
         default="closeness",
-        help="which centrality; 'all' computes every one (default: %(default)s)",
+        help="which centrality; 'all' computes every one; --measure is its former name (default: %(default)s)",
     )
     add_point_options(parser)
     add_graph_options(parser, "--graph", help_text="data-graph for point sets")
@@ -137,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     from ..io import IMAGE_SUFFIXES, POINT_SUFFIXES, read_shape
 
     started = time.perf_counter()
-    names = CENTRALITY_NAMES if args.measure == "all" else (args.measure,)
+    names = CENTRALITY_NAMES if args.centrality == "all" else (args.centrality,)
     kind = suffix(args.input)
     if kind not in IMAGE_SUFFIXES + POINT_SUFFIXES:
         raise InputError(
@@ -147,8 +149,8 @@ def run(args: argparse.Namespace) -> int:
     is_image = kind in IMAGE_SUFFIXES
     _refuse_options_of_the_other_input(args, is_image)
     applies = {
-        "weights": ("measure", (*_WITH_PROGRESS, "all")),
-        "strengths": ("measure", (*_DEGREE_LIKE, "all")),
+        "weights": ("centrality", (*_WITH_PROGRESS, "all")),
+        "strengths": ("centrality", (*_DEGREE_LIKE, "all")),
         **{dest: ("graph", kinds) for dest, kinds in GRAPH_OPTION_KINDS.items()},
     }
     refuse_unused(args, applies, vars(args))
