@@ -942,7 +942,10 @@ def test_an_option_the_run_would_ignore_is_refused(tmp_path, capsys, argv, messa
         (["graph", "{p}", "--kind", "emst", "--lam", "0.9"], "--lam is an option of --kind mstme; got --kind emst"),
         (["centrality", "{p}", "--graph", "gabriel", "--k", "3"], "--k is an option of --graph knn"),
         (["centrality", "{p}", "--norm", "log"], "--norm is the colour scale of --plot"),
-        (["centrality", "{p}", "--centrality", "degree", "--weights"], "--weights is an option of --centrality betweenness"),
+        (
+            ["centrality", "{p}", "--centrality", "degree", "--weights"],
+            "--weights is an option of --centrality betweenness",
+        ),
         (
             ["centrality", "{p}", "--centrality", "closeness", "--strengths"],
             "--strengths is an option of --centrality degree",

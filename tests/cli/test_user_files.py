@@ -207,9 +207,8 @@ def test_classify_classifiers_and_the_confusion_matrix_figure(tmp_path, shapes_f
 
 def test_no_progress_bar_text_when_stderr_is_not_a_terminal(tmp_path, capfd):
     np.save(tmp_path / "m.npy", RNG.random((2100, 2)))
-    assert (
-        main(["centrality", str(tmp_path / "m.npy"), "--centrality", "closeness", "--out", str(tmp_path / "c.npy")]) == 0
-    )
+    argv = ["centrality", str(tmp_path / "m.npy"), "--centrality", "closeness", "--out", str(tmp_path / "c.npy")]
+    assert main(argv) == 0
     err = capfd.readouterr().err
     assert "\r" not in err and "it/s" not in err and "source/s" not in err
     assert (

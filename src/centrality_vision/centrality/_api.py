@@ -936,7 +936,8 @@ def compute(graph, /, centrality: str, **options):
 
             known = set(inspect.signature(function).parameters)
             unknown = ", ".join(f"`{key}`" for key in options if key not in known) or "an option"
-            raise TypeError(f"{centrality}() got an unknown option {unknown}; it accepts: {_options(function)}.") from None
+            accepted = _options(function)
+            raise TypeError(f"{centrality}() got an unknown option {unknown}; it accepts: {accepted}.") from None
         raise
 
 
