@@ -49,3 +49,25 @@ def test_the_scan_finds_a_bare_raise(tmp_path):
 def test_no_bare_value_error_or_exception_outside_kernel_modules():
     offenders = _offenders()
     assert not offenders, "bare raises (use InputError naming the parameter):\n" + "\n".join(offenders)
+
+
+def test_every_exception_and_warning_of_the_package_is_exported_at_the_top():
+    # API audit F18: CollapseWarning and MatchingWarning, which the library emits, were
+    # importable only from centrality_vision.exceptions
+    import inspect
+
+    import centrality_vision
+    from centrality_vision import exceptions
+
+    defined = {
+        name for name, obj in vars(exceptions).items() if inspect.isclass(obj) and obj.__module__ == exceptions.__name__
+    }
+    assert defined == {
+        "CentralityVisionError",
+        "InputError",
+        "ConvergenceWarning",
+        "CollapseWarning",
+        "MatchingWarning",
+    }
+    assert defined <= set(centrality_vision.__all__)
+    assert all(getattr(centrality_vision, name) is getattr(exceptions, name) for name in defined)

@@ -7,12 +7,17 @@ Subpackages, in the one direction data flows:
   eigenvector and eccentricity centralities, and the degree entropy.
 - :mod:`centrality_vision.datasets`: the bundled Kimia-99 silhouettes and CPD point sets.
 - :mod:`centrality_vision.plotting`: figures (matplotlib is imported lazily).
+
+The package's exceptions and warnings (:mod:`centrality_vision.exceptions`) are exported
+here too: bad input raises :class:`InputError` (a ``ValueError``); a registration that
+stops early warns :class:`ConvergenceWarning`, one whose scale or variance collapses
+:class:`CollapseWarning`, and an unreliable matching :class:`MatchingWarning`.
 """
 
 from importlib.metadata import PackageNotFoundError, version
 
 from ._parallel import get_num_threads, set_num_threads
-from .exceptions import CentralityVisionError, ConvergenceWarning, InputError
+from .exceptions import CentralityVisionError, CollapseWarning, ConvergenceWarning, InputError, MatchingWarning
 
 try:
     __version__ = version("centrality-vision")
@@ -21,8 +26,10 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 
 __all__ = [
     "CentralityVisionError",
+    "CollapseWarning",
     "ConvergenceWarning",
     "InputError",
+    "MatchingWarning",
     "get_num_threads",
     "set_num_threads",
     "__version__",

@@ -809,7 +809,7 @@ def _meshio():
         import meshio
         import meshio.ply
     except ImportError:  # pragma: no cover - meshio is a dependency
-        raise InputError("reading and writing PLY files needs the meshio package: pip install meshio") from None
+        raise ImportError("writing PLY files needs the meshio package: pip install meshio") from None
     return meshio
 
 
