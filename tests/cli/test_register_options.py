@@ -245,3 +245,16 @@ def test_iteration_limits_default_to_the_methods_own(tmp_path, method, estimator
     assert record["parameters"]["tol"] == signature["tol"].default
     given = _register(tmp_path, fixed + 0.01, fixed, "--method", method, "--transform", "rigid", "--max-iter", "7")
     assert given["parameters"]["max_iter"] == 7
+
+
+def test_an_estimators_parameter_reads_as_the_option():
+    # API audit (errors): estimators name `RigidCPD.tol`, which the command line showed as is
+    import argparse
+
+    from centrality_vision.cli import _in_cli_words
+    from centrality_vision.cli.register import add_parser
+
+    parser = add_parser(argparse.ArgumentParser().add_subparsers())
+    args = parser.parse_args(["m.txt", "f.txt", "--out", "x.json"])
+    said = _in_cli_words("`NonRigidCPD.lam` must be positive; `RigidCPD.tol` too, and `tol`.", parser, args)
+    assert said == "--lam must be positive; --tol too, and --tol."

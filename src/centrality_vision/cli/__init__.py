@@ -133,8 +133,9 @@ def _glued_columns(argv: list[str]) -> list[str]:
 def _in_cli_words(message: str, parser, args: argparse.Namespace | None = None) -> str:
     """A library message in this command's words.
 
-    - A parameter (```tol```) becomes its option (``--tol``), and a setting
-      (```tol=1e-05```) the option with its value (``--tol 1e-05``); a command's
+    - A parameter (```tol```, or an estimator's ```RigidCPD.tol```) becomes its option
+      (``--tol``), and a setting (```tol=1e-05```) the option with its value
+      (``--tol 1e-05``); a command's
       ``_cli_phrases`` (``{library phrase: command-line phrase}``) come first, for
       settings the command spells otherwise (``match``: ```scale=True``` is
       ``--transform similarity``).
@@ -159,7 +160,8 @@ def _in_cli_words(message: str, parser, args: argparse.Namespace | None = None) 
                 return option if flag and value == "True" else f"{option} {value}"
 
             message = re.sub(rf"`{re.escape(action.dest)}=([^`]*)`", setting, message)
-            message = message.replace(f"`{action.dest}`", longs[0])
+            # an estimator's parameter (`RigidCPD.tol`) is the option too
+            message = re.sub(rf"`(?:[A-Z]\w*\.)?{re.escape(action.dest)}`", longs[0], message)
         elif not action.option_strings and isinstance(getattr(args, action.dest, None), str):
             metavar = action.metavar or action.dest.upper()
             for name in (action.dest, *(name for name, dest in aliases.items() if dest == action.dest)):
