@@ -51,6 +51,12 @@ def get_num_threads() -> int:
 def set_num_threads(n: int) -> None:
     """Set how many threads the compiled centralities use (``None`` restores the default).
 
+    Parameters
+    ----------
+    n : int >= 1 or None
+        Threads for this process from now on. None: back to ``$CENTRALITY_VISION_NUM_THREADS``,
+        else the cores this process may run on (:func:`get_num_threads`).
+
     Examples
     --------
     >>> import centrality_vision as cv

@@ -169,6 +169,19 @@ class SimilarityTransform(_ArrayEquality):
         return _finite_result(out, type(self).__name__)
 
     def inverse(self) -> SimilarityTransform:
+        """The transform taking ``self(x)`` back to ``x``.
+
+        Returns
+        -------
+        SimilarityTransform
+            Rotation ``rotation.T``, translation ``-rotation.T @ translation / scale`` and
+            scale ``1 / scale``.
+
+        Raises
+        ------
+        InputError
+            When ``1 / scale`` or that translation is beyond float64.
+        """
         rotation = self.rotation.T
         with np.errstate(over="ignore", invalid="ignore"):
             translation, scale = -(rotation @ self.translation) / self.scale, 1.0 / self.scale
@@ -202,6 +215,13 @@ class RigidTransform(SimilarityTransform):
         super().__post_init__()
 
     def inverse(self) -> RigidTransform:
+        """The transform taking ``self(x)`` back to ``x``.
+
+        Returns
+        -------
+        RigidTransform
+            Rotation ``rotation.T`` and translation ``-rotation.T @ translation``.
+        """
         rotation = self.rotation.T
         return RigidTransform(rotation, -(rotation @ self.translation))
 
@@ -380,7 +400,18 @@ class NonRigidTransform(_ArrayEquality):
         """The displacement ``T(z) - z`` at each row of ``points``, in blocks of rows.
 
         It is summed as ``(p - z) + v + field(v)``: far from the origin, near ``p``, no
-        coordinate's rounding enters it."""
+        coordinate's rounding enters it.
+
+        Parameters
+        ----------
+        points : array_like of shape (n_points, D)
+            D is the dimension of ``control_points``.
+
+        Returns
+        -------
+        ndarray of shape (n_points, D)
+            ``self(points) - points``.
+        """
         points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
         with np.errstate(over="ignore", invalid="ignore"):
             v = self._pre(points)
@@ -400,6 +431,17 @@ class NonRigidTransform(_ArrayEquality):
 
 def random_rotation(n_dims: int, seed=None) -> np.ndarray:
     """A uniformly distributed proper rotation matrix of shape (n_dims, n_dims).
+
+    Parameters
+    ----------
+    n_dims : int in [1, 1000]
+    seed : int, numpy.random.Generator or None, default=None
+        Seed of the draw; ``None`` draws fresh entropy.
+
+    Returns
+    -------
+    ndarray of shape (n_dims, n_dims)
+        Orthogonal, determinant +1.
 
     Examples
     --------
@@ -488,6 +530,19 @@ def proper_rotation(cross: np.ndarray) -> tuple[np.ndarray, float]:
     ``det(U V^T) < 0`` (Umeyama's correction), so det R = +1 even for reflected data.
     A non-finite ``cross`` raises :class:`InputError` (LAPACK's SVD can loop on inf).
 
+    Parameters
+    ----------
+    cross : array_like of shape (D, D)
+        A square, finite matrix with D >= 1, e.g. the cross-covariance ``fixed.T @ moving``
+        of two centred point sets.
+
+    Returns
+    -------
+    rotation : ndarray of shape (D, D)
+        Orthogonal, determinant +1.
+    trace : float
+        ``tr(cross^T rotation)``, the maximum.
+
     Examples
     --------
     >>> r, trace = proper_rotation(np.diag([2.0, 1.0]))
@@ -515,6 +570,17 @@ def power_of_two_scale(points: np.ndarray) -> float:
     Dividing by it is exact in floating point and brings every coordinate into [-2, 2], so
     that products and sums of squares stay finite (even for coordinates near 1e308).
 
+    Parameters
+    ----------
+    points : array_like
+        Finite real numbers, of any shape.
+
+    Returns
+    -------
+    float
+        ``2**e`` with ``2**e <= max |points| < 2**(e + 1)``; 1.0 when every value is 0 or
+        there are none.
+
     Examples
     --------
     >>> power_of_two_scale(np.array([[3.0, -5.0]])), power_of_two_scale(np.zeros((2, 2)))
@@ -532,6 +598,16 @@ def _unit(points: np.ndarray) -> float:
 
 def rms_radius(points: np.ndarray) -> float:
     """The RMS distance of the rows from their mean, without overflow near 1e308 (0 for no rows).
+
+    Parameters
+    ----------
+    points : array_like of shape (n_points, n_dims)
+        Finite.
+
+    Returns
+    -------
+    float
+        ``sqrt(mean_i |points[i] - mean|^2)``.
 
     Examples
     --------
@@ -552,6 +628,17 @@ def centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     The correction keeps the centred coordinates accurate when the points sit far from the
     origin (e.g. a shape of size 1 at offset 1e8); the points are pre-divided by a power of
     two so that the sum cannot overflow.
+
+    Parameters
+    ----------
+    points : array_like of shape (n_points, n_dims)
+        Finite, at least one row.
+
+    Returns
+    -------
+    mean : ndarray of shape (n_dims,)
+    centred : ndarray of shape (n_points, n_dims)
+        ``points - mean``.
 
     Examples
     --------
@@ -583,6 +670,23 @@ def least_squares_similarity(
     Each centred set is divided by a power of two within a factor 2 of its largest
     coordinate before the cross-covariance is formed, so coordinates up to the float64
     limit give finite products (no inf reaches the SVD).
+
+    Parameters
+    ----------
+    moving, fixed : array_like of shape (n_points, D)
+        Finite paired points (at least 1 row), ``moving[i]`` to go onto ``fixed[i]``.
+    scale : bool
+        Fit ``s`` (True), or keep ``s = 1``.
+
+    Returns
+    -------
+    rotation : ndarray of shape (D, D)
+        Proper rotation ``R``.
+    translation : ndarray of shape (D,)
+        ``t``.
+    s : float
+        Positive scale: 1 without ``scale``, or when the centred ``moving`` is all zeros or
+        the best rotation's trace is not positive.
 
     Examples
     --------

@@ -955,6 +955,17 @@ def degree_entropy(graph, /) -> float:
     where :math:`p(v)` is the share of the ``n`` nodes whose degree is ``v``; isolated
     nodes count, with degree 0. Edge values are ignored.
 
+    Parameters
+    ----------
+    graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph
+        Undirected (an asymmetric adjacency or a directed graph is refused); self-loops
+        are dropped.
+
+    Returns
+    -------
+    float
+        The entropy in bits; 0 when every node has the same degree.
+
     Examples
     --------
     >>> from scipy import sparse

@@ -243,6 +243,16 @@ class Kimia99:
 
         The array returned is the one held in :attr:`images` (not a copy).
 
+        Parameters
+        ----------
+        name : str
+            One of :attr:`names`.
+
+        Returns
+        -------
+        ndarray of bool
+            The 2D mask ``images[i]`` of the first ``i`` with ``names[i] == name``.
+
         Raises
         ------
         InputError

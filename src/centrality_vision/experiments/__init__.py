@@ -144,7 +144,27 @@ def check_options(*, quick=False, seed=0, seeds=None, scheduler=None, workers=No
     :func:`~centrality_vision.experiments.report.run_all`, checked: ``quick`` True or False,
     ``seed`` an int in [0, 2**32 - 1], ``seeds`` None or an int in [1, 100000], ``scheduler``
     None or a scheduler name, ``workers`` None or an int in [1, 1024]. A bad one is a named
-    ``TypeError`` or :class:`~centrality_vision.exceptions.InputError`."""
+    ``TypeError`` or :class:`~centrality_vision.exceptions.InputError`.
+
+    Parameters
+    ----------
+    quick : bool, default=False
+        The experiments' quick (smaller) runs.
+    seed : int in [0, 2**32 - 1], default=0
+        Seed of the run drawn in the figures.
+    seeds : int in [1, 100000], optional
+        How many seeds the thesis' claims are checked over.
+    scheduler : {"serial", "processes", "dask"} or "tcp://host:port", optional
+        Where the units run (a Dask scheduler's address: a host and a port in 1..65535).
+    workers : int in [1, 1024], optional
+        Processes or Dask workers.
+
+    Returns
+    -------
+    dict
+        The checked values under the keys ``"quick"``, ``"seed"``, ``"seeds"``, ``"scheduler"``
+        and ``"workers"``.
+    """
     from .._validation import check_int
     from ._common import MAX_SEEDS, check_run
     from ._runner import MAX_WORKERS, _check_scheduler
@@ -172,6 +192,22 @@ def experiment_argv(
     """The command line of experiment ``name``'s ``main`` for these options (checked by
     :func:`check_options`; ``seeds`` only for :data:`SEEDS_EXPERIMENTS`, ``scheduler`` and
     ``workers`` only for :data:`RUNNER_EXPERIMENTS`).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`REGISTRY`, e.g. ``"fig-5.3"``.
+    out : str or os.PathLike
+        The output folder (``--out``).
+    quick, seed, seeds, scheduler, workers :
+        As in :func:`check_options`; those an experiment does not take are left out, and so
+        are ``quick=False`` and the options that are None.
+
+    Returns
+    -------
+    list of str
+        ``--out`` and ``--seed`` first, then ``--quick``, ``--seeds``, ``--scheduler`` and
+        ``--workers`` where given.
 
     Examples
     --------
@@ -220,6 +256,20 @@ def run_experiment(
     experiments of :data:`RUNNER_EXPERIMENTS` and are ignored by the others (they are
     instant). For ``reproduce all`` see :func:`centrality_vision.experiments.report.run_all`,
     which takes the same options.
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`REGISTRY`, e.g. ``"fig-5.3"``.
+    out : str or os.PathLike
+        The output folder, created when missing.
+    quick, seed, seeds, scheduler, workers :
+        As in :func:`check_options`.
+
+    Returns
+    -------
+    int
+        The exit status of the experiment's ``main``: 0 when it finishes (errors are raised).
     """
     from importlib import import_module
 

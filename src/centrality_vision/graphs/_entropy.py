@@ -52,6 +52,18 @@ def nhdd_joining(n: int, *, connected: bool = True) -> np.ndarray:
     Position ``k`` (0-based) joins iff ``n - 1 - k`` is even for the connected graph, so
     that the last node joins; the complement (one isolated node) swaps the roles.
 
+    Parameters
+    ----------
+    n : int >= 2
+        Number of nodes.
+    connected : bool, default=True
+        The connected graph (True) or its complement (False), as in :func:`nhdd_graph`.
+
+    Returns
+    -------
+    ndarray of bool, shape (n,)
+        True at the positions that join all earlier nodes; position 0 is always False.
+
     Examples
     --------
     >>> nhdd_joining(5).tolist()

@@ -277,6 +277,19 @@ def pixel_coordinates(nodes, shape) -> np.ndarray:
     """Pixel coordinates ((row, col), or (plane, row, col)) of pixel-graph nodes, as an
     int64 array of shape (n, len(shape)).
 
+    Parameters
+    ----------
+    nodes : array_like of int, shape (n,)
+        Flat (row-major) pixel indices, each in [0, prod(shape)), e.g. the ``nodes`` of
+        :func:`pixel_graph`.
+    shape : sequence of int
+        The image's shape, ``(n_rows, n_cols)`` or ``(n_planes, n_rows, n_cols)``, every side >= 1.
+
+    Returns
+    -------
+    ndarray of int64, shape (n, len(shape))
+        Row ``i`` holds the coordinates of pixel ``nodes[i]``.
+
     Examples
     --------
     >>> pixel_coordinates([0, 2, 3], (2, 2))

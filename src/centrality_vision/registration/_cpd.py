@@ -143,6 +143,23 @@ class Snapshots:
 def initial_sigma2(moving, fixed) -> float:
     """CPD's starting variance ``sum_mn |x_n - y_m|^2 / (D M N)``, in O((M + N) D).
 
+    Parameters
+    ----------
+    moving : array_like of shape (M, D)
+        The moving set (CPD's Y), D from 1 to 64.
+    fixed : array_like of shape (N, D)
+        The fixed set (CPD's X), of the same D.
+
+    Returns
+    -------
+    float
+        The mean squared distance over all (moving, fixed) pairs, divided by D.
+
+    Raises
+    ------
+    InputError
+        When that value is beyond float64 (rescale the sets).
+
     Examples
     --------
     >>> initial_sigma2([[0.0, 0.0]], [[3.0, 4.0]])
@@ -178,6 +195,18 @@ def _initial_sigma2(moving, fixed) -> float:
 
 def alignment_error(true_moving, moving_transformed) -> float:
     """``|X - T(Y)|``: the Frobenius norm over known correspondences (thesis figs. 5.3, 5.6, 5.8).
+
+    Parameters
+    ----------
+    true_moving : array_like of shape (M, D)
+        Where each moving point truly belongs in the fixed frame (D from 1 to 64).
+    moving_transformed : array_like of shape (M, D)
+        The transformed moving points, row ``i`` paired with row ``i`` of ``true_moving``.
+
+    Returns
+    -------
+    float
+        ``sqrt(sum |true_moving - moving_transformed|^2)`` over all rows, in the caller's units.
 
     Examples
     --------
@@ -589,6 +618,10 @@ class _CPD(BaseEstimator):
             The hook GPD uses: a log prior on the (moving, fixed) pairs added to the E-step
             (thesis eq. 5.10), or ``prior(sigma2_ratio) -> CentralityPrior | None`` called
             before each E-step with the current sigma2 over the initial one (a schedule).
+
+        Returns
+        -------
+        self : RigidCPD, AffineCPD or NonRigidCPD
         """
         self._check_common()
         self._check_params()

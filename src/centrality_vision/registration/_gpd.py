@@ -67,6 +67,19 @@ def _build_graph(points: np.ndarray, graph, k: int):
 def normalize_centrality(values, *, name: str = "values") -> np.ndarray:
     """Min-max scale centrality values to [0, 1]; a constant vector (to 1e-9) becomes zeros.
 
+    Parameters
+    ----------
+    values : array_like of shape (n,)
+        Finite real values, at least one.
+    name : str, default="values"
+        The parameter name error messages give.
+
+    Returns
+    -------
+    ndarray of float, shape (n,)
+        ``(values - min) / (max - min)``: 0 at the smallest value, 1 at the largest; all zeros
+        when the span is at most 1e-9 times the largest absolute value.
+
     Examples
     --------
     >>> normalize_centrality([2.0, 4.0, 3.0])
@@ -422,6 +435,29 @@ class GPD(BaseEstimator):
         ``moving_graph``/``fixed_graph`` (sparse adjacency, one node per point) or
         ``moving_centrality``/``fixed_centrality`` (raw values, normalised here) replace the
         ones GPD would build. ``true_moving`` and ``landmarks`` as in :meth:`RigidCPD.fit`.
+
+        Parameters
+        ----------
+        moving : array_like of shape (M, D)
+            The set to transform. Not modified. D from 1 to 64, but 2 or 3 where GPD builds a
+            ``"delaunay"``, ``"gabriel"`` or ``"emst"`` graph.
+        fixed : array_like of shape (N, D)
+            The set it is brought onto, of the same D. Not modified.
+        true_moving : array_like of shape (M, D), optional
+            Where each moving point truly belongs; ``history_["error"]`` then holds
+            ``|true_moving - T(Y)|`` per iteration.
+        landmarks : sequence of (i, j) pairs, optional
+            Moving point ``i`` corresponds to fixed point ``j`` (see :meth:`RigidCPD.fit`).
+        moving_graph, fixed_graph : sparse array or matrix of shape (n, n), or a networkx or igraph graph, optional
+            Undirected graph with one node per point of that set, used instead of the ``graph``
+            GPD would build; ignored where the set's centrality is given.
+        moving_centrality, fixed_centrality : array_like of shape (M,) and (N,), optional
+            Finite centrality values, one per point, used instead of computing ``centrality``;
+            they are min-max normalised (:func:`normalize_centrality`).
+
+        Returns
+        -------
+        self : GPD
         """
         self._check_params()
         base = RigidCPD() if self.base_cpd is None else self.base_cpd
@@ -443,12 +479,37 @@ class GPD(BaseEstimator):
         return self
 
     def transform(self, points) -> np.ndarray:
-        """Apply the fitted transform to new points."""
+        """Apply the fitted transform to new points.
+
+        Parameters
+        ----------
+        points : array_like of shape (n_points, D)
+            Points in the moving set's frame, D as in :meth:`fit`.
+
+        Returns
+        -------
+        ndarray of shape (n_points, D)
+            ``transform_(points)``.
+        """
         check_is_fitted(self, "estimator_")
         return self.estimator_.transform(points)
 
     def score(self, moving, fixed) -> float:
-        """The fitted base estimator's :meth:`RigidCPD.score`."""
+        """The fitted base estimator's :meth:`RigidCPD.score`.
+
+        Parameters
+        ----------
+        moving : array_like of shape (M, D)
+            Points to transform with the fitted transform.
+        fixed : array_like of shape (N, D)
+            Points to compare them with.
+
+        Returns
+        -------
+        float
+            Minus the mean distance from each fixed point to its nearest transformed moving point
+            (at most 0; larger is better), in the caller's units.
+        """
         check_is_fitted(self, "estimator_")
         return self.estimator_.score(moving, fixed)
 

@@ -34,6 +34,18 @@ def estimate_normals(points, *, k: int = 10) -> np.ndarray:
     """Unit normals by local PCA: for each point, the direction of least variance of its
     ``k`` nearest neighbours (itself included). The sign is arbitrary.
 
+    Parameters
+    ----------
+    points : array_like of shape (n_points, 2) or (n_points, 3)
+        At least 2 points.
+    k : int >= 2, default=10
+        Neighbours per point; at most ``n_points`` are used.
+
+    Returns
+    -------
+    ndarray of shape (n_points, n_dims)
+        One unit normal per row of ``points``.
+
     Examples
     --------
     >>> import numpy as np
@@ -197,7 +209,24 @@ class ICP(BaseEstimator):
             raise TypeError(f"`ICP.callback` must be callable or None; got {self.callback!r}.")
 
     def fit(self, moving, fixed, *, true_moving=None):
-        """Register ``moving`` onto ``fixed``; returns ``self``. See :meth:`RigidCPD.fit`."""
+        """Register ``moving`` onto ``fixed``; returns ``self``. See :meth:`RigidCPD.fit`.
+
+        Parameters
+        ----------
+        moving : array_like of shape (M, D)
+            The set to transform, at least D + 1 points (D from 1 to 64; 2 or 3 for
+            ``metric='point_to_plane'``). Not modified.
+        fixed : array_like of shape (N, D)
+            The set it is brought onto, of the same D (at least D points for
+            ``metric='point_to_plane'``). Not modified.
+        true_moving : array_like of shape (M, D), optional
+            Where each moving point truly belongs; ``history_["error"]`` then holds
+            ``|true_moving - T(Y)|`` per iteration (None otherwise).
+
+        Returns
+        -------
+        self : ICP
+        """
         self._check_params()
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
         fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
@@ -368,7 +397,18 @@ class ICP(BaseEstimator):
         return keep
 
     def transform(self, points) -> np.ndarray:
-        """Apply the fitted transform to new points."""
+        """Apply the fitted transform to new points.
+
+        Parameters
+        ----------
+        points : array_like of shape (n_points, D)
+            Points in the moving set's frame, D as in :meth:`fit`.
+
+        Returns
+        -------
+        ndarray of shape (n_points, D)
+            ``transform_(points)``.
+        """
         check_is_fitted(self, "transform_")
         return self.transform_(points)
 

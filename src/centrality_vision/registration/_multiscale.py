@@ -187,7 +187,20 @@ class MultiscaleCPD(BaseEstimator):
         return sizes, isinstance(self.estimator, NonRigidCPD)
 
     def fit(self, moving, fixed):
-        """Register ``moving`` (M x D) onto ``fixed`` (N x D); returns ``self``. Neither is modified."""
+        """Register ``moving`` (M x D) onto ``fixed`` (N x D); returns ``self``. Neither is modified.
+
+        Parameters
+        ----------
+        moving : array_like of shape (M, D)
+            The set to transform, D from 1 to 64; each level registers a subsample of it.
+        fixed : array_like of shape (N, D)
+            The set it is brought onto, of the same D.
+
+        Returns
+        -------
+        self : MultiscaleCPD
+            With ``transform_``, ``moving_transformed_`` (all M points), ``levels_`` and ``sigma2_``.
+        """
         sizes, nonrigid = self._check()
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
         fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
@@ -242,7 +255,18 @@ class MultiscaleCPD(BaseEstimator):
         return self
 
     def transform(self, points):
-        """Apply the fitted transform to new points."""
+        """Apply the fitted transform to new points.
+
+        Parameters
+        ----------
+        points : array_like of shape (n_points, D)
+            Points in the moving set's frame, D as in :meth:`fit`.
+
+        Returns
+        -------
+        ndarray of shape (n_points, D)
+            ``transform_(points)``.
+        """
         check_is_fitted(self, "transform_")
         return self.transform_(as_points(points, name="points", n_dims=ANY_DIMS))
 

@@ -57,6 +57,22 @@ def as_shape_images(
     touches most of the border gets a warning (it looks inverted). A shape must have
     background too: an all-foreground image has no outline.
 
+    Parameters
+    ----------
+    images : sequence of 2D array_like, or array_like of shape (n_images, rows, cols)
+        At least one image; a single 2D array is refused (wrap it in a list).
+    name : str, default="X"
+        The parameter name error messages give (``X[i]`` for image ``i``).
+    foreground : {"auto", "dark", "light"}, default="auto"
+        Which side of a grey image is the shape; ``"dark"`` also takes the 0s of a mask.
+    threshold : float, optional
+        Grey level splitting grey images; default half each image's range, ``(min + max) / 2``.
+
+    Returns
+    -------
+    list of ndarray of bool
+        One 2D mask per image (True = the shape), each with foreground and background pixels.
+
     Examples
     --------
     >>> image = np.zeros((5, 5), dtype=np.uint8)
@@ -302,7 +318,25 @@ class CentralityCache:
         return entry
 
     def lookup(self, mask: np.ndarray, name: str, *, connectivity: int = 8, weights: bool = False):
-        """The cached values (memory, then disk) or None; never computes."""
+        """The cached values (memory, then disk) or None; never computes.
+
+        Parameters
+        ----------
+        mask : 2D array_like
+            The shape: a boolean mask (True = shape), or a 0/1 or grey image split as
+            :func:`as_shape_images` splits it with its defaults.
+        name : str
+            A centrality from :data:`centrality_vision.centrality.CENTRALITIES`.
+        connectivity : {8, 4}, default=8
+            Pixel neighbourhood.
+        weights : bool, default=False
+            As in :meth:`get`.
+
+        Returns
+        -------
+        (values, nodes) or None
+            As :meth:`get` returns them, or None when neither memory nor disk holds them.
+        """
         name = check_choice(name, CENTRALITIES, name="name")
         mask = _as_mask(mask)
         key = _key(mask, connectivity, weights)
@@ -332,6 +366,30 @@ class CentralityCache:
         harmonic, eccentricity) Euclidean edge lengths 1 and sqrt 2; degree and
         eigenvector are the same either way. With ``wait=False``, returns None instead
         of waiting when another process holds the lock on this image.
+
+        Parameters
+        ----------
+        mask : 2D array_like
+            The shape: a boolean mask (True = shape), or a 0/1 or grey image split as
+            :func:`as_shape_images` splits it with its defaults.
+        name : str
+            A centrality from :data:`centrality_vision.centrality.CENTRALITIES`.
+        connectivity : {8, 4}, default=8
+            Pixel neighbourhood.
+        weights : bool, default=False
+            Euclidean edge lengths (True) or hop counts (False) for the shortest-path centralities.
+        wait : bool, default=True
+            Only matters with a ``directory``, where a ``.lock`` file marks an image that another
+            process (or thread) is computing. True: poll every 0.05 s until its values are on
+            disk, or until the lock is gone and this call computes them itself (a lock older than
+            600 s, or whose process has ended, is taken over). False: return None at once.
+
+        Returns
+        -------
+        (values, nodes) or None
+            ``values``: float64, one per foreground pixel in row-major order; ``nodes``: the flat
+            (row-major) pixel index of each; both of shape (n_foreground,) and read-only. None
+            with ``wait=False`` while another process holds the lock.
         """
         mask = _as_mask(mask)
         found = self.lookup(mask, name, connectivity=connectivity, weights=weights)
@@ -362,6 +420,27 @@ class CentralityCache:
         They are checked as :meth:`get` would compute them: a known centrality, a pixel
         connectivity, one finite value per foreground pixel (a NaN stored here was served
         to every later lookup).
+
+        Parameters
+        ----------
+        mask : 2D array_like
+            The shape: a boolean mask (True = shape), or a 0/1 or grey image split as
+            :func:`as_shape_images` splits it with its defaults.
+        name : str
+            A centrality from :data:`centrality_vision.centrality.CENTRALITIES`.
+        values : array_like of shape (n_foreground,)
+            Finite real values, one per foreground pixel in row-major order.
+        connectivity : {8, 4}, default=8
+            Pixel neighbourhood the values were computed with.
+        weights : bool, default=False
+            Whether they were computed with Euclidean edge lengths (see :meth:`get`).
+
+        Returns
+        -------
+        dict
+            The image's entry in memory: ``"nodes"`` (flat pixel indices) and each centrality
+            kept for it, ``name`` included, as read-only arrays. The values are also written to
+            the ``directory``, unless a file for them is already there.
         """
         mask = _as_mask(mask)
         name = check_choice(name, CENTRALITIES, name="name")
@@ -392,6 +471,17 @@ _registry_lock = threading.Lock()
 def resolve_cache(cache, *, name: str = "cache") -> CentralityCache:
     """``None`` -> :data:`default_cache`; a :class:`CentralityCache` -> itself; a path ->
     the process's cache on that directory (one per directory, so its memory is reused).
+
+    Parameters
+    ----------
+    cache : None, CentralityCache, str or os.PathLike
+        A path names a folder (created when first written to); ``~`` is expanded.
+    name : str, default="cache"
+        The parameter name error messages give.
+
+    Returns
+    -------
+    CentralityCache
 
     Examples
     --------

@@ -247,7 +247,18 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         return names, n, extent
 
     def fit(self, X, y=None):
-        """Draw the comparisons (the images are only checked)."""
+        """Draw the comparisons (the images are only checked).
+
+        Parameters
+        ----------
+        X : sequence of images of shape (rows, cols)
+            Masks or grey images (see :func:`as_shape_images`); sizes may differ.
+        y : ignored
+
+        Returns
+        -------
+        self : CentralityComparisons
+        """
         names, n, extent = self._drawn_with()
         self._masks(X)
         rng = _random_state(self)
@@ -399,7 +410,19 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         return int(a), int(b)
 
     def fit(self, X, y):
-        """Draw the comparisons and grow the forest on the shapes ``X`` with labels ``y``."""
+        """Draw the comparisons and grow the forest on the shapes ``X`` with labels ``y``.
+
+        Parameters
+        ----------
+        X : sequence of images of shape (rows, cols)
+            Masks or grey images (see :func:`as_shape_images`); sizes may differ.
+        y : array_like of shape (n_samples,)
+            Class label of each image of ``X`` (required).
+
+        Returns
+        -------
+        self : CentralityComparisonForest
+        """
         from sklearn.ensemble import RandomForestClassifier
         from sklearn.utils import check_array
         from sklearn.utils.multiclass import check_classification_targets
@@ -445,14 +468,36 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         return self
 
     def predict_proba(self, X) -> np.ndarray:
-        """Class probabilities (mean of the trees' leaf distributions), shape (n_images, n_classes)."""
+        """Class probabilities (mean of the trees' leaf distributions), shape (n_images, n_classes).
+
+        Parameters
+        ----------
+        X : sequence of images of shape (rows, cols)
+            Masks or grey images, read as in :meth:`fit`.
+
+        Returns
+        -------
+        ndarray of shape (n_images, n_classes)
+            Columns in the order of ``classes_``; each row sums to 1.
+        """
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "forest_")
         return self.forest_.predict_proba(self.comparisons_.transform(self._masks(X)))
 
     def predict(self, X) -> np.ndarray:
-        """Most probable class of each shape."""
+        """Most probable class of each shape.
+
+        Parameters
+        ----------
+        X : sequence of images of shape (rows, cols)
+            Masks or grey images, read as in :meth:`fit`.
+
+        Returns
+        -------
+        ndarray of shape (n_images,)
+            Labels from ``classes_`` (on equal probabilities, the first in ``classes_``).
+        """
         proba = self.predict_proba(X)
         return self.classes_[np.argmax(proba, axis=1)]
 

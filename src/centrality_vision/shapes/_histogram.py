@@ -248,7 +248,18 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         return out
 
     def get_feature_names_out(self, input_features=None) -> np.ndarray:
-        """Names ``"<centrality>_bin<k>"`` of the output features."""
+        """Names ``"<centrality>_bin<k>"`` of the output features.
+
+        Parameters
+        ----------
+        input_features : ignored
+            Present for scikit-learn's API (the inputs are images, not named columns).
+
+        Returns
+        -------
+        ndarray of str objects, shape (``n_features_out_``,)
+            ``k`` runs from 0 to ``bins - 1`` for each centrality of ``centralities_``, in order.
+        """
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "centralities_")

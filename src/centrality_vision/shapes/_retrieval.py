@@ -453,6 +453,18 @@ def pairwise_shape_distances(
 def shape_distance(a, b, /, **options) -> float:
     """Distance between two shapes: ``pairwise_shape_distances([a, b], **options)[0, 1]``.
 
+    Parameters
+    ----------
+    a, b : 2D array_like
+        Masks or grey images (see :func:`as_shape_images`); sizes may differ.
+    **options
+        Keyword arguments of :func:`pairwise_shape_distances` (``method``, ``n_points``, ...).
+
+    Returns
+    -------
+    float
+        Non-negative; 0 for two identical images.
+
     Examples
     --------
     >>> import numpy as np
@@ -535,6 +547,18 @@ def diffusion_rerank(distances, /, *, n_neighbors: int = 8, bandwidth: int = 10,
 
     ``distances`` must be non-negative (an :class:`InputError` otherwise).
 
+    Parameters
+    ----------
+    distances : array_like of shape (n, n)
+        Finite, non-negative dissimilarities, n >= 2; made symmetric by taking the smaller
+        of ``d[i, j]`` and ``d[j, i]``, the diagonal set to 0.
+    n_neighbors : int in [1, n], default=8
+        Strongest affinities each shape keeps in ``P``.
+    bandwidth : int in [1, n - 1], default=10
+        Which nearest neighbour's distance sets each shape's scale ``s_i``.
+    n_iter : int >= 1, default=5
+        Diffusion steps.
+
     Returns
     -------
     ndarray of shape (n, n)
@@ -595,6 +619,20 @@ def bullseye_score(distances, labels, /, *, top: int = 40) -> float:
     size one ``top`` serves every query (the textbook score uses twice each query's class
     size). Row ``i`` holds query ``i``'s distances; equal distances rank the lower index
     first. ``labels`` are all strings or all numbers.
+
+    Parameters
+    ----------
+    distances : array_like of shape (n_shapes, n_shapes)
+        Finite; row ``i`` holds query ``i``'s distances to every shape (n_shapes >= 2).
+    labels : array_like of shape (n_shapes,)
+        Class of each shape; all strings or all numbers, no NaN or None.
+    top : int >= 1, default=40
+        How many of the nearest shapes count, the query included.
+
+    Returns
+    -------
+    float
+        Same-class shapes found over the most that could be found, in [0, 1].
 
     Examples
     --------
@@ -660,6 +698,24 @@ def nearest_neighbour_accuracy(distances, labels, /, *, n_train: int = 10, n_spl
     random as the training set; every other shape takes the class of its nearest
     training shape (on equal distances, the lower index). Returns the mean accuracy
     (MPEG-7 protocol: 10 per class).
+
+    Parameters
+    ----------
+    distances : array_like of shape (n_shapes, n_shapes)
+        Finite; row ``i`` holds shape ``i``'s distances to every shape (n_shapes >= 2).
+    labels : array_like of shape (n_shapes,)
+        Class of each shape; all strings or all numbers, no NaN or None.
+    n_train : int >= 1, default=10
+        Training shapes per class; every class must have more.
+    n_splits : int >= 1, default=10
+        Random splits averaged over.
+    seed : int, numpy.random.Generator or None, default=0
+        Seed of the splits; ``None`` draws fresh entropy.
+
+    Returns
+    -------
+    float
+        Mean share of the test shapes classified correctly, in [0, 1].
 
     Examples
     --------
