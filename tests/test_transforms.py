@@ -263,3 +263,5 @@ def test_fit_similarity_takes_moving_and_fixed_and_its_former_names_with_a_warni
         fit_similarity(fixed=fixed, moving=moving, source=moving)
     with pytest.raises(ValueError, match="`moving` and `fixed` must have the same shape"):
         fit_similarity(moving, fixed[:5])
+    with pytest.raises(TypeError, match="`scale` must be"):
+        least_squares_similarity(moving, fixed, scale="no")  # a truthy string fitted a scale

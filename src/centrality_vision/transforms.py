@@ -696,6 +696,7 @@ def least_squares_similarity(
     >>> np.allclose(rotation, quarter_turn), np.allclose(translation, [3, 4]), round(s, 12)
     (True, True, 2.0)
     """
+    check_bool(scale, name="scale")
     moving, fixed = _finite_array(moving, "moving"), _finite_array(fixed, "fixed")
     if moving.shape != fixed.shape or moving.shape[0] == 0:
         raise InputError(

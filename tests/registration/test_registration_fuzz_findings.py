@@ -390,9 +390,12 @@ def test_a_non_rigid_transform_needs_points_with_coordinates():
 
 
 def test_gpd_s_graph_failure_names_the_set_and_suggests_other_graphs():
-    # an 'emst' failure suggested 'emst'
-    with pytest.raises(InputError, match=r"^`moving`: GPD could not build its 'emst' graph: .*\(e\.g\. 'knn'\)"):
-        GPD(graph="emst").fit(np.array([[0.0, 0.0], [1.0, 0.0]]), np.array([[0.0, 0.0], [1.0, 0.0]]))
+    # an 'emst' failure suggested 'emst'; for 4D points (which the Delaunay-based graphs
+    # refuse) it then suggested 'knn' or 'emst', and 'emst' failed too
+    points = np.random.default_rng(0).random((10, 4))
+    said = r"^`moving`: GPD could not build its 'emst' graph: .*\(e\.g\. 'knn' or 'complete'\)"
+    with pytest.raises(InputError, match=said):
+        GPD(graph="emst").fit(points, points)
 
 
 @pytest.mark.parametrize("offset", [1e4, 1e6])

@@ -112,6 +112,22 @@ def test_feature_names():
     names = CentralityHistogram(centrality=["degree", "closeness"], bins=3).fit([_disk(5)]).get_feature_names_out()
     expected = [f"{name}_bin{k}" for name in ("degree", "closeness") for k in range(3)]
     assert names.tolist() == expected
+    # the fitted bins name the features: bins changed after fit (which transform refuses)
+    # gave names that did not match n_features_out_
+    histogram = CentralityHistogram(centrality=["degree", "closeness"], bins=3).fit([_disk(5)])
+    histogram.bins = 5
+    assert histogram.get_feature_names_out().tolist() == expected
+
+
+def test_the_cache_hands_out_copies_of_its_entries():
+    from centrality_vision.shapes import CentralityCache
+
+    cache = CentralityCache()
+    mask = _disk(4)
+    entry = cache.put(mask, "degree", np.ones(int(mask.sum())))
+    entry["degree"] = np.zeros(3)  # changes the caller's copy only
+    values, _ = cache.get(mask, "degree")
+    np.testing.assert_array_equal(values, np.ones(int(mask.sum())))
 
 
 def test_centrality_map_fills_holes_from_nearest_pixel():

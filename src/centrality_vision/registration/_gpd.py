@@ -398,7 +398,9 @@ class GPD(BaseEstimator):
                 graph = _build_graph(points, self.graph, self.k)
             except InputError as exc:
                 kind = getattr(self.graph, "__name__", self.graph)
-                others = " or ".join(repr(g) for g in ("knn", "emst") if g != kind)
+                # the Delaunay-based graphs take 2D and 3D points only
+                offered = ("knn", "emst") if points.shape[1] in (2, 3) else ("knn", "complete")
+                others = " or ".join(repr(g) for g in offered if g != kind)
                 raise InputError(
                     f"`{name}`: GPD could not build its {kind!r} graph: {exc} Choose another `graph` "
                     f"(e.g. {others}). From Python, you can also pass your own "

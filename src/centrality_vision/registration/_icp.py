@@ -138,8 +138,9 @@ class ICP(BaseEstimator):
     metric : {'point_to_point', 'point_to_plane'}, default='point_to_point'
         With a flat (3D) or straight (2D) fixed set, point-to-plane leaves the motions along it
         free: a :class:`~centrality_vision.exceptions.ConvergenceWarning` then says so.
-    k_normals : int, default=10
-        Neighbours for the normals of ``metric='point_to_plane'``.
+    k_normals : int >= 3, default=10
+        Neighbours for the normals of ``metric='point_to_plane'`` (the point itself
+        included; :func:`estimate_normals` takes 2, enough in 2D only).
     init : RigidTransform or SimilarityTransform, optional
         Starting pose (identity by default).
     callback : callable, optional

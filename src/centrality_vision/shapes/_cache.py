@@ -315,7 +315,7 @@ class CentralityCache:
             self._store.move_to_end(key)
             while len(self._store) > self.max_images:
                 self._store.popitem(last=False)
-        return entry
+            return dict(entry)  # a copy: the caller cannot change what the cache holds
 
     def lookup(self, mask: np.ndarray, name: str, *, connectivity: int = 8, weights: bool = False):
         """The cached values (memory, then disk) or None; never computes.
@@ -438,8 +438,8 @@ class CentralityCache:
         Returns
         -------
         dict
-            The image's entry in memory: ``"nodes"`` (flat pixel indices) and each centrality
-            kept for it, ``name`` included, as read-only arrays. The values are also written to
+            A copy of the image's entry in memory: ``"nodes"`` (flat pixel indices) and each
+            centrality kept for it, ``name`` included, as read-only arrays. The values are also written to
             the ``directory``, unless a file for them is already there.
         """
         mask = _as_mask(mask)

@@ -258,12 +258,14 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         Returns
         -------
         ndarray of str objects, shape (``n_features_out_``,)
-            ``k`` runs from 0 to ``bins - 1`` for each centrality of ``centralities_``, in order.
+            ``k`` runs over the bins of the fit for each centrality of ``centralities_``, in
+            order (the fitted bins: changing ``bins`` after ``fit`` does not change them).
         """
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "centralities_")
-        return np.array([f"{name}_bin{k}" for name in self.centralities_ for k in range(self.bins)], dtype=object)
+        bins = self.n_features_out_ // len(self.centralities_)
+        return np.array([f"{name}_bin{k}" for name in self.centralities_ for k in range(bins)], dtype=object)
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
