@@ -159,3 +159,21 @@ def test_spacing_whose_lengths_overflow_is_refused(spacing):
 def test_bad_spacing_and_shape_are_named(call, error, message):
     with pytest.raises(error, match=message):
         call()
+
+
+def test_foreground_chooses_the_side_in_2d_and_3d():
+    # API audit F5: pixel_graph and salt_noise could not choose the side of a grey image
+    from centrality_vision.graphs import salt_noise
+
+    image = np.full((8, 8), 200.0)
+    image[2:6, 2:6] = 10.0  # a dark 4 x 4 square on a light image
+    assert pixel_graph(image, threshold=100)[1].size == 16  # auto: the side off the border
+    assert pixel_graph(image, threshold=100, foreground="dark")[1].size == 16
+    assert pixel_graph(image, threshold=100, foreground="light")[1].size == 48
+    volume = np.stack([image] * 3)
+    assert pixel_graph(volume, threshold=100)[1].size == 3 * 48  # 3D auto: above the threshold
+    assert pixel_graph(volume, threshold=100, foreground="dark")[1].size == 3 * 16
+    assert pixel_graph(volume > 100, foreground="dark")[1].size == 3 * 16  # a mask's False side
+    assert int(salt_noise(image, 0.25, seed=0, threshold=100, foreground="light").sum()) == 36
+    with pytest.raises(ValueError, match="`foreground` must be one of 'auto', 'dark', 'light'; got 'white'"):
+        pixel_graph(volume, threshold=100, foreground="white")

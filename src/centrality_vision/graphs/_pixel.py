@@ -9,7 +9,7 @@ from numba import njit
 from scipy import sparse
 
 from .._seeding import as_generator
-from .._validation import as_binary_image, check_float, is_real_dtype
+from .._validation import FOREGROUNDS, as_binary_image, check_choice, check_float, is_real_dtype
 from ..exceptions import InputError
 from ._pointsets import _robust_norms
 
@@ -115,8 +115,9 @@ def _csr_is_grid(indptr, indices, data, raster, node_of, offs, lengths):
     return indptr[n] == k and indices.shape[0] == k and data.shape[0] == k
 
 
-def _volume_mask(image, threshold) -> np.ndarray:
-    """Boolean mask of a 3D image: a boolean or 0/1 array, or ``image > threshold``."""
+def _volume_mask(image, threshold, foreground: str = "auto") -> np.ndarray:
+    """Boolean mask of a 3D image: a boolean or 0/1 array, or ``image > threshold``; the
+    other side with ``foreground="dark"``."""
     arr = np.asarray(image)
     if not is_real_dtype(arr.dtype):
         raise TypeError(f"`image` must be a real numeric or boolean array; got dtype {arr.dtype}.")
@@ -132,12 +133,22 @@ def _volume_mask(image, threshold) -> np.ndarray:
         mask = arr == 1
     else:
         raise InputError("`image` must be binary (bool or 0/1) in 3D, or come with `threshold`; got other values.")
+    if foreground == "dark":
+        mask = ~mask
     if not mask.any():
         raise InputError("`image` must have at least one foreground pixel; got none.")
     return mask
 
 
-def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, threshold: float | None = None):
+def pixel_graph(
+    image,
+    /,
+    *,
+    connectivity: int | None = None,
+    spacing=None,
+    threshold: float | None = None,
+    foreground: str = "auto",
+):
     """Graph of the foreground pixels (voxels) of a binary 2D or 3D image.
 
     One node per foreground pixel, in row-major (C) order; an edge joins two foreground
@@ -162,9 +173,13 @@ def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, thre
         Grey level that splits a numeric image. 2D: as
         :func:`centrality_vision.io.read_shape` with ``foreground="auto"`` splits it (default
         half the image's range; the shape is the side that touches fewer border pixels, so
-        dark shapes on white and white shapes on black both come out as the shape); pass a
-        boolean mask to choose the side yourself. 3D: the foreground is ``image > threshold``.
-        (:func:`centrality_vision.datasets.load_kimia99` already returns masks.)
+        dark shapes on white and white shapes on black both come out as the shape). 3D: the
+        foreground is ``image > threshold``. (:func:`centrality_vision.datasets.load_kimia99`
+        already returns masks.)
+    foreground : {"auto", "dark", "light"}, default="auto"
+        Which side is the shape: ``"light"`` the pixels above ``threshold`` (of a mask, the
+        True or 1 pixels), ``"dark"`` the others. ``"auto"``: in 2D, the side that touches
+        fewer border pixels of a grey image (a mask's True pixels); in 3D, ``"light"``.
 
     Returns
     -------
@@ -200,10 +215,11 @@ def pixel_graph(image, /, *, connectivity: int | None = None, spacing=None, thre
     if sparse.issparse(image):
         raise TypeError("`image` must be a dense 2D or 3D array; got a sparse matrix.")
     ndim = np.ndim(image)
+    foreground = check_choice(foreground, FOREGROUNDS, name="foreground")
     if ndim == 3:
-        mask = _volume_mask(image, threshold)
+        mask = _volume_mask(image, threshold, foreground)
     else:
-        mask = as_binary_image(image, name="image", threshold=threshold)  # 2D, or its error
+        mask = as_binary_image(image, name="image", threshold=threshold, foreground=foreground)  # 2D, or its error
     allowed = _CONNECTIVITY[mask.ndim]
     if connectivity is None:
         connectivity = max(allowed)
@@ -314,7 +330,9 @@ def pixel_coordinates(nodes, shape) -> np.ndarray:
     return np.stack(np.unravel_index(nodes, shape), axis=1).astype(np.int64)
 
 
-def salt_noise(image, /, rate: float, *, seed=None, threshold: float | None = None) -> np.ndarray:
+def salt_noise(
+    image, /, rate: float, *, seed=None, threshold: float | None = None, foreground: str = "auto"
+) -> np.ndarray:
     """Remove a share of the foreground pixels at random (thesis 4.4.1).
 
     Exactly ``round(rate * n_foreground)`` foreground pixels, drawn without replacement,
@@ -331,6 +349,8 @@ def salt_noise(image, /, rate: float, *, seed=None, threshold: float | None = No
         Seed of the random choice; ``None`` draws fresh entropy.
     threshold : float, optional
         As in :func:`pixel_graph`.
+    foreground : {"auto", "dark", "light"}, default="auto"
+        As in :func:`pixel_graph` (2D).
 
     Returns
     -------
@@ -343,12 +363,12 @@ def salt_noise(image, /, rate: float, *, seed=None, threshold: float | None = No
     >>> int(noisy.sum())
     95
     """
-    mask = as_binary_image(image, name="image", threshold=threshold)
+    mask = as_binary_image(image, name="image", threshold=threshold, foreground=foreground)
     rate = check_float(rate, name="rate", low=0.0, high=1.0)
     rng = as_generator(seed)
-    foreground = np.flatnonzero(mask)
-    n_remove = int(round(rate * foreground.size))
+    shape_pixels = np.flatnonzero(mask)
+    n_remove = int(round(rate * shape_pixels.size))
     noisy = mask.copy()
     if n_remove:
-        noisy.flat[rng.choice(foreground, size=n_remove, replace=False)] = False
+        noisy.flat[rng.choice(shape_pixels, size=n_remove, replace=False)] = False
     return noisy
