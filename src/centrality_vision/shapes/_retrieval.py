@@ -401,8 +401,10 @@ def pairwise_shape_distances(
         Profile method: how far, in outline points, the alignment may stray from the
         best shift.
     centrality, bins, weights :
-        Histogram methods: as in :class:`CentralityHistogram` (``weights=True``: Euclidean
-        pixel edges, nearly rotation invariant).
+        Histogram methods: as in :class:`CentralityHistogram`, except that ``weights``
+        defaults to True here (Euclidean pixel edges, so that a rotated shape's
+        distances stay nearly the same, as retrieval needs), where the histogram
+        estimator keeps the thesis' hop counts (False) for its classification experiments.
     n_jobs : int, optional
         Parallel jobs (joblib) for the descriptors and the matching; the result does not
         depend on it.
