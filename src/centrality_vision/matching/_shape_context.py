@@ -14,6 +14,8 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import pdist
 
+from ..transforms import centred
+
 __all__ = ["shape_context", "shape_context_assignment"]
 
 N_RADII = 5
@@ -79,7 +81,7 @@ _TIE_BREAK = 1e-9
 
 def _radial(points: np.ndarray) -> np.ndarray:
     """Each point's distance to the set's centroid over the mean such distance."""
-    radius = np.hypot(*(points - points.mean(axis=0)).T)
+    radius = np.hypot(*centred(points)[1].T)
     return radius / max(float(radius.mean()), np.finfo(float).tiny)
 
 
