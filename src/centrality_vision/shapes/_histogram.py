@@ -238,7 +238,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         if names != self.centralities_ or len(names) * self.bins != self.n_features_out_:
             raise InputError(
                 f"`centrality` or `bins` changed since fit ({', '.join(self.centralities_)} in "
-                f"{self.n_features_out_ // len(self.centralities_)} bins, now {', '.join(names)} in {self.bins}); "
+                f"{self._fitted_bins} bins, now {', '.join(names)} in {self.bins}); "
                 "call fit again."
             )
         records = self._centralities(self._masks(X), self.centralities_)
@@ -246,6 +246,11 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         for i, record in enumerate(records):
             out[i] = np.concatenate([_histogram(record[name], self.bins, self.scaling) for name in self.centralities_])
         return out
+
+    @property
+    def _fitted_bins(self) -> int:
+        """The bins per centrality of the fit (``bins`` may have changed since)."""
+        return self.n_features_out_ // len(self.centralities_)
 
     def get_feature_names_out(self, input_features=None) -> np.ndarray:
         """Names ``"<centrality>_bin<k>"`` of the output features.
@@ -264,8 +269,9 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "centralities_")
-        bins = self.n_features_out_ // len(self.centralities_)
-        return np.array([f"{name}_bin{k}" for name in self.centralities_ for k in range(bins)], dtype=object)
+        return np.array(
+            [f"{name}_bin{k}" for name in self.centralities_ for k in range(self._fitted_bins)], dtype=object
+        )
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
