@@ -177,6 +177,19 @@ def test_rerank_pulls_a_chain_together():
     assert retrieval_counts(r, labels, top=5).sum() == 60
 
 
+def test_rerank_defaults_fit_any_collection_size():
+    # the defaults (8 neighbours, bandwidth 10) once refused fewer than 11 shapes
+    rng = np.random.default_rng(3)
+    for n, neighbors, bandwidth in ((2, 2, 1), (5, 5, 4), (11, 8, 10), (20, 8, 10)):
+        x = rng.random(n)
+        d = np.abs(np.subtract.outer(x, x))
+        np.testing.assert_array_equal(
+            diffusion_rerank(d), diffusion_rerank(d, n_neighbors=neighbors, bandwidth=bandwidth)
+        )
+    with pytest.raises(ValueError, match="`bandwidth` must be"):
+        diffusion_rerank(np.zeros((5, 5)), bandwidth=10)  # a value given is not shrunk
+
+
 def test_rerank_of_huge_finite_distances_stays_finite():
     # squared distances over 1e308 once gave inf / inf = NaN affinities
     x = np.r_[np.arange(4.0), 1e200 + np.arange(4.0) * 1e190]

@@ -531,7 +531,13 @@ def _ranking(d: np.ndarray, *, include_self: bool) -> np.ndarray:
     return order if include_self else order[:, 1:]
 
 
-def diffusion_rerank(distances, /, *, n_neighbors: int = 8, bandwidth: int = 10, n_iter: int = 5) -> np.ndarray:
+#: diffusion_rerank's n_neighbors and bandwidth when not given (chosen on MPEG-7; see its docstring)
+_RERANK_NEIGHBORS, _RERANK_BANDWIDTH = 8, 10
+
+
+def diffusion_rerank(
+    distances, /, *, n_neighbors: int | None = None, bandwidth: int | None = None, n_iter: int = 5
+) -> np.ndarray:
     """Re-rank by a locally constrained diffusion over the shapes' neighbour graph.
 
     Affinities ``W = exp(-d**2 / (s_i s_j))``, with ``s_i`` the distance of shape i to
@@ -554,10 +560,12 @@ def diffusion_rerank(distances, /, *, n_neighbors: int = 8, bandwidth: int = 10,
     distances : array_like of shape (n, n)
         Finite, non-negative dissimilarities, n >= 2; made symmetric by taking the smaller
         of ``d[i, j]`` and ``d[j, i]``, the diagonal set to 0.
-    n_neighbors : int in [1, n], default=8
-        Strongest affinities each shape keeps in ``P``.
-    bandwidth : int in [1, n - 1], default=10
-        Which nearest neighbour's distance sets each shape's scale ``s_i``.
+    n_neighbors : int in [1, n] or None, default=None
+        Strongest affinities each shape keeps in ``P``. None: 8, or ``n`` for fewer
+        than 8 shapes.
+    bandwidth : int in [1, n - 1] or None, default=None
+        Which nearest neighbour's distance sets each shape's scale ``s_i``. None: 10, or
+        ``n - 1`` for fewer than 11 shapes.
     n_iter : int >= 1, default=5
         Diffusion steps.
 
@@ -577,6 +585,9 @@ def diffusion_rerank(distances, /, *, n_neighbors: int = 8, bandwidth: int = 10,
     """
     d = _check_distances(distances)
     n = d.shape[0]
+    # the defaults shrink to a small collection; a value given is checked against it
+    n_neighbors = min(_RERANK_NEIGHBORS, n) if n_neighbors is None else n_neighbors
+    bandwidth = min(_RERANK_BANDWIDTH, n - 1) if bandwidth is None else bandwidth
     n_neighbors = check_int(n_neighbors, name="n_neighbors", low=1, high=n)
     bandwidth = check_int(bandwidth, name="bandwidth", low=1, high=n - 1)
     n_iter = check_int(n_iter, name="n_iter", low=1)
