@@ -139,7 +139,7 @@ def honest(call, *args, **kwargs):
         graphs.gabriel_graph,
         graphs.emst_graph,
         graphs.complete_graph,
-        lambda points: graphs.knn_graph(points, k=3),
+        lambda points: graphs.knn_graph(points, n_neighbors=3),
     ],
     ids=["delaunay", "gabriel", "emst", "complete", "knn"],
 )

@@ -20,7 +20,7 @@ from centrality_vision.graphs import (
 )
 from centrality_vision.graphs._pointsets import edges_to_graph
 
-BUILDERS = [delaunay_graph, gabriel_graph, emst_graph, complete_graph, lambda p: knn_graph(p, k=3)]
+BUILDERS = [delaunay_graph, gabriel_graph, emst_graph, complete_graph, lambda p: knn_graph(p, n_neighbors=3)]
 
 
 def _edges(graph):
@@ -117,7 +117,7 @@ def test_delaunay_edge_count_euler():
 @pytest.mark.parametrize("k", [1, 2, 5])
 def test_knn_degrees_and_neighbours(k):
     points = _random_points(2, 30, 2)
-    graph = knn_graph(points, k=k)
+    graph = knn_graph(points, n_neighbors=k)
     assert np.all(np.diff(graph.indptr) >= k)
     dist = np.linalg.norm(points[:, None] - points[None], axis=2)
     np.fill_diagonal(dist, np.inf)
@@ -135,7 +135,7 @@ def test_knn_neighbours_in_a_cluster_below_squared_precision(seed):
     k = int(rng.integers(1, m - 1))
     shape = rng.random((m, 2))
     points = np.vstack([shape * 10.0 ** -rng.integers(150, 300), rng.random((5, 2)) + 1.0])
-    dense = knn_graph(points, k=k).toarray()[:m, :m] > 0
+    dense = knn_graph(points, n_neighbors=k).toarray()[:m, :m] > 0
     dist = squareform(pdist(shape))  # the cluster's shape, at unit size
     np.fill_diagonal(dist, np.inf)
     expected = np.zeros((m, m), dtype=bool)
@@ -268,8 +268,17 @@ def test_bad_points_type():
 
 @pytest.mark.parametrize(("k", "error"), [(0, ValueError), (10, ValueError), (2.5, TypeError), (True, TypeError)])
 def test_knn_bad_k(k, error):
-    with pytest.raises(error, match="`k`"):
-        knn_graph(_random_points(0, 10, 2), k=k)
+    with pytest.raises(error, match="`n_neighbors`"):
+        knn_graph(_random_points(0, 10, 2), n_neighbors=k)
+
+
+def test_knn_former_name_k_warns_and_agrees():
+    points = _random_points(0, 10, 2)
+    with pytest.warns(FutureWarning, match="`k` of knn_graph\\(\\) is renamed `n_neighbors`"):
+        old = knn_graph(points, k=3)
+    assert (old != knn_graph(points, n_neighbors=3)).nnz == 0
+    with pytest.raises(TypeError, match="give `n_neighbors` only"):
+        knn_graph(points, k=3, n_neighbors=3)
 
 
 def test_to_networkx_bad_points():
@@ -283,14 +292,14 @@ def test_builders_are_scale_invariant_at_extreme_coordinates(scale):
     from centrality_vision.graphs import complete_graph, delaunay_graph, emst_graph, gabriel_graph, knn_graph
 
     points = np.random.default_rng(3).random((40, 2))
-    for build in (lambda p: knn_graph(p, k=3), delaunay_graph, gabriel_graph, emst_graph, complete_graph):
+    for build in (lambda p: knn_graph(p, n_neighbors=3), delaunay_graph, gabriel_graph, emst_graph, complete_graph):
         reference = build(points)
         scaled = build(points * scale)
         assert (scaled != 0).nnz == (reference != 0).nnz
         np.testing.assert_allclose(scaled.toarray() / scale, reference.toarray(), rtol=1e-12)
 
 
-@pytest.mark.parametrize("build", [complete_graph, lambda p: knn_graph(p, k=1)])
+@pytest.mark.parametrize("build", [complete_graph, lambda p: knn_graph(p, n_neighbors=1)])
 def test_a_pair_closer_than_squares_can_hold_keeps_its_true_length(build):
     """1e-170 apart: the squared difference underflows to 0; the edge must still be there."""
     points = np.array([[0.0, 0.0], [1e-170, 0.0], [1.0, 0.0], [0.0, 1.0]])
@@ -327,8 +336,8 @@ def test_a_set_far_from_the_origin_gives_the_same_graphs(offset, seed):
 def test_equal_distances_stay_equal_far_from_the_origin():
     # the weighted betweenness of this k-NN graph has a tie that rounding broke at offset 3e8
     points = np.array([[7.0, 6.0], [8.0, 7.0], [9.0, 7.0], [9.0, 8.0], [10.0, 6.0], [11.0, 3.0]])
-    near = betweenness(knn_graph(points, k=3), weights=True)
-    np.testing.assert_array_equal(betweenness(knn_graph(points + 300000670.0, k=3), weights=True), near)
+    near = betweenness(knn_graph(points, n_neighbors=3), weights=True)
+    np.testing.assert_array_equal(betweenness(knn_graph(points + 300000670.0, n_neighbors=3), weights=True), near)
     np.testing.assert_array_equal(near, [0.0, 1.0, 0.5, 0.0, 2.0, 0.0])
 
 

@@ -366,7 +366,7 @@ def _build_graph(points, kind: str, *, k: int, lam: float, progress: bool):
     if kind == "knn":
         if k >= points.shape[0]:
             raise InputError(f"--k must be smaller than the number of points ({points.shape[0]}); got {k}.")
-        return graphs.knn_graph(points, k=k), {}
+        return graphs.knn_graph(points, n_neighbors=k), {}
     if kind == "mwme":
         result = graphs.mwme_graph(points, progress=progress)
         return result.graph, {"cost": float(result.cost), "degrees": result.degrees}
@@ -395,6 +395,9 @@ def add_graph_options(parser: argparse.ArgumentParser, flag: str, *, help_text: 
         help="weight of the degree entropy for the mstme graph; 0 gives the EMST (default: %(default)s)",
     )
 
+
+#: knn_graph's name for ``--k``, for a command's ``_cli_phrases``
+GRAPH_PHRASES = {"`n_neighbors`": "`k`"}
 
 #: which ``--kind``/``--graph`` uses ``--k`` and ``--lam``
 GRAPH_OPTION_KINDS = {"k": ("knn",), "lam": ("mstme",)}

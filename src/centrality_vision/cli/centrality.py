@@ -9,6 +9,7 @@ from pathlib import Path
 from ._common import (
     CENTRALITY_NAMES,
     GRAPH_OPTION_KINDS,
+    GRAPH_PHRASES,
     POINT_FILES,
     add_graph_options,
     add_out,
@@ -108,7 +109,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         _parser=parser,
         # the library's names for INPUT, and its wording for an unset --threshold
         _cli_aliases={"points": "input", "image": "input"},
-        _cli_phrases={"a finite real number or None": "a finite real number"},
+        _cli_phrases={"a finite real number or None": "a finite real number", **GRAPH_PHRASES},
     )
     return parser
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ._common import (
     GRAPH_OPTION_KINDS,
+    GRAPH_PHRASES,
     POINT_FILES,
     add_graph_options,
     add_out,
@@ -49,7 +50,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     add_out(parser, ".json", ".npz", ".csv")
     add_plot(parser, "the graph")
     add_progress(parser)
-    parser.set_defaults(run=run, _parser=parser)
+    parser.set_defaults(run=run, _parser=parser, _cli_phrases=GRAPH_PHRASES)
     return parser
 
 

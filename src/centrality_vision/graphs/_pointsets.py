@@ -7,6 +7,7 @@ from scipy import sparse
 from scipy.spatial import Delaunay, QhullError, cKDTree
 from scipy.spatial.distance import pdist, squareform
 
+from .._deprecation import renamed_parameters
 from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import InputError
 from ._predicates import delaunay_violations
@@ -408,18 +409,20 @@ def emst_graph(points, /) -> sparse.csr_array:
     return edges_to_graph(points.shape[0], tree.row, tree.col, lengths=tree.data)
 
 
-def knn_graph(points, /, *, k: int) -> sparse.csr_array:
+@renamed_parameters(k="n_neighbors")
+def knn_graph(points, /, *, n_neighbors: int) -> sparse.csr_array:
     """Symmetric k-nearest-neighbour graph.
 
-    Joins every point to its ``k`` nearest other points; an edge is kept when either end
-    chooses it (union), so every node has degree at least ``k``.
+    Joins every point to its ``n_neighbors`` nearest other points; an edge is kept when
+    either end chooses it (union), so every node has degree at least ``n_neighbors``.
 
     Parameters
     ----------
     points : array_like of shape (n_points, n_dims)
         Distinct points, any dimension.
-    k : int in [1, n_points - 1]
-        Number of neighbours per point. Ties in distance are broken by the k-d tree.
+    n_neighbors : int in [1, n_points - 1]
+        Number of neighbours per point (formerly ``k``). Ties in distance are broken by
+        the k-d tree.
 
     Returns
     -------
@@ -428,13 +431,13 @@ def knn_graph(points, /, *, k: int) -> sparse.csr_array:
 
     Examples
     --------
-    >>> graph = knn_graph([[0, 0], [1, 0], [3, 0], [7, 0]], k=1)
+    >>> graph = knn_graph([[0, 0], [1, 0], [3, 0], [7, 0]], n_neighbors=1)
     >>> sorted(map(tuple, np.argwhere(graph.toarray() > 0).tolist()))[:3]
     [(0, 1), (1, 0), (1, 2)]
     """
     points = as_points(points, name="points", n_dims=ANY_DIMS, min_points=2, allow_duplicates=False)
     n = points.shape[0]
-    k = check_int(k, name="k", low=1, high=n - 1)
+    k = check_int(n_neighbors, name="n_neighbors", low=1, high=n - 1)
     unit, _ = _unit_scale(points)
     tree = cKDTree(unit)
     distances, idx = tree.query(unit, k=k + 1)

@@ -58,7 +58,8 @@ def _build_graph(points: np.ndarray, graph, k: int):
     if graph == "emst":
         return _graphs.emst_graph(points) if points.shape[0] > 1 else _edgeless(points)
     if graph == "knn":
-        return _graphs.knn_graph(points, k=min(k, points.shape[0] - 1)) if points.shape[0] > 1 else _edgeless(points)
+        n = points.shape[0]
+        return _graphs.knn_graph(points, n_neighbors=min(k, n - 1)) if n > 1 else _edgeless(points)
     if graph == "complete":
         return _graphs.complete_graph(points) if points.shape[0] > 1 else _edgeless(points)
     return _edgeless(points)
