@@ -382,7 +382,7 @@ def test_match_recovers_a_permutation(tmp_path):
         str(tmp_path / "f.txt"),
         "--method",
         "mwme",
-        "--mwme-method",
+        "--mwme-solver",
         "greedy",
         "--out",
         str(tmp_path / "m.json"),
@@ -393,7 +393,7 @@ def test_match_recovers_a_permutation(tmp_path):
     record = json.loads((tmp_path / "m.json").read_text())
     assert record["correspondence"] == perm.tolist()
     assert abs(record["transform"]["scale"] - 2.0) < 1e-9 and record["rms_residual"] < 1e-9
-    assert record["parameters"]["mwme_method"] == "greedy" and (tmp_path / "m.png").stat().st_size > 0
+    assert record["parameters"]["mwme_solver"] == "greedy" and (tmp_path / "m.png").stat().st_size > 0
 
 
 def _shapes_folder(folder, *, extra=()):
@@ -918,8 +918,8 @@ def test_an_interrupt_is_reported_as_one_even_from_inside_a_kernel(monkeypatch, 
             "--refine is an option of --method robust; got --method shape-context",
         ),
         (
-            ["match", "m.txt", "f.txt", "--mwme-method", "exact"],
-            "--mwme-method is an option of --method mwme; got --method robust",
+            ["match", "m.txt", "f.txt", "--mwme-method", "exact"],  # the former name, as --mwme-solver
+            "--mwme-solver is an option of --method mwme; got --method robust",
         ),
         (["reproduce", "table-2.1", "--workers", "3"], "--workers applies to"),
     ],

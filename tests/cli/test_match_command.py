@@ -112,15 +112,15 @@ def test_plot_matching_draws_unmatched_points_grey_without_lines():
 
 
 def test_library_advice_reads_as_match_options(tmp_path, capsys):
-    # match spells the library's method='local' as --mwme-method local (its own --method
+    # match spells the library's method='local' as --mwme-solver local (its own --method
     # is another choice) and scale=True as --transform similarity
     points = np.random.default_rng(0).random((25, 2))
     np.savetxt(tmp_path / "a.txt", points)
-    argv = ["match", str(tmp_path / "a.txt"), str(tmp_path / "a.txt"), "--method", "mwme", "--mwme-method", "exact"]
+    argv = ["match", str(tmp_path / "a.txt"), str(tmp_path / "a.txt"), "--method", "mwme", "--mwme-solver", "exact"]
     assert main([*argv, "--out", str(tmp_path / "m.json")]) == 2
     err = capsys.readouterr().err
-    assert "error: --mwme-method exact solves sets of up to 20 points" in err
-    assert "Use --mwme-method local or --mwme-method greedy." in err
+    assert "error: --mwme-solver exact solves sets of up to 20 points" in err
+    assert "Use --mwme-solver local or --mwme-solver greedy." in err
 
 
 def test_scale_advice_names_the_transform_option():

@@ -273,10 +273,27 @@ def test_cpd_refinement_that_collapses_is_dropped_with_a_warning():
     np.testing.assert_array_equal(kept.correspondence, perm)
 
 
-def test_mwme_exact_limit_names_mwme_method():
+def test_mwme_exact_limit_names_mwme_solver():
     points = np.random.default_rng(0).random((25, 2))
-    with pytest.raises(InputError, match=r"`mwme_method='exact'` solves sets of up to 20 .* `mwme_method='local'`"):
-        match(points, points[::-1], method="mwme", mwme_method="exact")
+    with pytest.raises(InputError, match=r"`mwme_solver='exact'` solves sets of up to 20 .* `mwme_solver='local'`"):
+        match(points, points[::-1], method="mwme", mwme_solver="exact")
+
+
+def test_mwme_solver_former_names_warn_and_agree():
+    # API audit F13: `method` meant the matching method in match and the solver in mwme_match
+    rng = np.random.default_rng(1)
+    fixed = rng.random((10, 2))
+    moving = fixed[::-1] @ np.array([[0.0, -1.0], [1.0, 0.0]]).T + 2.0
+    with pytest.warns(FutureWarning, match="`mwme_method` of match\\(\\) is renamed `mwme_solver`"):
+        old = match(moving, fixed, method="mwme", mwme_method="greedy")
+    new = match(moving, fixed, method="mwme", mwme_solver="greedy")
+    np.testing.assert_array_equal(old.correspondence, new.correspondence)
+    assert new.info == {"mwme_solver": "greedy"}
+    with pytest.warns(FutureWarning, match="`method` of mwme_match\\(\\) is renamed `solver`"):
+        old_pairs, _ = mwme_match(moving, fixed, method="exact")
+    np.testing.assert_array_equal(old_pairs, mwme_match(moving, fixed, solver="exact")[0])
+    with pytest.raises(TypeError, match="give `solver` only"):
+        mwme_match(moving, fixed, method="exact", solver="exact")
 
 
 @pytest.mark.parametrize("method", ["robust", "mwme"])

@@ -21,7 +21,7 @@ def test_recovers_random_similarity_transforms(seed, method):
     perm = rng.permutation(12)
     scale, angle, shift = rng.uniform(0.5, 2), rng.uniform(0, 2 * np.pi), rng.uniform(-5, 5, 2)
     moving = scale * fixed[perm] @ _rotation(angle).T + shift
-    correspondence, transform = mwme_match(moving, fixed, method=method)
+    correspondence, transform = mwme_match(moving, fixed, solver=method)
     np.testing.assert_array_equal(correspondence, perm)
     np.testing.assert_allclose(transform(moving), fixed[perm], atol=1e-9)
     assert transform.scale == pytest.approx(1 / scale)
@@ -103,7 +103,7 @@ def test_relabelling_a_set_with_one_far_point_does_not_change_the_matching(metho
         rng = np.random.default_rng(seed)
         fixed = np.vstack([rng.random((10, 2)), [[far, 0.0]]])
         perm = rng.permutation(11)
-        correspondence, _ = mwme_match(fixed[perm], fixed, method=method)
+        correspondence, _ = mwme_match(fixed[perm], fixed, solver=method)
         np.testing.assert_array_equal(correspondence, perm)
 
 
@@ -116,8 +116,8 @@ def test_rigid_mwme_matching_of_incomparable_extents_and_bad_options_are_errors(
     for scale in (None, 0, "no", np.nan):  # a rigid or a similarity fit, silently
         with pytest.raises(TypeError, match="`scale` must be True or False"):
             mwme_match(points, points, scale=scale)
-    with pytest.raises(InputError, match="`mwme_method` must be one of"):  # it named `method`
-        match(points, points, method="mwme", mwme_method="fast")
+    with pytest.raises(InputError, match="`mwme_solver` must be one of"):  # it named `method`
+        match(points, points, method="mwme", mwme_solver="fast")
 
 
 def test_a_similarity_match_of_a_tiny_copy_raises_no_overflow_warning():
@@ -148,8 +148,8 @@ def test_a_scale_beyond_float64_is_a_named_error_without_a_warning_first(pair):
         ("mwme", {"n_candidates": -5}, InputError),
         ("mwme", {"refine": "nonsense"}, InputError),
         ("mwme", {"w": np.nan}, InputError),
-        ("robust", {"mwme_method": "nonsense"}, InputError),
-        ("shape-context", {"mwme_method": 3}, InputError),
+        ("robust", {"mwme_solver": "nonsense"}, InputError),
+        ("shape-context", {"mwme_solver": 3}, InputError),
     ],
 )
 def test_every_option_is_checked_whatever_the_method(method, options, error):
@@ -176,7 +176,7 @@ def test_a_matching_its_own_transform_contradicts_is_a_warning_not_silent(method
     for moving, fixed in _grid_trials():
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            correspondence, transform = mwme_match(moving, fixed, method=method)
+            correspondence, transform = mwme_match(moving, fixed, solver=method)
         moved = transform(moving)
         nearest = np.argmin(((moved[:, None, :] - fixed[None, :, :]) ** 2).sum(axis=2), axis=1)
         wrong = int(np.count_nonzero(nearest != correspondence))

@@ -52,10 +52,13 @@ def add_parser(sub) -> argparse.ArgumentParser:
     add_point_options(parser)
     parser.add_argument("--method", choices=METHODS, default="robust", help="matching method (default: %(default)s)")
     parser.add_argument(
-        "--mwme-method",
+        "--mwme-solver",
+        "--mwme-method",  # its former name
+        dest="mwme_solver",
         choices=("local", "greedy", "exact"),
         default="local",
-        help="MWME solver for --method mwme; exact only up to 20 points (default: %(default)s)",
+        help="MWME solver for --method mwme; exact only up to 20 points; --mwme-method is its former name "
+        "(default: %(default)s)",
     )
     parser.add_argument(
         "--transform",
@@ -75,8 +78,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     phrases = {
         "`scale=True`": "--transform similarity",
         "`scale=False`": "--transform rigid",
-        "`method='local'`": "--mwme-method local",
-        "`method='exact'`": "--mwme-method exact",
+        "`method='local'`": "--mwme-solver local",
+        "`method='exact'`": "--mwme-solver exact",
     }
     parser.set_defaults(run=run, _parser=parser, _cli_phrases=phrases)
     return parser
@@ -88,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
     from ..exceptions import InputError
     from ..matching import match
 
-    refuse_unused(args, {"refine": ("method", ("robust",)), "mwme_method": ("method", ("mwme",))}, vars(args))
+    refuse_unused(args, {"refine": ("method", ("robust",)), "mwme_solver": ("method", ("mwme",))}, vars(args))
     started = time.perf_counter()
     moving = read_point_file(args.moving, args)
     fixed = read_point_file(args.fixed, args)
@@ -117,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         scale=args.transform == "similarity",
         refine=args.refine,
-        mwme_method=args.mwme_method,
+        mwme_solver=args.mwme_solver,
     )
     correspondence = np.asarray(result.correspondence, dtype=np.int64)
     transform = result.transform

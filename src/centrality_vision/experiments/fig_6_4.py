@@ -64,7 +64,7 @@ def match_image(index: int, seed: int, method: str, noise) -> dict:
                 # the experiment measures how often the global matching is wrong under noise,
                 # which is what MatchingWarning says
                 warnings.simplefilter("ignore", MatchingWarning)
-                correspondence, _ = match(moved, fixed, method=m, mwme_method=method)
+                correspondence, _ = match(moved, fixed, method=m, mwme_solver=method)
             accuracy[m].append(float(np.mean(correspondence == perm)))
     return accuracy
 
@@ -232,7 +232,7 @@ def plot(result: dict, path, *, example: str = "cow1", seed: int = 0) -> Path:
     fixed = contour_points(load_kimia99().image(example), N_POINTS)[:, ::-1] * [1, -1]
     rng = np.random.default_rng(seed)
     moved = _random_similarity(fixed[rng.permutation(N_POINTS)], rng)
-    correspondence, _ = mwme_match(moved, fixed, method=result["method"])
+    correspondence, _ = mwme_match(moved, fixed, solver=result["method"])
     fig = Figure(figsize=(14, 5))
     left, right = fig.subplots(1, 2, gridspec_kw={"width_ratios": [2, 1]})
     plot_matching(

@@ -50,7 +50,7 @@ def _warn_if_scaled(info: dict) -> None:
         )
 
 
-@renamed_parameters(n_neighbours="n_neighbors", outlier_weight="w")
+@renamed_parameters(n_neighbours="n_neighbors", outlier_weight="w", mwme_method="mwme_solver")
 def match(
     moving,
     fixed,
@@ -62,7 +62,7 @@ def match(
     n_candidates: int = 6,
     refine: str = "icp",
     w: float = 0.3,
-    mwme_method: str = "local",
+    mwme_solver: str = "local",
 ) -> MatchResult:
     """Correspondences from ``moving`` to ``fixed`` and the similarity transform between them.
 
@@ -113,8 +113,9 @@ def match(
         many points into agreement as the consensus pose it started from (a collapse: weights
         near 1 let CPD shrink the set onto a few points), the consensus pose is kept and a
         ``MatchingWarning`` says so; ``info["cpd_kept"]`` records which was kept.
-    mwme_method : {"local", "greedy", "exact"}, default="local"
-        ``"mwme"``: the MWME solver.
+    mwme_solver : {"local", "greedy", "exact"}, default="local"
+        ``"mwme"``: the MWME solver (``solver`` of
+        :func:`~centrality_vision.matching.mwme_match`; formerly ``mwme_method``).
 
     Returns
     -------
@@ -153,7 +154,7 @@ def match(
     method = check_choice(method, METHODS, name="method")
     check_bool(scale, name="scale")
     # every option is checked whatever the method, so a typo is caught before it matters
-    mwme_method = check_choice(mwme_method, ("local", "greedy", "exact"), name="mwme_method")
+    mwme_solver = check_choice(mwme_solver, ("local", "greedy", "exact"), name="mwme_solver")
     n_neighbors = check_int(n_neighbors, name="n_neighbors", low=3, high=19)
     n_candidates = check_int(n_candidates, name="n_candidates", low=1)
     refine = check_choice(refine, ("icp", "cpd"), name="refine")
@@ -163,14 +164,14 @@ def match(
         from ._mwme import mwme_match
 
         moving_arr = as_points(moving, name="moving", n_dims=(2, 3), min_points=3, allow_duplicates=False)
-        if mwme_method == "exact" and moving_arr.shape[0] > MAX_EXACT:
+        if mwme_solver == "exact" and moving_arr.shape[0] > MAX_EXACT:
             raise InputError(
-                f"`mwme_method='exact'` solves sets of up to {MAX_EXACT} points (time and memory grow as 2^n n); "
-                f"`moving` has {moving_arr.shape[0]}. Use `mwme_method='local'` or `mwme_method='greedy'`."
+                f"`mwme_solver='exact'` solves sets of up to {MAX_EXACT} points (time and memory grow as 2^n n); "
+                f"`moving` has {moving_arr.shape[0]}. Use `mwme_solver='local'` or `mwme_solver='greedy'`."
             )
-        correspondence, transform = mwme_match(moving_arr, fixed, method=mwme_method, scale=bool(scale))
+        correspondence, transform = mwme_match(moving_arr, fixed, solver=mwme_solver, scale=bool(scale))
         transform = _rigid_if_unscaled(transform, scale)
-        return MatchResult(correspondence, transform, method, int(moving_arr.shape[0]), {"mwme_method": mwme_method})
+        return MatchResult(correspondence, transform, method, int(moving_arr.shape[0]), {"mwme_solver": mwme_solver})
     moving = as_points(moving, name="moving", n_dims=(2,), min_points=4, allow_duplicates=False)
     fixed = as_points(fixed, name="fixed", n_dims=(2,), min_points=4, allow_duplicates=False)
     norm_m, norm_f = normalise(moving), normalise(fixed)

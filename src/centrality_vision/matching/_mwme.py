@@ -7,6 +7,7 @@ import warnings
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .._deprecation import renamed_parameters
 from .._validation import as_points, check_bool
 from ..exceptions import InputError, MatchingWarning
 from ..graphs import mwme_graph
@@ -16,8 +17,9 @@ from ._common import check_resolution, check_rigid_extents, fit_pairs, normalise
 __all__ = ["mwme_match"]
 
 
+@renamed_parameters(method="solver")
 def mwme_match(
-    moving, fixed, /, *, method: str = "local", scale: bool = True
+    moving, fixed, /, *, solver: str = "local", scale: bool = True
 ) -> tuple[np.ndarray, SimilarityTransform]:
     """Match two point sets through the degrees of their MWME graphs.
 
@@ -49,8 +51,10 @@ def mwme_match(
     ----------
     moving, fixed : array_like of shape (n_points, n_dims)
         Two sets of the same size, n_dims 2 or 3, at least 3 distinct points each.
-    method : {"local", "greedy", "exact"}, default="local"
-        MWME solver (see :func:`~centrality_vision.graphs.mwme_graph`).
+    solver : {"local", "greedy", "exact"}, default="local"
+        MWME solver (``method`` of :func:`~centrality_vision.graphs.mwme_graph`; formerly
+        ``method`` here too, which :func:`~centrality_vision.matching.match` uses for the
+        matching method).
     scale : bool, default=True
         Fit a similarity (True) or a rigid transform (False).
 
@@ -85,8 +89,8 @@ def mwme_match(
     check_resolution(norm_f.points, "fixed", original=fixed)
     if not scale:  # else both candidates' residuals overflow and the first one wins, right or not
         check_rigid_extents(norm_m, norm_f)
-    graph_m = mwme_graph(norm_m.points, method=method)
-    graph_f = mwme_graph(norm_f.points, method=method)
+    graph_m = mwme_graph(norm_m.points, method=solver)
+    graph_f = mwme_graph(norm_f.points, method=solver)
     repeated = n // 2
     by_degree_f = np.full(n, -1, dtype=np.int64)
     for node, deg in enumerate(graph_f.degrees):
