@@ -35,7 +35,14 @@ def _default_threads() -> int:
 
 
 def available_cores() -> int:
-    """The cores this process may run on (its CPU affinity where the OS reports one)."""
+    """The cores this process may run on (its CPU affinity where the OS reports one).
+
+    Examples
+    --------
+    >>> import os
+    >>> 1 <= available_cores() <= (os.cpu_count() or 1)
+    True
+    """
     try:
         return len(os.sched_getaffinity(0))
     except AttributeError:  # pragma: no cover - not Linux
@@ -44,7 +51,17 @@ def available_cores() -> int:
 
 def get_num_threads() -> int:
     """Threads used by the compiled centralities: :func:`set_num_threads`, else
-    ``$CENTRALITY_VISION_NUM_THREADS``, else the cores this process may run on."""
+    ``$CENTRALITY_VISION_NUM_THREADS``, else the cores this process may run on.
+
+    Examples
+    --------
+    >>> import centrality_vision as cv
+    >>> cv.get_num_threads() >= 1
+    True
+    >>> cv.set_num_threads(2); cv.get_num_threads()
+    2
+    >>> cv.set_num_threads(None)  # back to the default
+    """
     return _state["threads"] or _default_threads()
 
 
@@ -96,6 +113,12 @@ def run_chunks(
     The chunks depend on ``n_items`` and ``weight`` only, never on the thread count (at
     least 8, one per 256 units beyond, at most 64), so that a caller adding the chunks' partial
     sums in chunk order gets the same bits with any number of threads.
+
+    Examples
+    --------
+    >>> parts = run_chunks(lambda lo, hi: sum(range(lo, hi)), 100)
+    >>> len(parts), parts[0], sum(result for _, _, result in parts)
+    (8, (0, 12, 66), 4950)
     """
     threads = get_num_threads()
     units = n_items * weight

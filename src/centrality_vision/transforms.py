@@ -156,7 +156,17 @@ class SimilarityTransform(_ArrayEquality):
 
     @property
     def matrix(self) -> np.ndarray:
-        """Homogeneous matrix of shape (D+1, D+1)."""
+        """Homogeneous matrix of shape (D+1, D+1).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = SimilarityTransform(np.array([[0.0, -1.0], [1.0, 0.0]]), np.array([1.0, 0.0]), 2.0)
+        >>> t.matrix
+        array([[ 0., -2.,  1.],
+               [ 2.,  0.,  0.],
+               [ 0.,  0.,  1.]])
+        """
         dim = self.rotation.shape[0]
         out = np.eye(dim + 1)
         out[:dim, :dim] = self.scale * self.rotation
@@ -264,7 +274,17 @@ class AffineTransform(_ArrayEquality):
 
     @property
     def matrix(self) -> np.ndarray:
-        """Homogeneous matrix of shape (D+1, D+1)."""
+        """Homogeneous matrix of shape (D+1, D+1).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = AffineTransform(np.array([[2.0, 0.0], [0.0, 4.0]]), np.array([1.0, 1.0]))
+        >>> t.matrix
+        array([[2., 0., 1.],
+               [0., 4., 1.],
+               [0., 0., 1.]])
+        """
         dim = self.linear.shape[0]
         out = np.eye(dim + 1)
         out[:dim, :dim] = self.linear
@@ -278,7 +298,23 @@ class AffineTransform(_ArrayEquality):
         return _finite_result(out, "AffineTransform")
 
     def inverse(self) -> AffineTransform:
-        """The inverse map; raises ``InputError`` when ``linear`` is singular."""
+        """The inverse map; raises ``InputError`` when ``linear`` is singular.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> t = AffineTransform(np.array([[2.0, 0.0], [0.0, 4.0]]), np.array([1.0, 1.0]))
+        >>> inv = t.inverse()
+        >>> inv.linear, inv.translation
+        (array([[0.5 , 0.  ],
+               [0.  , 0.25]]), array([-0.5 , -0.25]))
+        >>> inv(t([[3.0, 5.0]]))
+        array([[3., 5.]])
+        >>> AffineTransform(np.array([[1.0, 2.0], [0.5, 1.0]]), np.zeros(2)).inverse()  # doctest: +ELLIPSIS
+        Traceback (most recent call last):
+        ...
+        centrality_vision.exceptions.InputError: `linear` must be invertible for the inverse transform; ...
+        """
         if np.linalg.cond(self.linear) > 1e14:
             raise InputError(
                 "`linear` must be invertible for the inverse transform; got a singular matrix "
@@ -411,6 +447,20 @@ class NonRigidTransform(_ArrayEquality):
         -------
         ndarray of shape (n_points, D)
             ``self(points) - points``.
+
+        Examples
+        --------
+        One kernel of width 1 at the origin pushing by (1, 0): the push fades with distance.
+
+        >>> import numpy as np
+        >>> t = NonRigidTransform(np.zeros((1, 2)), np.array([[1.0, 0.0]]), beta=1.0)
+        >>> points = np.array([[0.0, 0.0], [1.0, 0.0], [10.0, 0.0]])
+        >>> t.displacement(points).round(3)  # exp(-1/2) = 0.607 at distance beta
+        array([[1.   , 0.   ],
+               [0.607, 0.   ],
+               [0.   , 0.   ]])
+        >>> bool(np.allclose(t.displacement(points), t(points) - points))
+        True
         """
         points = as_points(points, name="points", n_dims=(self.control_points.shape[1],))
         with np.errstate(over="ignore", invalid="ignore"):

@@ -40,7 +40,15 @@ COMMANDS = (demo, reproduce, graph, centrality, register, match, classify)
 
 
 def build_parser() -> Parser:
-    """The argument parser of ``centrality-vision`` with every subcommand."""
+    """The argument parser of ``centrality-vision`` with every subcommand.
+
+    Examples
+    --------
+    >>> parser = build_parser()
+    >>> args = parser.parse_args(["centrality", "points.csv", "--out", "out.csv"])
+    >>> parser.prog, args.command, args.centrality, args.graph, args.out
+    ('centrality-vision', 'centrality', 'closeness', 'delaunay', 'out.csv')
+    """
     from .. import __version__
 
     parser = Parser(
@@ -61,6 +69,24 @@ def main(argv: list[str] | None = None) -> int:
     written (``OSError``) are printed as one line on stderr and give status 2. Any other
     exception is a bug: its traceback is printed and the status is 1. Warnings are
     printed as one line each and recorded in the outputs that keep them.
+
+    Examples
+    --------
+    The degree of the five points of a square and its centre (notes go to stderr):
+
+    >>> import tempfile
+    >>> from pathlib import Path
+    >>> import numpy as np
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     points, out = Path(folder) / "square.csv", Path(folder) / "degree.csv"
+    ...     np.savetxt(points, [[0, 0], [1, 0], [0, 1], [1, 1], [0.5, 0.5]], delimiter=",", header="x,y", comments="")
+    ...     status = main(["centrality", str(points), "--centrality", "degree", "--out", str(out)])
+    ...     table = out.read_text().splitlines()
+    ...     missing = main(["centrality", str(Path(folder) / "none.csv"), "--out", str(out)])
+    >>> status, table[0], table[-1]
+    (0, 'node,x,y,degree', '4,0.5,0.5,4.0')
+    >>> missing  # a file that cannot be read: one line on stderr, status 2
+    2
     """
     import traceback
     import warnings

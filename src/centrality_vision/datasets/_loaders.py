@@ -42,6 +42,15 @@ class PointSetPair(NamedTuple):
         The set that a registration transforms (CPD's Y, the ``*_source.txt`` file).
     fixed : ndarray of shape (n_points, n_dims)
         The set it is brought onto (CPD's X, the ``*_target.txt`` file).
+
+    Examples
+    --------
+    >>> moving, fixed = load_fish()
+    >>> moving.shape, fixed.shape
+    ((91, 2), (91, 2))
+    >>> pair = load_fish()
+    >>> pair.moving.shape == pair[0].shape, pair._fields
+    (True, ('moving', 'fixed'))
     """
 
     moving: np.ndarray
@@ -340,6 +349,23 @@ class MPEG7(Kimia99):
     ``labels``, ``names``, ``image(name)``), sorted by file name. Labels are the file
     names' class part (``'apple'``, ``'Bone'``, ...); names are file stems
     (``'apple-1'``).
+
+    Examples
+    --------
+    The data set is not shipped with the package; :func:`load_mpeg7` reads it from a
+    folder of GIFs (``$CENTRALITY_VISION_DATA/mpeg7`` by default):
+
+    >>> data = load_mpeg7(classes=["apple", "bat"])  # doctest: +SKIP
+    >>> data, data.names[:2].tolist()  # doctest: +SKIP
+    (MPEG7(n_images=40, n_classes=2), ['apple-1', 'apple-10'])
+
+    It holds the fields of :class:`Kimia99`; a small one built by hand:
+
+    >>> import numpy as np
+    >>> square = np.zeros((5, 5), dtype=bool); square[1:4, 1:4] = True
+    >>> small = MPEG7(images=[square, square.T], labels=["apple", "apple"], names=["apple-1", "apple-2"])
+    >>> small, len(small), int(small.image("apple-2").sum())
+    (MPEG7(n_images=2, n_classes=1), 2, 9)
     """
 
     def __repr__(self) -> str:

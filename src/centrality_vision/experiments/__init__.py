@@ -52,6 +52,14 @@ class Experiment:
     seeds : bool
         Its claims are checked over several seeds (``--seeds``); the others check theirs on
         every image or point of one run, or have nothing random.
+
+    Examples
+    --------
+    >>> entry = REGISTRY["fig-5.3"]
+    >>> entry.module, entry.reproduces, entry.runner, entry.seeds
+    ('fig_5_3', ('fig. 5.3', 'fig. 5.4'), True, True)
+    >>> [e.name for e in REGISTRY.values() if not e.runner][:3]
+    ['table-2.1', 'fig-5.1', 'fig-5.10']
     """
 
     name: str
@@ -164,6 +172,15 @@ def check_options(*, quick=False, seed=0, seeds=None, scheduler=None, workers=No
     dict
         The checked values under the keys ``"quick"``, ``"seed"``, ``"seeds"``, ``"scheduler"``
         and ``"workers"``.
+
+    Examples
+    --------
+    >>> check_options(quick=True, seeds=4, scheduler="serial")
+    {'quick': True, 'seed': 0, 'seeds': 4, 'scheduler': 'serial', 'workers': None}
+    >>> check_options(workers=0)
+    Traceback (most recent call last):
+    ...
+    centrality_vision.exceptions.InputError: `workers` must be an int in [1, 1024]; got 0.
     """
     from .._validation import check_int
     from ._common import MAX_SEEDS, check_run
@@ -270,6 +287,26 @@ def run_experiment(
     -------
     int
         The exit status of the experiment's ``main``: 0 when it finishes (errors are raised).
+
+    Examples
+    --------
+    Table 2.1 (about a second), its table printed and its files written to ``out``:
+
+    >>> import os, tempfile
+    >>> out = tempfile.mkdtemp()  # doctest: +SKIP
+    >>> run_experiment("table-2.1", out, quick=True)  # doctest: +SKIP
+    Table 2.1 (each cell: ours | thesis)
+    ...
+    0
+    >>> sorted(os.listdir(out))  # doctest: +SKIP
+    ['table-2.1-quick.files.json', 'table-2.1-quick.json', 'table-2.1-quick.png', 'table-2.1-quick.txt']
+
+    A name not in :data:`REGISTRY` is refused before anything runs:
+
+    >>> run_experiment("fig-9.9", "out")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    centrality_vision.exceptions.InputError: `name` must be one of table-2.1, fig-4.2, ...; got 'fig-9.9'.
     """
     from importlib import import_module
 

@@ -175,6 +175,17 @@ class MWMEResult:
     cost : float
         Total edge length.
     method : str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> result = mwme_graph(np.random.default_rng(0).random((6, 2)), method="exact")
+    >>> result.method, result.graph.shape, sorted(result.degrees.tolist())
+    ('exact', (6, 6), [1, 2, 3, 3, 4, 5])
+    >>> bool(np.isclose(result.cost, result.graph.sum() / 2))  # each edge is stored twice
+    True
+    >>> sorted(result.order.tolist())  # a permutation of the points
+    [0, 1, 2, 3, 4, 5]
     """
 
     graph: sparse.csr_array
@@ -400,6 +411,21 @@ class MSTMEResult:
     mst_share : float
         Share of the tree's edges that are not edges of the Euclidean MST (0 when the
         entropy term changed nothing).
+
+    Examples
+    --------
+    Four points around a centre: the MST is the star (total length 4, the ``scale`` of
+    ``normalize="tree"``); the entropy term trades one of its edges for a longer one.
+
+    >>> star = [[0, 0], [1, 0], [0, 1], [-1, 0], [0, -1]]
+    >>> mst = mstme_graph(star, lam=0.0)
+    >>> mst.scale, mst.weight, round(mst.entropy, 3), mst.mst_share
+    (4.0, 1.0, 0.722, 0.0)
+    >>> tree = mstme_graph(star, lam=1.0)
+    >>> round(tree.weight, 3), round(tree.entropy, 3), round(tree.cost, 3), tree.mst_share
+    (1.104, 1.371, -0.267, 0.25)
+    >>> tree.graph.nnz // 2  # edges of a spanning tree on 5 points
+    4
     """
 
     graph: sparse.csr_array

@@ -55,7 +55,18 @@ class PixelGraph(sparse.csr_array):
 
     def matches_mask(self) -> bool:
         """Whether this adjacency (structure and edge lengths) is still exactly the pixel
-        graph of :attr:`mask`; False when it was edited in place or derived from one."""
+        graph of :attr:`mask`; False when it was edited in place or derived from one.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> graph, _ = pixel_graph(np.ones((2, 3), dtype=bool))
+        >>> graph.matches_mask(), (2 * graph).matches_mask()
+        (True, False)
+        >>> graph.data[0] = 5.0  # an edge length edited in place
+        >>> graph.matches_mask()
+        False
+        """
         if self.mask is None:
             return False
         mask = np.asarray(self.mask, dtype=bool)

@@ -33,6 +33,23 @@ class MatchResult:
     info : dict
         Method-specific diagnostics (e.g. the number of similarity hypotheses tried, the
         inlier count of the best one); for reading, not for computing.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from centrality_vision.matching import match
+    >>> rng = np.random.default_rng(0)
+    >>> fixed = rng.random((10, 2))
+    >>> perm = rng.permutation(10)
+    >>> moving = 0.5 * fixed[perm] @ np.array([[0.0, -1.0], [1.0, 0.0]]).T + 3.0
+    >>> result = match(moving, fixed, method="mwme")
+    >>> result.method, result.n_matched, round(result.transform.scale, 6)
+    ('mwme', 10, 2.0)
+    >>> correspondence, transform = result  # unpacks as a pair
+    >>> bool(np.array_equal(correspondence, perm))
+    True
+    >>> bool(np.allclose(transform(moving), fixed[correspondence]))
+    True
     """
 
     correspondence: np.ndarray

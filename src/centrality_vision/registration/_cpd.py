@@ -100,6 +100,24 @@ class IterationInfo:
     """What a ``callback`` receives after each E-step (iteration 0 is the initial state).
 
     Everything is in the caller's units (also under ``normalize=True``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from centrality_vision.registration import RigidCPD
+    >>> y = np.random.default_rng(0).random((20, 2))
+    >>> seen = []
+    >>> def watch(info):
+    ...     seen.append(info)
+    ...     return info.iteration == 3  # True stops the fit
+    >>> reg = RigidCPD(callback=watch).fit(y, y + 0.1)
+    >>> [info.iteration for info in seen], reg.n_iter_, reg.converged_
+    ([0, 1, 2, 3], 3, False)
+    >>> sigma2 = [info.sigma2 for info in seen]
+    >>> sigma2 == sorted(sigma2, reverse=True), seen[-1].moving_transformed.shape
+    (True, (20, 2))
+    >>> type(seen[-1].transform).__name__, seen[-1].error  # error needs ``true_moving``
+    ('SimilarityTransform', None)
     """
 
     iteration: int

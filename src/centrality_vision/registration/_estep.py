@@ -99,6 +99,19 @@ class CentralityPrior:
     Kept in this separable form so that no M x N array is ever built. ``inv2phi2`` is
     ``1 / (2 phi2)`` (0 drops the Gaussian term), ``scale`` weighs the prior against the
     spatial term (1 = the thesis' eq. 5.10, 0 = CPD).
+
+    Examples
+    --------
+    :func:`~centrality_vision.registration.centrality_prior` builds it from centralities;
+    by hand, two moving points of equal weight and three fixed points:
+
+    >>> import numpy as np
+    >>> prior = CentralityPrior(np.zeros(2), np.array([0.0, 1.0]), np.array([0.0, 0.5, 1.0]), inv2phi2=2.0)
+    >>> prior.matrix()  # pairs of equal centrality are the most likely
+    array([[ 0. , -0.5, -2. ],
+           [-2. , -0.5,  0. ]])
+    >>> prior.bounds()
+    (-2.0, 0.0)
     """
 
     log_weight: np.ndarray
@@ -108,7 +121,18 @@ class CentralityPrior:
     scale: float = 1.0
 
     def bounds(self) -> tuple[float, float]:
-        """Lower and upper bound of the prior over all pairs (for the truncated search)."""
+        """Lower and upper bound of the prior over all pairs (for the truncated search).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> prior = CentralityPrior(np.log([0.5, 0.25]), np.array([0.0, 1.0]), np.array([0.5]), inv2phi2=2.0)
+        >>> low, high = prior.bounds()
+        >>> round(low, 3), round(high, 3)  # log 0.25 - 1 * 2, log 0.5
+        (-3.386, -0.693)
+        >>> bool(low <= prior.matrix().min() and prior.matrix().max() <= high)
+        True
+        """
         if self.scale == 0 or self.log_weight.size == 0:
             return 0.0, 0.0
         span = (max(self.v_fixed.max(), self.v_moving.max()) - min(self.v_fixed.min(), self.v_moving.min())) ** 2
@@ -116,7 +140,16 @@ class CentralityPrior:
         return float(low), float(self.scale * self.log_weight.max())
 
     def matrix(self) -> np.ndarray:
-        """The dense (M, N) prior, for tests and small problems."""
+        """The dense (M, N) prior, for tests and small problems.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> prior = CentralityPrior(np.log([0.5, 0.25]), np.array([0.0, 1.0]), np.array([0.5]), inv2phi2=2.0)
+        >>> prior.matrix().round(3)  # log_weight[m] - (0.5 - v_moving[m])^2 * 2
+        array([[-1.193],
+               [-1.886]])
+        """
         dv = self.v_fixed[None, :] - self.v_moving[:, None]
         return self.scale * (self.log_weight[:, None] - dv * dv * self.inv2phi2)
 
@@ -142,6 +175,20 @@ class Posteriors:
         For each fixed point, the moving point of largest posterior, or -1 where the outlier
         component is more probable than any moving point; None from a dense E-step asked
         not to compute it (``want_best=False``).
+
+    Examples
+    --------
+    A fitted CPD keeps those of its final E-step in ``posteriors_``:
+
+    >>> import numpy as np
+    >>> from centrality_vision.registration import RigidCPD
+    >>> y = np.random.default_rng(0).random((15, 2))
+    >>> fixed = np.vstack([y + 0.1, [[5.0, 5.0]]])  # a copy and one far outlier
+    >>> post = RigidCPD(w=0.2, tol=1e-8).fit(y, fixed).posteriors_
+    >>> post.p1.shape, post.pt1.shape, post.px.shape, round(post.n_p, 3)
+    ((15,), (16,), (15, 2), 15.0)
+    >>> post.best.tolist()  # each copy's moving point; -1: the outlier
+    [0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, -1]
     """
 
     p1: np.ndarray

@@ -461,6 +461,29 @@ class GPD(BaseEstimator):
         Returns
         -------
         self : GPD
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from centrality_vision.registration import GPD, RigidCPD
+        >>> y = np.random.default_rng(0).random((20, 2))
+        >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+        >>> x = y @ r.T + 0.5
+        >>> gpd = GPD(RigidCPD(scale=False, tol=1e-10), graph="delaunay").fit(y, x)
+        >>> gpd.moving_graph_.shape, gpd.moving_centrality_.shape  # one node, one value per point
+        ((20, 20), (20,))
+        >>> float(gpd.moving_centrality_.min()), float(gpd.moving_centrality_.max())  # normalised
+        (0.0, 1.0)
+        >>> gpd.converged_, bool(np.allclose(gpd.transform_.rotation, r))
+        (True, True)
+
+        Centralities of your own replace the graphs (they are min-max normalised):
+
+        >>> own = GPD(RigidCPD(scale=False, tol=1e-10)).fit(
+        ...     y, x, moving_centrality=np.arange(20.0), fixed_centrality=np.arange(20.0)
+        ... )
+        >>> own.moving_graph_ is None, own.moving_centrality_[:3].round(3).tolist()
+        (True, [0.0, 0.053, 0.105])
         """
         self._check_params()
         base = RigidCPD() if self.base_cpd is None else self.base_cpd
@@ -493,6 +516,18 @@ class GPD(BaseEstimator):
         -------
         ndarray of shape (n_points, D)
             ``transform_(points)``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from centrality_vision.registration import GPD, RigidCPD
+        >>> y = np.random.default_rng(0).random((20, 2))
+        >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+        >>> x = y @ r.T + 0.5
+        >>> gpd = GPD(RigidCPD(scale=False, tol=1e-10)).fit(y, x)
+        >>> gpd.transform([[0.0, 0.0], [1.0, 0.0]]).round(3)  # r @ p + 0.5
+        array([[0.5  , 0.5  ],
+               [1.455, 0.796]])
         """
         check_is_fitted(self, "estimator_")
         return self.estimator_.transform(points)
@@ -512,11 +547,36 @@ class GPD(BaseEstimator):
         float
             Minus the mean distance from each fixed point to its nearest transformed moving point
             (at most 0; larger is better), in the caller's units.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from centrality_vision.registration import GPD, RigidCPD
+        >>> y = np.random.default_rng(0).random((20, 2))
+        >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+        >>> x = y @ r.T + 0.5
+        >>> gpd = GPD(RigidCPD(scale=False, tol=1e-10)).fit(y, x)
+        >>> bool(abs(gpd.score(y, x)) < 1e-9), round(gpd.score(y, x + [0.1, 0.0]), 3)
+        (True, -0.086)
         """
         check_is_fitted(self, "estimator_")
         return self.estimator_.score(moving, fixed)
 
     def posterior(self) -> np.ndarray:
-        """The full GPD posterior matrix (M x N) of the final state; see :meth:`RigidCPD.posterior`."""
+        """The full GPD posterior matrix (M x N) of the final state; see :meth:`RigidCPD.posterior`.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from centrality_vision.registration import GPD, RigidCPD
+        >>> y = np.random.default_rng(0).random((20, 2))
+        >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+        >>> x = y @ r.T + 0.5
+        >>> P = GPD(RigidCPD(scale=False, tol=1e-10)).fit(y, x).posterior()
+        >>> P.shape, bool(np.allclose(P.sum(axis=0), 1))  # w=0: each fixed point's column sums to 1
+        ((20, 20), True)
+        >>> bool(np.array_equal(P.argmax(axis=0), np.arange(20)))  # y[m] went to x[m]
+        True
+        """
         check_is_fitted(self, "estimator_")
         return self.estimator_.posterior()

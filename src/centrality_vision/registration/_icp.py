@@ -227,6 +227,21 @@ class ICP(BaseEstimator):
         Returns
         -------
         self : ICP
+
+        Examples
+        --------
+        A rotated copy with a fifth of its points replaced by far clutter; ``trim=0.2``
+        ignores the worst fifth of the pairs:
+
+        >>> import numpy as np
+        >>> y = np.random.default_rng(0).random((30, 2))
+        >>> r = np.array([[np.cos(0.1), -np.sin(0.1)], [np.sin(0.1), np.cos(0.1)]])
+        >>> x = np.vstack([(y @ r.T + 0.02)[:24], np.random.default_rng(1).random((6, 2)) + 3.0])
+        >>> icp = ICP(tol=1e-12, trim=0.2).fit(y, x)
+        >>> icp.converged_, bool(np.allclose(icp.transform_.rotation, r))
+        (True, True)
+        >>> icp.moving_to_fixed_[22:26].tolist(), int(icp.history_["n_pairs"][-1])  # -1: not kept
+        ([22, 23, -1, -1], 24)
         """
         self._check_params()
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
@@ -409,6 +424,16 @@ class ICP(BaseEstimator):
         -------
         ndarray of shape (n_points, D)
             ``transform_(points)``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> y = np.random.default_rng(0).random((30, 2))
+        >>> r = np.array([[np.cos(0.1), -np.sin(0.1)], [np.sin(0.1), np.cos(0.1)]])
+        >>> icp = ICP(tol=1e-12).fit(y, y @ r.T + 0.02)
+        >>> icp.transform([[0.0, 0.0], [1.0, 0.0]]).round(3)  # r @ p + 0.02
+        array([[0.02 , 0.02 ],
+               [1.015, 0.12 ]])
         """
         check_is_fitted(self, "transform_")
         return self.transform_(points)

@@ -200,6 +200,20 @@ class MultiscaleCPD(BaseEstimator):
         -------
         self : MultiscaleCPD
             With ``transform_``, ``moving_transformed_`` (all M points), ``levels_`` and ``sigma2_``.
+
+        Examples
+        --------
+        A subsample of 30 points first, then all 60:
+
+        >>> import numpy as np
+        >>> from centrality_vision.registration import RigidCPD
+        >>> y = np.random.default_rng(0).random((60, 2))
+        >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+        >>> reg = MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(30, 60)).fit(y, y @ r.T + 0.1)
+        >>> [(level["n_moving"], level["n_fixed"], level["converged"]) for level in reg.levels_]
+        [(30, 30, True), (60, 60, True)]
+        >>> reg.moving_transformed_.shape, bool(np.allclose(reg.moving_transformed_, y @ r.T + 0.1))
+        ((60, 2), True)
         """
         sizes, nonrigid = self._check()
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
@@ -266,6 +280,17 @@ class MultiscaleCPD(BaseEstimator):
         -------
         ndarray of shape (n_points, D)
             ``transform_(points)``.
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> from centrality_vision.registration import RigidCPD
+        >>> y = np.random.default_rng(0).random((60, 2))
+        >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+        >>> reg = MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(30, 60)).fit(y, y @ r.T + 0.1)
+        >>> reg.transform([[0.0, 0.0], [1.0, 0.0]]).round(3)  # r @ p + 0.1
+        array([[0.1  , 0.1  ],
+               [1.055, 0.396]])
         """
         check_is_fitted(self, "transform_")
         return self.transform_(as_points(points, name="points", n_dims=ANY_DIMS))

@@ -184,6 +184,25 @@ class CentralityCache:
     >>> values, nodes = cache.get(square, "degree")
     >>> values.reshape(3, 3)[1], (cache.hits, cache.misses)
     (array([5., 8., 5.]), (0, 1))
+    >>> _ = cache.get(square, "degree")  # now served from memory
+    >>> (cache.hits, cache.misses), cache.lookup(square, "closeness") is None  # lookup never computes
+    ((1, 1), True)
+    >>> entry = cache.put(square, "closeness", np.ones(9))  # values computed elsewhere
+    >>> sorted(entry), len(cache)
+    (['closeness', 'degree', 'nodes'], 1)
+    >>> cache.clear(); len(cache), (cache.hits, cache.misses)
+    (0, (0, 0))
+
+    With a ``directory``, another cache on the same folder (another process, a later run)
+    reads the values back instead of computing them:
+
+    >>> import tempfile
+    >>> with tempfile.TemporaryDirectory() as folder:
+    ...     _ = CentralityCache(directory=folder).get(square, "degree")
+    ...     other = CentralityCache(directory=folder)
+    ...     found, _ = other.lookup(square, "degree")
+    ...     print(found.tolist() == values.tolist(), other.hits, other.misses)
+    True 1 0
     """
 
     def __init__(self, max_images: int = 4096, directory=None):

@@ -199,6 +199,26 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
     which_ : ndarray of shape (n_comparisons,)
         Index into ``centralities_`` of each comparison.
     centralities_ : tuple of str
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> yy, xx = np.mgrid[:20, :20]
+    >>> disk = (yy - 10) ** 2 + (xx - 10) ** 2 < 49
+    >>> bar = (abs(yy - 10) < 3) & (abs(xx - 10) < 8)
+    >>> comparisons = CentralityComparisons(n_comparisons=8, extent=1.0).fit([disk, bar])
+    >>> comparisons.offsets_.shape, comparisons.centralities_
+    ((8, 2, 2), ('closeness',))
+    >>> features = comparisons.transform([disk, bar])
+    >>> features.shape, set(features.ravel().tolist())
+    ((2, 8), {0.0, 1.0})
+
+    The offsets are relative to the shape's centre and size: the same disk elsewhere in a
+    larger image gives the same features.
+
+    >>> moved = np.zeros((30, 40), dtype=bool); moved[6:26, 15:35] = disk
+    >>> bool(np.array_equal(comparisons.transform([moved])[0], features[0]))
+    True
     """
 
     def __init__(
@@ -258,6 +278,20 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         Returns
         -------
         self : CentralityComparisons
+
+        Examples
+        --------
+        The draw depends on ``random_state`` and the parameters only, not on the images:
+
+        >>> import numpy as np
+        >>> disk = np.add.outer((np.arange(15) - 7) ** 2, (np.arange(15) - 7) ** 2) < 25
+        >>> square = np.zeros((8, 8), dtype=bool); square[2:6, 2:6] = True
+        >>> a = CentralityComparisons(["closeness", "degree"], n_comparisons=5, random_state=1).fit([disk])
+        >>> b = CentralityComparisons(["closeness", "degree"], n_comparisons=5, random_state=1).fit([square])
+        >>> bool(np.array_equal(a.offsets_, b.offsets_)), a.centralities_
+        (True, ('closeness', 'degree'))
+        >>> bool(np.abs(a.offsets_).max() <= a.extent), a.which_.shape
+        (True, (5,))
         """
         names, n, extent = self._drawn_with()
         self._masks(X)
@@ -361,6 +395,11 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
     >>> clf = CentralityComparisonForest(n_estimators=20, n_comparisons=50).fit([disk, bar] * 3, [0, 1] * 3)
     >>> clf.predict([disk, bar]).tolist()
     [0, 1]
+    >>> proba = clf.predict_proba([disk, bar])  # columns in the order of classes_
+    >>> clf.classes_.tolist(), proba.shape, bool(np.allclose(proba.sum(axis=1), 1))
+    ([0, 1], (2, 2), True)
+    >>> proba.argmax(axis=1).tolist(), clf.comparisons_.offsets_.shape, len(clf.forest_.estimators_)
+    ([0, 1], (50, 2, 2), 20)
     """
 
     def __init__(

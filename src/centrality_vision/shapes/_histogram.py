@@ -222,6 +222,14 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         ----------
         X : sequence of 2D binary arrays
         y : ignored
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> square = np.zeros((6, 6), dtype=bool); square[1:5, 1:5] = True
+        >>> hist = CentralityHistogram(centrality=["degree", "closeness"], bins=5).fit([square])
+        >>> hist.centralities_, hist.n_features_out_
+        (('degree', 'closeness'), 10)
         """
         names = self._validate_params()
         self._masks(X)
@@ -265,6 +273,14 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         ndarray of str objects, shape (``n_features_out_``,)
             ``k`` runs over the bins of the fit for each centrality of ``centralities_``, in
             order (the fitted bins: changing ``bins`` after ``fit`` does not change them).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> square = np.zeros((6, 6), dtype=bool); square[1:5, 1:5] = True
+        >>> hist = CentralityHistogram(centrality=["degree", "closeness"], bins=2).fit([square])
+        >>> hist.get_feature_names_out().tolist()
+        ['degree_bin0', 'degree_bin1', 'closeness_bin0', 'closeness_bin1']
         """
         from sklearn.utils.validation import check_is_fitted
 
