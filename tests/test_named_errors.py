@@ -2,10 +2,14 @@
 TypeError naming the parameter (before: unhashable-type, numba typing, overflow and reshape
 errors from deep inside, a wrong parameter named, truthy strings taken as True, NaN cached)."""
 
+import math
+
 import numpy as np
 import pytest
 
 from centrality_vision import graphs
+from centrality_vision._validation import check_float
+from centrality_vision.exceptions import InputError
 from centrality_vision.graphs import mwme_degrees, mwme_graph, nhdd_graph, pixel_coordinates, pixel_graph, to_networkx
 from centrality_vision.shapes import (
     CentralityCache,
@@ -15,6 +19,7 @@ from centrality_vision.shapes import (
     bullseye_score,
     shape_centralities,
 )
+from centrality_vision.transforms import SimilarityTransform
 
 POINTS = np.random.default_rng(0).random((6, 2))
 SQUARE = np.pad(np.ones((3, 3), dtype=bool), 1)
@@ -105,3 +110,12 @@ def test_durations_are_not_coordinates_or_pixel_values(call):
     durations = (POINTS * 1000).astype("m8[ms]")
     with pytest.raises(TypeError, match=r"`(points|image|moving)` must .*timedelta64"):
         call(durations)
+
+
+@pytest.mark.parametrize("value", [math.inf, -math.inf, math.nan, 0.0])
+def test_an_unbounded_side_reads_open(value):
+    # "(0, inf]" said inf was allowed, next to "got inf"
+    with pytest.raises(InputError, match=r"`scale` must be a finite number in \(0, inf\); got"):
+        SimilarityTransform(np.eye(2), [0.0, 0.0], scale=value)
+    with pytest.raises(InputError, match=r"`x` must be a finite number in \(-inf, 1\]; got"):
+        check_float(math.inf if value != 0 else 2.0, name="x", high=1.0)

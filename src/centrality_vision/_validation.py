@@ -466,8 +466,9 @@ def check_float(
     if high is not None:
         bad |= value >= high if high_open else value > high
     if bad:
-        lb = "(" if low_open else "["
-        rb = ")" if high_open else "]"
+        # an unbounded side is open: the value must be finite ("(0, inf)", never "(0, inf]")
+        lb = "(" if low_open or low is None else "["
+        rb = ")" if high_open or high is None else "]"
         lo = "-inf" if low is None else shown_bound(low)
         hi = "inf" if high is None else shown_bound(high)
         raise InputError(f"`{name}` must be a finite number in {lb}{lo}, {hi}{rb}; got {shown or repr(value)}.")
