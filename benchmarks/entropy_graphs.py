@@ -59,17 +59,17 @@ def main() -> None:
     rng = np.random.default_rng(0)
     warm = rng.random((10, 2))
     for m in ("exact", "greedy", "local"):
-        mwme_graph(warm, method=m)
+        mwme_graph(warm, solver=m)
     for m in ("greedy", "exchange"):
-        mstme_graph(warm, method=m)
+        mstme_graph(warm, solver=m)
 
     sizes = [50, 100, 200, 400] if args.quick else [100, 250, 500, 1000, 2000]
     limits = {"mwme local": 200 if args.quick else 500, "mstme exchange": 200 if args.quick else 400}
     rows = {
-        "mwme greedy": lambda p: mwme_graph(p, method="greedy"),
-        "mwme local": lambda p: mwme_graph(p, method="local"),
+        "mwme greedy": lambda p: mwme_graph(p, solver="greedy"),
+        "mwme local": lambda p: mwme_graph(p, solver="local"),
         "mstme greedy": lambda p: mstme_graph(p, lam=0.5),
-        "mstme exchange": lambda p: mstme_graph(p, lam=0.5, method="exchange"),
+        "mstme exchange": lambda p: mstme_graph(p, lam=0.5, solver="exchange"),
     }
     print("\n1. median seconds (uniform random points, default_rng(n))")
     print(f"{'method':<16}" + "".join(f"{n:>10}" for n in sizes) + f"{'exponent':>10}")
@@ -85,7 +85,7 @@ def main() -> None:
         print(f"{name:<16}{cells}{_exponent(sizes, ts):>10.2f}")
     exact_sizes = [10, 12, 14, 16] if args.quick else [10, 12, 14, 16, 18]
     ts = [
-        _time(lambda n=n: mwme_graph(np.random.default_rng(n).random((n, 2)), method="exact"), 1) for n in exact_sizes
+        _time(lambda n=n: mwme_graph(np.random.default_rng(n).random((n, 2)), solver="exact"), 1) for n in exact_sizes
     ]
     print(f"{'mwme exact':<16}" + "".join(f"{f'n={n}':>10}" for n in exact_sizes))
     print(
@@ -101,9 +101,9 @@ def main() -> None:
         gaps = {"greedy": [], "local": []}
         for s in range(n_sets):
             points = np.random.default_rng([n, s]).random((n, 2))
-            best = mwme_graph(points, method="exact").cost
+            best = mwme_graph(points, solver="exact").cost
             for m in gaps:
-                gaps[m].append(100 * (mwme_graph(points, method=m).cost - best) / best)
+                gaps[m].append(100 * (mwme_graph(points, solver=m).cost - best) / best)
         g, loc = np.array(gaps["greedy"]), np.array(gaps["local"])
         print(
             f"{n:>4}{g.mean():>13.2f}{g.max():>14.2f}{loc.mean():>12.2f}{loc.max():>13.2f}{np.mean(loc < 1e-9):>15.2f}"
@@ -125,7 +125,7 @@ def _mstme_section(quick: bool) -> None:
         for norm in ("tree", "edge"):
             for lam in (0.5, 1.0, 2.0):
                 g = mstme_graph(points, lam=lam, normalize=norm)
-                e = mstme_graph(points, lam=lam, normalize=norm, method="exchange")
+                e = mstme_graph(points, lam=lam, normalize=norm, solver="exchange")
                 changed = len(_edge_set(g.graph) ^ _edge_set(e.graph)) // 2
                 gain = 100 * (g.cost - e.cost) / abs(g.cost) if g.cost else 0.0
                 print(

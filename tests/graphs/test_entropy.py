@@ -90,7 +90,7 @@ def _brute_force_mwme(points):
 @pytest.mark.parametrize("n", [4, 5, 6, 7])
 def test_mwme_exact_matches_brute_force(n, seed):
     points = np.random.default_rng(seed).random((n, 2))
-    exact = mwme_graph(points, method="exact")
+    exact = mwme_graph(points, solver="exact")
     assert exact.cost == pytest.approx(_brute_force_mwme(points), rel=1e-12)
 
 
@@ -98,7 +98,7 @@ def test_mwme_exact_matches_brute_force(n, seed):
 @pytest.mark.parametrize("n", [5, 8, 11, 14])
 def test_mwme_every_method_returns_nhdd_and_exact_is_lowest(n, seed):
     points = np.random.default_rng(100 + seed).random((n, 2))
-    results = {m: mwme_graph(points, method=m) for m in ("exact", "greedy", "local")}
+    results = {m: mwme_graph(points, solver=m) for m in ("exact", "greedy", "local")}
     for method, res in results.items():
         deg = res.degrees
         assert len(set(deg.tolist())) == n - 1, method
@@ -112,7 +112,7 @@ def test_mwme_every_method_returns_nhdd_and_exact_is_lowest(n, seed):
 
 def test_mwme_large_greedy_and_3d():
     points = np.random.default_rng(5).random((150, 3))
-    res = mwme_graph(points, method="greedy")
+    res = mwme_graph(points, solver="greedy")
     assert len(set(res.degrees.tolist())) == 149
     assert res.graph.nnz // 2 == (150 * 149 // 2 + 75) // 2
 
@@ -176,7 +176,7 @@ def test_fig_7_1_mst_and_mstme():
 def test_lam_zero_is_the_euclidean_mst(seed):
     points = np.random.default_rng(seed).random((80, 2))
     for method in ("greedy", "exchange"):
-        tree = mstme_graph(points, lam=0.0, method=method)
+        tree = mstme_graph(points, lam=0.0, solver=method)
         assert _edge_set(tree.graph) == _edge_set(emst_graph(points))
     # the greedy kernel itself, run with a tiny lam, also starts out as Kruskal would
     assert _edge_set(mstme_graph(points, lam=1e-12).graph) == _edge_set(emst_graph(points))
@@ -187,7 +187,7 @@ def test_lam_zero_is_the_euclidean_mst(seed):
 def test_mstme_trees_and_exchange_improves(seed, lam):
     points = np.random.default_rng(seed).random((6, 2))
     greedy = mstme_graph(points, lam=lam, normalize=False)
-    better = mstme_graph(points, lam=lam, normalize=False, method="exchange")
+    better = mstme_graph(points, lam=lam, normalize=False, solver="exchange")
     optimum = _brute_force_mstme(points, lam)
     for tree in (greedy, better):
         assert tree.graph.nnz // 2 == 5 and connected_components(tree.graph)[0] == 1
@@ -209,8 +209,8 @@ def test_mstme_normalized_is_scale_invariant():
         (lambda: mwme_graph([[0, 0], [1, 1]]), ValueError, "at least 3 points"),
         (lambda: mwme_graph([[0, 0], [1, 1], [1, 1]]), ValueError, "duplicate"),
         (lambda: mwme_graph([[0, 0], [1, np.nan], [2, 1]]), ValueError, "finite"),
-        (lambda: mwme_graph(np.random.default_rng(0).random((21, 2)), method="exact"), ValueError, "up to 20 points"),
-        (lambda: mwme_graph(np.eye(3), method="best"), ValueError, "`method`"),
+        (lambda: mwme_graph(np.random.default_rng(0).random((21, 2)), solver="exact"), ValueError, "up to 20 points"),
+        (lambda: mwme_graph(np.eye(3), solver="best"), ValueError, "`solver`"),
         (lambda: mstme_graph(FIG_7_1, lam=-0.1), ValueError, "`lam`"),
         (lambda: mstme_graph(FIG_7_1, normalize="yes"), ValueError, "`normalize`"),
         (lambda: mstme_graph(FIG_7_1, normalize=1.5), TypeError, "`normalize`"),
@@ -231,8 +231,8 @@ def test_errors(call, error, match):
 def test_inputs_not_modified():
     points = np.random.default_rng(0).random((12, 2))
     before = points.copy()
-    mwme_graph(points, method="exact")
-    mstme_graph(points, method="exchange")
+    mwme_graph(points, solver="exact")
+    mstme_graph(points, solver="exchange")
     np.testing.assert_array_equal(points, before)
 
 
@@ -251,10 +251,10 @@ def test_entropy_graphs_at_any_scale(exponent, seed, n):
             mwme_graph(scaled)
         return
     for build in (
-        lambda p: mwme_graph(p, method="exact"),
-        lambda p: mwme_graph(p, method="local"),
+        lambda p: mwme_graph(p, solver="exact"),
+        lambda p: mwme_graph(p, solver="local"),
         lambda p: mstme_graph(p),
-        lambda p: mstme_graph(p, lam=0.3, normalize="edge", method="exchange"),
+        lambda p: mstme_graph(p, lam=0.3, normalize="edge", solver="exchange"),
     ):
         reference = build(points)
         try:
@@ -275,8 +275,8 @@ def test_fuzz_cases_from_the_report(factor):
     points = np.random.default_rng(0).random((8, 2))
     for tree in (mstme_graph(points * factor), mstme_graph(points * factor, normalize="none", lam=0.1)):
         assert tree.graph.nnz == 14 and np.all(np.isfinite(tree.graph.data))
-    exact = mwme_graph(points * factor, method="exact")
-    assert exact.cost == pytest.approx(mwme_graph(points, method="exact").cost * factor, rel=1e-12)
+    exact = mwme_graph(points * factor, solver="exact")
+    assert exact.cost == pytest.approx(mwme_graph(points, solver="exact").cost * factor, rel=1e-12)
 
 
 @pytest.mark.parametrize("offset", [1.0, 1e6])
@@ -315,13 +315,13 @@ TABLE_6_1 = np.array([[0, 1, 2, 4], [1, 0, 5, 6], [2, 5, 0, 3], [4, 6, 3, 0]], d
 
 
 def test_table_6_1_optimum_cost_10():
-    exact = mwme_graph(TABLE_6_1, method="exact", metric="precomputed")
+    exact = mwme_graph(TABLE_6_1, solver="exact", metric="precomputed")
     assert exact.cost == 10.0
     # the optimum: the triangle a, c, d and b hanging from a (degrees a 3, b 1, c 2, d 2)
     assert exact.degrees.tolist() == [3, 1, 2, 2]
     assert _edge_set(exact.graph) == {(0, 1), (0, 2), (0, 3), (2, 3)}
-    assert mwme_graph(TABLE_6_1, method="local", metric="precomputed").cost == 10.0
-    assert mwme_graph(TABLE_6_1, method="greedy", metric="precomputed").cost >= 10.0
+    assert mwme_graph(TABLE_6_1, solver="local", metric="precomputed").cost == 10.0
+    assert mwme_graph(TABLE_6_1, solver="greedy", metric="precomputed").cost >= 10.0
 
 
 def test_fig_6_1_entropies():
@@ -331,14 +331,14 @@ def test_fig_6_1_entropies():
     assert entropy(complete_graph(points)) == 0.0
     assert round(entropy(delaunay_graph(points)), 2) == 0.92  # the thesis prints 0.91 (truncated)
     assert round(entropy(nhdd_graph(6)), 2) == round(entropy(nhdd_graph(6, connected=False)), 2) == 2.25
-    assert round(entropy(mwme_graph(points, method="exact").graph), 2) == 2.25
+    assert round(entropy(mwme_graph(points, solver="exact").graph), 2) == 2.25
 
 
 def test_mwme_degrees_is_the_exact_graph_batched():
     sets = np.random.default_rng(4).random((6, 9, 2))
     degrees = mwme_degrees(sets)
     for b in range(6):
-        np.testing.assert_array_equal(degrees[b], mwme_graph(sets[b], method="exact").degrees)
+        np.testing.assert_array_equal(degrees[b], mwme_graph(sets[b], solver="exact").degrees)
 
 
 # --- MSTME normalisation ----------------------------------------------------------------
@@ -372,7 +372,7 @@ def test_entropy_graphs_store_each_edge_its_own_length(seed):
     so the lengths sat on the wrong edges (their sum, and so cost and weight, stayed right)."""
     points = np.random.default_rng(seed).random((12, 2))
     distances = squareform(pdist(points))
-    for graph in (mwme_graph(points, method="exact").graph, mstme_graph(points, lam=1.0).graph):
+    for graph in (mwme_graph(points, solver="exact").graph, mstme_graph(points, lam=1.0).graph):
         edges = sparse.coo_array(graph)
         np.testing.assert_allclose(edges.data, distances[edges.row, edges.col], rtol=1e-14)
 
@@ -389,7 +389,7 @@ def test_mstme_ties_do_not_follow_the_row_order(method):
     # equal distances: the first edge in row order won, and relabelling changed the tree
     points = np.array([[2.0, 2], [1, 1], [1, 2], [0, 2], [2, 0]])
     perm = [4, 2, 1, 3, 0]
-    assert mstme_graph(points[perm], method=method).cost == pytest.approx(mstme_graph(points, method=method).cost)
+    assert mstme_graph(points[perm], solver=method).cost == pytest.approx(mstme_graph(points, solver=method).cost)
     changed = 0
     for seed in range(300):
         rng = np.random.default_rng(seed)
@@ -397,7 +397,7 @@ def test_mstme_ties_do_not_follow_the_row_order(method):
         if len(grid) < 3:
             continue
         shuffled = grid[rng.permutation(len(grid))]
-        changed += abs(mstme_graph(grid, method=method).cost - mstme_graph(shuffled, method=method).cost) > 1e-9
+        changed += abs(mstme_graph(grid, solver=method).cost - mstme_graph(shuffled, solver=method).cost) > 1e-9
     assert changed <= 3  # (where the invariant key ties too; about 70 of 300 before)
 
 
@@ -405,8 +405,23 @@ def test_mstme_ties_do_not_follow_the_row_order(method):
 def test_the_local_search_limit_is_max_iter_and_max_passes_still_works(build):
     # API audit F12: the package's iteration limit is max_iter
     points = np.random.default_rng(4).random((12, 2))
-    options = {"method": "local"} if build is mwme_graph else {"method": "exchange"}
+    options = {"solver": "local"} if build is mwme_graph else {"solver": "exchange"}
     new = build(points, max_iter=1, **options)
     with pytest.warns(FutureWarning, match=rf"`max_passes` of {build.__name__}\(\) is renamed `max_iter`"):
         old = build(points, max_passes=1, **options)
     np.testing.assert_array_equal(old.graph.toarray(), new.graph.toarray())
+
+
+@pytest.mark.parametrize(("build", "solver"), [(mwme_graph, "greedy"), (mstme_graph, "exchange")])
+def test_the_solver_is_named_solver_and_method_still_works(build, solver):
+    # API audit F13: `method` was the solver here and the matching method in match()
+    points = np.random.default_rng(5).random((10, 2))
+    new = build(points, solver=solver)
+    with pytest.warns(FutureWarning, match=rf"`method` of {build.__name__}\(\) is renamed `solver`"):
+        old = build(points, method=solver)
+    np.testing.assert_array_equal(old.graph.toarray(), new.graph.toarray())
+    assert new.solver == solver
+    with pytest.warns(FutureWarning, match=r"Result.method` is renamed `solver`"):
+        assert new.method == solver
+    with pytest.raises(TypeError, match="give `solver` only"):
+        build(points, method=solver, solver=solver)

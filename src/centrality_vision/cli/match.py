@@ -78,8 +78,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     phrases = {
         "`scale=True`": "--transform similarity",
         "`scale=False`": "--transform rigid",
-        "`method='local'`": "--mwme-solver local",
-        "`method='exact'`": "--mwme-solver exact",
+        "`solver='local'`": "--mwme-solver local",
+        "`solver='exact'`": "--mwme-solver exact",
     }
     parser.set_defaults(run=run, _parser=parser, _cli_phrases=phrases)
     return parser

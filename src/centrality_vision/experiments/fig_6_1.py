@@ -41,7 +41,7 @@ def _graphs() -> dict:
     return {
         "complete": complete_graph(SIX_POINTS),
         "delaunay": delaunay_graph(SIX_POINTS),
-        "nhdd": mwme_graph(SIX_POINTS, method="exact").graph,  # the connected NHDD graph laid at least cost
+        "nhdd": mwme_graph(SIX_POINTS, solver="exact").graph,  # the connected NHDD graph laid at least cost
         "nhdd_complement": nhdd_graph(6, connected=False),
     }
 
@@ -56,7 +56,7 @@ def run(*, quick: bool = False, seed: int = 0) -> dict:
     entropy = {name: _entropy(g) for name, g in _graphs().items()}
     solvers = {}
     for method in ("exact", "local", "greedy"):
-        res = mwme_graph(TABLE_6_1, method=method, metric="precomputed")
+        res = mwme_graph(TABLE_6_1, solver=method, metric="precomputed")
         coo = res.graph.tocoo()
         edges = sorted({f"{NODES[min(i, j)]}-{NODES[max(i, j)]}" for i, j in zip(coo.row.tolist(), coo.col.tolist())})
         solvers[method] = {
@@ -141,7 +141,7 @@ def plot(result: dict, path) -> Path:
         plot_graph(SIX_POINTS, graph, ax=ax, title=f"{titles[name]}: H = {result['entropy'][name]:.2f}")
     ax = axes[-1]
     square = np.array([[0.0, 1.0], [1.0, 1.0], [0.0, 0.0], [1.0, 0.0]])  # a b / c d, for drawing only
-    best = mwme_graph(TABLE_6_1, method="exact", metric="precomputed").graph
+    best = mwme_graph(TABLE_6_1, solver="exact", metric="precomputed").graph
     for i in range(4):
         for j in range(i + 1, 4):
             chosen = best[i, j] > 0

@@ -239,8 +239,8 @@ def plot(result: dict, path, *, example: str = "cow1", seed: int = 0) -> Path:
         moved,
         fixed,
         correspondence,
-        moving_graph=mwme_graph(moved, method=result["method"]).graph,
-        fixed_graph=mwme_graph(fixed, method=result["method"]).graph,
+        moving_graph=mwme_graph(moved, solver=result["method"]).graph,
+        fixed_graph=mwme_graph(fixed, solver=result["method"]).graph,
         ax=left,
         title=f"{example}: MWME graphs and matches (thesis fig. 6.4)",
     )

@@ -16,6 +16,7 @@ ever receives a non-finite weight.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -160,6 +161,15 @@ def _distance_matrix(points, *, min_points: int = 3) -> _Distances:
     return _Distances(pts, scaled, exponent)
 
 
+def _former_solver_name(result) -> str:
+    warnings.warn(
+        f"`{type(result).__name__}.method` is renamed `solver`; the old name will be removed.",
+        FutureWarning,
+        stacklevel=3,
+    )
+    return result.solver
+
+
 @dataclass(frozen=True)
 class MWMEResult:
     """A minimum-weight maximum-entropy graph of a point set.
@@ -174,13 +184,15 @@ class MWMEResult:
         Degree of every point (row i is point i).
     cost : float
         Total edge length.
-    method : str
+    solver : str
+        The solver that laid it (formerly ``method``, which still reads it, with a
+        FutureWarning).
 
     Examples
     --------
     >>> import numpy as np
-    >>> result = mwme_graph(np.random.default_rng(0).random((6, 2)), method="exact")
-    >>> result.method, result.graph.shape, sorted(result.degrees.tolist())
+    >>> result = mwme_graph(np.random.default_rng(0).random((6, 2)), solver="exact")
+    >>> result.solver, result.graph.shape, sorted(result.degrees.tolist())
     ('exact', (6, 6), [1, 2, 3, 3, 4, 5])
     >>> bool(np.isclose(result.cost, result.graph.sum() / 2))  # each edge is stored twice
     True
@@ -192,7 +204,12 @@ class MWMEResult:
     order: np.ndarray
     degrees: np.ndarray
     cost: float
-    method: str
+    solver: str
+
+    @property
+    def method(self) -> str:
+        """The former name of :attr:`solver`."""
+        return _former_solver_name(self)
 
 
 def _precomputed(distances) -> _Distances:
@@ -245,9 +262,9 @@ def _positions_graph(dist: _Distances, order: np.ndarray, joining: np.ndarray) -
     return _edges_graph(dist, lo, hi)
 
 
-@renamed_parameters(max_passes="max_iter")
+@renamed_parameters(max_passes="max_iter", method="solver")
 def mwme_graph(
-    points, /, *, method: str = "local", max_iter: int = 50, metric: str = "euclidean", progress: bool = False
+    points, /, *, solver: str = "local", max_iter: int = 50, metric: str = "euclidean", progress: bool = False
 ) -> MWMEResult:
     """Minimum-weight maximum-entropy (MWME) graph of a point set (thesis ch. 6).
 
@@ -259,9 +276,9 @@ def mwme_graph(
     ----------
     points : array_like of shape (n_points, n_dims)
         At least 3 distinct points.
-    method : {"local", "greedy", "exact"}, default="local"
-        ``"exact"``: dynamic programming over subsets, the optimum, O(2^n n) time and
-        memory, up to 20 points. ``"greedy"``: the thesis' multi-start n1graph
+    solver : {"local", "greedy", "exact"}, default="local"
+        (Formerly ``method``, which still works.) ``"exact"``: dynamic programming over
+        subsets, the optimum, O(2^n n) time and memory, up to 20 points. ``"greedy"``: the thesis' multi-start n1graph
         (Algorithm 6.2), corrected so that it always yields the NHDD graph, O(n^3).
         ``"local"``: the greedy result improved by exchanging the points of two
         positions while the cost drops, O(n^3) per pass.
@@ -291,13 +308,13 @@ def mwme_graph(
     --------
     >>> import numpy as np
     >>> pts = np.random.default_rng(0).random((9, 2))
-    >>> exact = mwme_graph(pts, method="exact")
+    >>> exact = mwme_graph(pts, solver="exact")
     >>> sorted(set(exact.degrees.tolist())) == list(range(1, 9))
     True
-    >>> mwme_graph(pts, method="greedy").cost >= exact.cost
+    >>> mwme_graph(pts, solver="greedy").cost >= exact.cost
     True
     """
-    method = check_choice(method, ("local", "greedy", "exact"), name="method")
+    solver = check_choice(solver, ("local", "greedy", "exact"), name="solver")
     progress = check_bool(progress, name="progress")
     max_iter = check_int(max_iter, name="max_iter", low=1)
     metric = check_choice(metric, ("euclidean", "precomputed"), name="metric")
@@ -305,11 +322,11 @@ def mwme_graph(
     dist = distances.scaled
     n = dist.shape[0]
     joining = nhdd_joining(n)
-    if method == "exact":
+    if solver == "exact":
         if n > MAX_EXACT:
             raise InputError(
-                f"`method='exact'` solves up to {MAX_EXACT} points (time and memory grow as 2^n n); "
-                f"got {n}. Use `method='local'`."
+                f"`solver='exact'` solves up to {MAX_EXACT} points (time and memory grow as 2^n n); "
+                f"got {n}. Use `solver='local'`."
             )
         order, cost = _k.mwme_exact(dist, joining)
     else:
@@ -322,13 +339,13 @@ def mwme_graph(
             if best_start < 0 or _k._better(cost, key[start], best_cost, key[best_start]):
                 best_cost, best_start = cost, start
         order, cost = _k.mwme_greedy_order(dist, joining, best_start, key)
-        if method == "local":
+        if solver == "local":
             order, cost, _ = _k.mwme_local(dist, joining, order, max_iter)
     order = np.asarray(order, dtype=np.int64)
     graph = _positions_graph(distances, order, joining)
     degrees = np.diff(graph.indptr).astype(np.int64)
     cost = float(distances.to_units(cost, "total edge length"))
-    return MWMEResult(graph=graph, order=order, degrees=degrees, cost=cost, method=method)
+    return MWMEResult(graph=graph, order=order, degrees=degrees, cost=cost, solver=solver)
 
 
 #: How :func:`mstme_graph` can divide the edge weights (see its ``normalize``).
@@ -338,7 +355,7 @@ NORMALIZATIONS = ("tree", "edge", "none")
 def mwme_degrees(point_sets, /) -> np.ndarray:
     """Degrees in the exact MWME graph of each of many small point sets of one size.
 
-    The batch form of ``mwme_graph(points, method="exact").degrees`` for local
+    The batch form of ``mwme_graph(points, solver="exact").degrees`` for local
     neighbourhoods (as used by :func:`centrality_vision.matching.match`): one validation,
     then the subset dynamic programme per set, without building graphs.
 
@@ -356,7 +373,7 @@ def mwme_degrees(point_sets, /) -> np.ndarray:
     >>> import numpy as np
     >>> sets = np.random.default_rng(0).random((4, 7, 2))
     >>> degrees = mwme_degrees(sets)
-    >>> bool(np.all(degrees[1] == mwme_graph(sets[1], method="exact").degrees))
+    >>> bool(np.all(degrees[1] == mwme_graph(sets[1], solver="exact").degrees))
     True
     """
     try:
@@ -405,7 +422,8 @@ class MSTMEResult:
     lam : float
     scale : float
         The weights were divided by this (1 for ``normalize="none"``).
-    method : str
+    solver : str
+        Formerly ``method``, which still reads it, with a FutureWarning.
     normalize : str
         ``"tree"``, ``"edge"`` or ``"none"``.
     mst_share : float
@@ -434,9 +452,14 @@ class MSTMEResult:
     cost: float
     lam: float
     scale: float
-    method: str
+    solver: str
     normalize: str = "tree"
     mst_share: float = 0.0
+
+    @property
+    def method(self) -> str:
+        """The former name of :attr:`solver`."""
+        return _former_solver_name(self)
 
 
 def _normalization(normalize) -> str:
@@ -451,9 +474,9 @@ def _edge_keys(n: int, edges: np.ndarray) -> np.ndarray:
     return np.sort(np.minimum(edges[:, 0], edges[:, 1]) * n + np.maximum(edges[:, 0], edges[:, 1]))
 
 
-@renamed_parameters(max_passes="max_iter")
+@renamed_parameters(max_passes="max_iter", method="solver")
 def mstme_graph(
-    points, /, *, lam: float = 1.0, normalize="tree", method: str = "greedy", max_iter: int = 20
+    points, /, *, lam: float = 1.0, normalize="tree", solver: str = "greedy", max_iter: int = 20
 ) -> MSTMEResult:
     """Minimum spanning tree of maximum entropy (MSTME, thesis ch. 7, eq. 7.1).
 
@@ -479,14 +502,14 @@ def mstme_graph(
         one entropy bit is then worth a single edge and the MSTME is the MST on almost
         every point set (0 of the fish's 90 edges change at ``lam = 0.5``).
         ``"none"`` (or False): raw Euclidean lengths (thesis fig. 7.1), scale dependent.
-    method : {"greedy", "exchange"}, default="greedy"
-        ``"greedy"``: Algorithm 7.1, O(n^3) with the entropy change tabulated per pair
-        of degrees. ``"exchange"``: the greedy tree improved by edge exchanges (drop a
-        tree edge, add the best edge across the cut) while the objective drops. Equally
-        good edges (to 1e-12 relative) go to the pair of smaller total distance to all
-        points, so that the tree does not depend on the row order unless that ties too (on
-        small integer grids, 3 of 991 sets gave another cost when permuted; 235 when the
-        first edge in row order won).
+    solver : {"greedy", "exchange"}, default="greedy"
+        (Formerly ``method``, which still works.) ``"greedy"``: Algorithm 7.1, O(n^3)
+        with the entropy change tabulated per pair of degrees. ``"exchange"``: the greedy
+        tree improved by edge exchanges (drop a tree edge, add the best edge across the
+        cut) while the objective drops. Equally good edges (to 1e-12 relative) go to the
+        pair of smaller total distance to all points, so that the tree does not depend on
+        the row order unless that ties too (on small integer grids, 3 of 991 sets gave
+        another cost when permuted; 235 when the first edge in row order won).
     max_iter : int >= 1, default=20
         Most passes of the exchange search (it stops at the first pass that improves
         nothing). Formerly ``max_passes``, which still works with a FutureWarning.
@@ -517,7 +540,7 @@ def mstme_graph(
     from scipy.sparse.csgraph import minimum_spanning_tree
 
     lam = check_float(lam, name="lam", low=0.0, high=LAM_MAX)
-    method = check_choice(method, ("greedy", "exchange"), name="method")
+    solver = check_choice(solver, ("greedy", "exchange"), name="solver")
     max_iter = check_int(max_iter, name="max_iter", low=1)
     normalize = _normalization(normalize)
     distances = _distance_matrix(points)
@@ -539,7 +562,7 @@ def mstme_graph(
     else:
         key = weight.sum(axis=1)  # invariant tie-breaker: total distance to all points
         edges = _k.mstme_greedy(weight, lam, key)
-        if method == "exchange":
+        if solver == "exchange":
             edges, _, _ = _k.mstme_exchange(weight, lam, edges, max_iter, key)
     graph = _edges_graph(distances, edges[:, 0], edges[:, 1])
     total = float(weight[edges[:, 0], edges[:, 1]].sum())
@@ -554,7 +577,7 @@ def mstme_graph(
         cost=total - lam * entropy,
         lam=lam,
         scale=scale,
-        method=method,
+        solver=solver,
         normalize=normalize,
         mst_share=share,
     )

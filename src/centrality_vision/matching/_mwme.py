@@ -52,9 +52,9 @@ def mwme_match(
     moving, fixed : array_like of shape (n_points, n_dims)
         Two sets of the same size, n_dims 2 or 3, at least 3 distinct points each.
     solver : {"local", "greedy", "exact"}, default="local"
-        MWME solver (``method`` of :func:`~centrality_vision.graphs.mwme_graph`; formerly
-        ``method`` here too, which :func:`~centrality_vision.matching.match` uses for the
-        matching method).
+        MWME solver (``solver`` of :func:`~centrality_vision.graphs.mwme_graph`; formerly
+        ``method``, which :func:`~centrality_vision.matching.match` uses for the matching
+        method).
     scale : bool, default=True
         Fit a similarity (True) or a rigid transform (False).
 
@@ -89,8 +89,8 @@ def mwme_match(
     check_resolution(norm_f.points, "fixed", original=fixed)
     if not scale:  # else both candidates' residuals overflow and the first one wins, right or not
         check_rigid_extents(norm_m, norm_f)
-    graph_m = mwme_graph(norm_m.points, method=solver)
-    graph_f = mwme_graph(norm_f.points, method=solver)
+    graph_m = mwme_graph(norm_m.points, solver=solver)
+    graph_f = mwme_graph(norm_f.points, solver=solver)
     repeated = n // 2
     by_degree_f = np.full(n, -1, dtype=np.int64)
     for node, deg in enumerate(graph_f.degrees):
