@@ -1,4 +1,5 @@
 import json
+import os
 
 import numpy as np
 import pytest
@@ -714,6 +715,19 @@ def test_an_output_that_is_an_input_is_refused(tmp_path, capsys, argv):
     assert main([a.format(**{k: str(v) for k, v in paths.items()}) for a in argv]) == 2
     assert "an input that writing it would destroy" in _one_line_error(capsys, only=True)
     assert before == {name: path.read_bytes() for name, path in paths.items() if path.exists()}
+
+
+def test_an_output_that_is_a_hard_link_to_an_input_is_refused(tmp_path, capsys):
+    # found by fuzz round 7: the check compared resolved paths, and a hard link resolves to
+    # its own name, so `register m.csv f.csv --out out.csv` replaced MOVING, exit 0
+    moving, fixed, out = tmp_path / "m.csv", tmp_path / "f.csv", tmp_path / "out.csv"
+    np.savetxt(moving, _points(12, seed=1), delimiter=",")
+    np.savetxt(fixed, _points(12, seed=2), delimiter=",")
+    os.link(moving, out)
+    before = moving.read_bytes()
+    assert main(["register", str(moving), str(fixed), "--out", str(out)]) == 2
+    assert "is also MOVING, an input that writing it would destroy" in _one_line_error(capsys, only=True)
+    assert moving.read_bytes() == before
 
 
 def test_options_of_the_other_kind_of_input_are_refused(tmp_path, capsys):

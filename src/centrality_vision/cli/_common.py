@@ -197,11 +197,14 @@ def check_output_places(args) -> None:
     from .._validation import nearest_existing
     from ..exceptions import InputError
 
+    # an input is known by its file's identity (device, inode) too: a hard link to it, or a
+    # second mount of its folder, resolves to another path but would overwrite it all the same
     inputs = {}
     for name in _INPUT_FILES:
         value = getattr(args, name, None)
         if isinstance(value, str) and value and Path(value).is_file():
             inputs[Path(value).resolve()] = _INPUT_FILES[name]
+            inputs[_file_identity(Path(value))] = _INPUT_FILES[name]
 
     places = []
     if getattr(args, "_out_is_file", False) and getattr(args, "out", None):
@@ -214,10 +217,10 @@ def check_output_places(args) -> None:
     for option, path in places:
         if path.is_dir():
             raise InputError(f"{option}: {path} is a folder, not a file.")
-        if path.resolve() in inputs:
+        same = inputs.get(path.resolve()) or (inputs.get(_file_identity(path)) if path.is_file() else None)
+        if same:
             raise InputError(
-                f"{option}: {path} is also {inputs[path.resolve()]}, an input that writing it would destroy; "
-                "choose another output file."
+                f"{option}: {path} is also {same}, an input that writing it would destroy; choose another output file."
             )
         ancestor = nearest_existing(path.parent)
         if not ancestor.is_dir():
@@ -227,6 +230,12 @@ def check_output_places(args) -> None:
                 pass
         except OSError as exc:
             raise InputError(f"{option}: cannot write {path}: {ancestor} refuses new files ({exc.strerror}).") from None
+
+
+def _file_identity(path: Path) -> tuple[int, int]:
+    """An existing file's (device, inode): equal for every name of one file."""
+    info = path.stat()
+    return info.st_dev, info.st_ino
 
 
 def add_progress(parser: argparse.ArgumentParser) -> None:
