@@ -222,12 +222,14 @@ def test_identical_sets_converge_to_the_identity_without_nan(fish):
 def test_one_point_sets_translate():
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", ConvergenceWarning)
-        reg = RigidCPD().fit([[0.0, 0.0]], [[1.0, 2.0]])
+        with pytest.warns(UserWarning, match=r"spans 0 of 2 dimensions \(1 point\): a rotation is not determined"):
+            reg = RigidCPD().fit([[0.0, 0.0]], [[1.0, 2.0]])
         np.testing.assert_allclose(reg.moving_transformed_, [[1.0, 2.0]], atol=1e-12)
         with pytest.warns(UserWarning, match="spans 0 of 2 dimensions"):  # its linear part is not determined
             reg = AffineCPD().fit([[0.0, 0.0]], [[1.0, 2.0]])
         np.testing.assert_allclose(reg.moving_transformed_, [[1.0, 2.0]], atol=1e-12)
-    reg = RigidCPD().fit([[0.0, 0.0]], [[1.0, 2.0], [3.0, 2.0]])
+    with pytest.warns(UserWarning, match="a rotation is not determined"):
+        reg = RigidCPD().fit([[0.0, 0.0]], [[1.0, 2.0], [3.0, 2.0]])
     np.testing.assert_allclose(reg.moving_transformed_, [[2.0, 2.0]], atol=1e-12)
 
 

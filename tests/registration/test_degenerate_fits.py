@@ -8,7 +8,8 @@ import warnings
 import numpy as np
 import pytest
 
-from centrality_vision.registration import AffineCPD, NonRigidCPD, RigidCPD
+from centrality_vision.exceptions import CollapseWarning
+from centrality_vision.registration import ICP, AffineCPD, NonRigidCPD, RigidCPD
 from centrality_vision.registration._estep import Posteriors
 from centrality_vision.registration._mstep import gaussian_kernel, nonrigid_m_step
 
@@ -134,3 +135,42 @@ def test_affine_cpd_warns_when_the_moving_points_do_not_determine_the_linear_map
     with warnings.catch_warnings():
         warnings.simplefilter("error", UserWarning)
         AffineCPD().fit(fixed[:3], fixed)  # three points in general position: no warning
+
+
+@pytest.mark.parametrize("n_fixed", [1, 10])
+@pytest.mark.parametrize("estimator", [RigidCPD(), AffineCPD(), NonRigidCPD(), ICP()], ids=lambda e: type(e).__name__)
+def test_a_fixed_set_of_one_point_is_not_reported_as_a_registration(estimator, n_fixed):
+    # found by fuzz round 7: AffineCPD shrank 30 spread points onto the one fixed point and
+    # reported converged_=True with sigma2 1.5e-14 (the collapse check needed a fixed radius)
+    moving = np.random.default_rng(0).normal(size=(30, 2))
+    fixed = np.ones((n_fixed, 2))
+    with pytest.warns(CollapseWarning, match="`fixed` is (a single point|one point repeated 10 times)"):
+        estimator.fit(moving, fixed)
+    assert not estimator.converged_
+
+
+def test_rigid_cpd_warns_when_the_moving_points_do_not_determine_a_rotation():
+    fixed = np.random.default_rng(1).random((20, 3))
+    line = np.c_[np.arange(5.0), 2 * np.arange(5.0), np.zeros(5)]
+    with pytest.warns(UserWarning, match=r"`moving` spans 1 of 3 dimensions \(5 points\): a rotation is not"):
+        RigidCPD().fit(line, fixed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UserWarning)
+        RigidCPD().fit(np.c_[line[:, :2], [0, 1, 0, 1, 0]], fixed)  # off the line: determined
+
+
+def test_estimate_normals_needs_a_plane_in_3d_and_says_when_a_normal_is_arbitrary():
+    from centrality_vision.registration import estimate_normals
+
+    points = np.random.default_rng(2).random((12, 3))
+    with pytest.raises(ValueError, match=r"`k` must be an int in \[3, "):  # two points: any normal
+        estimate_normals(points, k=2)
+    with pytest.raises(ValueError, match="`points` must have at least 3 points in 3D"):
+        estimate_normals(points[:2])
+    doubled = np.repeat(points, 3, axis=0)  # every point three times: k=3 sees one position
+    with pytest.warns(UserWarning, match="36 of 36 points have neighbourhoods of one point or one line"):
+        estimate_normals(doubled, k=3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UserWarning)
+        estimate_normals(doubled, k=9)  # three positions: a plane
+        estimate_normals(points[:, :2], k=2)  # a line through two points has a normal in 2D

@@ -954,6 +954,11 @@ class _CPD(BaseEstimator):
 
     def _collapse(self, moving_n, fixed, moving_t, w, post) -> str | None:
         radius_y, radius_x, radius_t = rms_radius(moving_n), rms_radius(fixed), rms_radius(moving_t)
+        if radius_x == 0 and radius_y > 0:  # every model shrinks (or turns at random) onto one point
+            return (
+                f"`fixed` is {_one_point(fixed.shape[0])}, onto which no transform of the spread moving set is "
+                "determined; the result is not a registration."
+            )
         # (normalize=True is suggested only where it is off: the command line always has it on)
         advice = (
             "Try " + ("normalize=True, " if not self.normalize else "") + "a smaller `w`, or a starting pose (`init`)."
@@ -1157,6 +1162,22 @@ _COMMON_ATTRIBUTES = """transform_ : transform
         The E-step statistics of the final state (``px`` and the likelihood in the caller's units)."""
 
 
+def _count(n: int, noun: str) -> str:
+    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
+
+
+def _one_point(n: int) -> str:
+    """A set of ``n`` copies of one point, in words."""
+    return "a single point" if n == 1 else f"one point repeated {n} times"
+
+
+def _span(points: np.ndarray) -> int:
+    """How many dimensions the points span about their mean (the rank of the centred set)."""
+    unit = points / power_of_two_scale(points)  # (the mean of coordinates near 1e308 overflowed)
+    centred = unit - unit.mean(axis=0)
+    return int(np.linalg.matrix_rank(centred / max(float(np.abs(centred).max()), np.finfo(float).tiny)))
+
+
 class RigidCPD(_CPD):
     """Rigid (``scale=False``) or similarity (``scale=True``) Coherent Point Drift.
 
@@ -1165,6 +1186,10 @@ class RigidCPD(_CPD):
     change of the objective ``-sum_n log(sum_m exp(-|x_n - T(y_m)|^2 / 2 sigma2) + c) + N D/2 log sigma2``
     between two E-steps is at most ``tol``, after ``max_iter`` M-steps, or when sigma2
     reaches 1e-14 of the data's spread (the sets coincide).
+
+    Moving points that do not determine a rotation (one point repeated, or in 3D points on
+    one line) are still aligned, but ``transform_`` is then right on them only, and a
+    :class:`UserWarning` says so.
 
     Parameters
     ----------
@@ -1248,6 +1273,19 @@ class RigidCPD(_CPD):
             return SimilarityTransform(start.rotation, start.translation, start.scale)
         return RigidTransform(start.rotation, start.translation)
 
+    def _validate(self, moving, fixed, true_moving):
+        moving, fixed, true_moving = super()._validate(moving, fixed, true_moving)
+        dim, rank = moving.shape[1], _span(moving)
+        if rank < dim - 1:
+            warnings.warn(
+                f"`moving` spans {rank} of {dim} dimensions ({_count(moving.shape[0], 'point')}): a rotation is not "
+                f"determined by it (it takes points not all on one {'point' if dim == 2 else 'line'}); `transform_` "
+                "is right on `moving` only.",
+                UserWarning,
+                stacklevel=3,
+            )
+        return moving, fixed, true_moving
+
     def _m_step(self, post, moving, fixed, state, sigma2):
         transform, sigma2 = rigid_m_step(post, moving, fixed, scale=bool(self.scale))
         return transform, transform._apply(moving), sigma2
@@ -1298,14 +1336,11 @@ class AffineCPD(_CPD):
 
     def _validate(self, moving, fixed, true_moving):
         moving, fixed, true_moving = super()._validate(moving, fixed, true_moving)
-        dim = moving.shape[1]
-        unit = moving / power_of_two_scale(moving)  # (the mean of coordinates near 1e308 overflowed)
-        centred = unit - unit.mean(axis=0)
-        rank = int(np.linalg.matrix_rank(centred / max(float(np.abs(centred).max()), np.finfo(float).tiny)))
+        dim, rank = moving.shape[1], _span(moving)
         if rank < dim:
             warnings.warn(
-                f"`moving` spans {rank} of {dim} dimensions ({moving.shape[0]} points): an affine transform is not "
-                f"determined by it (it takes at least {dim + 1} points, not all on one "
+                f"`moving` spans {rank} of {dim} dimensions ({_count(moving.shape[0], 'point')}): an affine transform "
+                f"is not determined by it (it takes at least {dim + 1} points, not all on one "
                 f"{'line' if dim == 2 else 'hyperplane'}); `transform_` is right on `moving` only.",
                 UserWarning,
                 stacklevel=3,

@@ -18,9 +18,9 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._parallel import get_num_threads
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
-from ..exceptions import ConvergenceWarning, InputError
+from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
 from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity, power_of_two_scale
-from ._cpd import IterationInfo, _Frame, _start_within_reach
+from ._cpd import IterationInfo, _Frame, _one_point, _start_within_reach
 
 __all__ = ["ICP", "estimate_normals"]
 
@@ -37,9 +37,11 @@ def estimate_normals(points, *, k: int = 10) -> np.ndarray:
     Parameters
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
-        At least 2 points.
-    k : int >= 2, default=10
-        Neighbours per point; at most ``n_points`` are used.
+        At least ``n_dims`` points.
+    k : int >= n_dims, default=10
+        Neighbours per point; at most ``n_points`` are used. A point whose neighbours are
+        one point repeated (or, in 3D, lie on one line) has no normal; a
+        :class:`UserWarning` counts such points.
 
     Returns
     -------
@@ -55,7 +57,13 @@ def estimate_normals(points, *, k: int = 10) -> np.ndarray:
     True
     """
     points = as_points(points, name="points", n_dims=(2, 3), min_points=2)
-    k = min(check_int(k, name="k", low=2), points.shape[0])
+    dim = points.shape[1]
+    if points.shape[0] < dim:
+        raise InputError(
+            f"`points` must have at least {dim} points in {dim}D (a normal needs {dim}); got {points.shape[0]}."
+        )
+    # a line through 2 points has a normal in 2D; a plane takes 3 in 3D
+    k = min(check_int(k, name="k", low=dim), points.shape[0])
     # normals do not depend on scale: a power-of-two scale to unit size is exact, and keeps
     # the k-d tree's squared distances from overflowing past 1e154 (it then reported no
     # neighbours) or underflowing below 1e-154
@@ -64,8 +72,27 @@ def estimate_normals(points, *, k: int = 10) -> np.ndarray:
     patches = points[neighbours]  # (n, k, D)
     patches = patches - patches.mean(axis=1, keepdims=True)
     cov = np.einsum("nki,nkj->nij", patches, patches)
-    _, vectors = np.linalg.eigh(cov)  # ascending eigenvalues
+    values, vectors = np.linalg.eigh(cov)  # ascending eigenvalues
+    # a neighbourhood of one point (duplicates), or one line in 3D, has no normal: its
+    # least-variance direction is any of two or more
+    # (the coordinates are of unit size here, so rounding of the patch means leaves variances
+    # near k eps^2: copies of one point do not average back to it exactly)
+    floor = np.maximum(_FLAT_PATCH * values[:, -1], k * (8 * np.finfo(float).eps) ** 2)
+    undetermined = int(np.count_nonzero(values[:, 1] <= floor))
+    if undetermined:
+        warnings.warn(
+            f"estimate_normals: {undetermined} of {points.shape[0]} points have neighbourhoods of one point"
+            f"{' or one line' if dim == 3 else ''} (their {k} nearest points), so their normals are arbitrary; "
+            "deduplicate the points or raise `k`.",
+            UserWarning,
+            stacklevel=2,
+        )
     return np.ascontiguousarray(vectors[:, :, 0])
+
+
+#: A neighbourhood whose second-least variance is at most this fraction of its largest has
+#: no normal (double rounding of unit-scale coordinates is far below it).
+_FLAT_PATCH = 1e-20
 
 
 def _small_rotation(omega: np.ndarray, n_dims: int) -> np.ndarray:
@@ -372,6 +399,16 @@ class ICP(BaseEstimator):
                 )
             moving_t = transform(moving_n)
             iteration += 1
+        if fixed_n.shape[0] > 0 and np.ptp(fixed_n, axis=0).max() == 0 and np.ptp(moving_n, axis=0).max() > 0:
+            # every moving point pairs with the one fixed point: the rotation is arbitrary
+            # (and a scale shrinks to 0), yet the residual stops changing
+            converged = False
+            warnings.warn(
+                f"ICP: `fixed` is {_one_point(fixed_n.shape[0])}, onto which no pose of the spread moving set is "
+                "determined; the result is not a registration.",
+                CollapseWarning,
+                stacklevel=2,
+            )
         if free:
             # (a planar or linear fixed set: the pose slid freely along it and came back
             # "converged" at the start's position, 0.05 off on a shifted plane)
