@@ -134,12 +134,15 @@ def test_comparisons_check_parameters_changed_after_fit():
     disk = np.add.outer((np.arange(15) - 7) ** 2, (np.arange(15) - 7) ** 2) < 30
     model = CentralityComparisons(n_comparisons=5).fit([disk])
     before = model.transform([disk])
-    with pytest.raises(InputError, match=r"changed since fit \(comparisons of closeness, 5 of them.*now degree"):
+    with pytest.raises(InputError, match=r"changed since fit: `centrality` \('closeness' at fit, now 'degree'\)"):
         model.set_params(centrality="degree").transform([disk])  # features of closeness, silently
     with pytest.raises(InputError, match="`orientation` must be one of"):
         model.set_params(centrality="closeness", orientation="bogus").transform([disk])  # ran as "image"
-    with pytest.raises(InputError, match="extent 2.0; now closeness, 5, extent 3.0"):
+    with pytest.raises(InputError, match=r"`extent` \(2.0 at fit, now 3.0\); call fit again"):
         model.set_params(orientation="image", extent=3.0).transform([disk])
+    with pytest.raises(InputError, match=r"`reference` \('centroid' at fit, now 'graph-centre'\)"):
+        model.set_params(extent=2.0, reference="graph-centre").transform([disk])  # was used live
+    model.set_params(reference="centroid", n_jobs=2, progress=False)  # how it runs may change
     np.testing.assert_array_equal(model.set_params(extent=2.0).transform([disk]), before)
 
 
@@ -176,10 +179,17 @@ def test_parameters_changed_after_fit_are_checked_not_mixed_with_the_fitted_ones
 
     disk = np.add.outer((np.arange(15) - 7) ** 2, (np.arange(15) - 7) ** 2) < 30
     model = CentralityHistogram(bins=10).fit([disk])
-    with pytest.raises(InputError, match=r"changed since fit \(closeness in 10 bins, now closeness in 20\)"):
+    with pytest.raises(InputError, match=r"changed since fit: `bins` \(10 at fit, now 20\); call fit again"):
         model.set_params(bins=20).transform([disk])  # was a numpy broadcast error
-    with pytest.raises(InputError, match=r"now degree in 10\); call fit again"):
+    with pytest.raises(InputError, match=r"`centrality` \('closeness' at fit, now 'degree'\); call fit again"):
         model.set_params(bins=10, centrality="degree").transform([disk])  # silently stayed closeness
+    for name, value in (("fill_holes", True), ("connectivity", 4), ("weights", True)):  # fuzz round 7: used live
+        with pytest.raises(InputError, match=rf"changed since fit: `{name}`"):
+            model.set_params(centrality="closeness", **{name: value}).transform([disk])
+        model.set_params(**{name: CentralityHistogram().get_params()[name]})
+    with pytest.raises(InputError, match=r"`scaling` \('max' at fit, now 'minmax'\)"):
+        model.set_params(scaling="minmax").transform([disk])
+    model.set_params(scaling="max")
     with pytest.raises(InputError, match="`scaling` must be one of"):
         model.set_params(centrality="closeness", scaling="bogus").transform([disk])  # silently 'max'
     refit = model.set_params(scaling="minmax", bins=20).fit([disk]).transform([disk])
@@ -259,3 +269,31 @@ def test_second_fuzz_round_shape_inputs_are_named(tmp_path):
         shape_distance(mask, np.zeros((5, 5), bool))
     with pytest.raises(InputError, match=r"`name` must be one of"):
         CentralityCache().lookup(mask, "foo")
+
+
+def test_the_forest_predicts_only_with_its_fitted_parameters():
+    # found by fuzz round 7: predict read fill_holes/foreground/threshold as they were now and
+    # the rest as at fit, and accepted invalid values set after fit
+    import pytest
+
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.shapes import CentralityComparisonForest
+
+    rows = np.arange(15) - 7
+    disk = np.add.outer(rows**2, rows**2) < 30
+    ring = disk & ~(np.add.outer(rows**2, rows**2) < 8)
+    square = np.zeros((15, 15), dtype=bool)
+    square[3:12, 3:12] = True
+    shapes, labels = [disk, ring, square] * 2, [0, 1, 2] * 2
+    forest = CentralityComparisonForest(n_comparisons=20, n_estimators=5).fit(shapes, labels)
+    before, fitted = forest.predict(shapes), forest.get_params()
+    for name, value in (("fill_holes", True), ("orientation", "principal"), ("extent", 3.0), ("n_estimators", 9)):
+        with pytest.raises(InputError, match=rf"changed since fit: `{name}`"):
+            forest.set_params(**{name: value}).predict(shapes)
+        forest.set_params(**{name: fitted[name]})
+    with pytest.raises(InputError, match="`orientation` must be one of"):
+        forest.set_params(orientation="bogus").fit(shapes, labels)
+    forest.set_params(orientation="image", n_jobs=1)
+    np.testing.assert_array_equal(forest.predict(shapes), before)  # how it runs may change
+    with pytest.raises(TypeError, match="`seed` is the former name of `random_state`; give `random_state` only"):
+        CentralityComparisonForest(random_state=7, seed=3).fit(shapes, labels)  # seed silently won

@@ -11,7 +11,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 from .._seeding import as_generator
 from .._validation import check_choice, check_float, check_int, is_real_dtype
 from ..exceptions import InputError
-from ._histogram import ShapeInputMixin, resolve_centralities
+from ._histogram import ShapeInputMixin, _same, resolve_centralities
 
 __all__ = ["CentralityComparisons", "CentralityComparisonForest", "centrality_map"]
 
@@ -140,7 +140,15 @@ def _random_state(estimator) -> np.random.Generator:
     (with a FutureWarning); a bad value's error names the parameter it came from."""
     if estimator.seed is None:
         return as_generator(estimator.random_state, name="random_state")
+    import inspect
     import warnings
+
+    default = inspect.signature(type(estimator).__init__).parameters["random_state"].default
+    if not _same(estimator.random_state, default):  # as renamed_parameters does with both names
+        raise TypeError(
+            "`seed` is the former name of `random_state`; give `random_state` only; got both "
+            f"(seed={estimator.seed!r}, random_state={estimator.random_state!r})."
+        )
 
     warnings.warn(
         f"`seed` of {type(estimator).__name__} is deprecated and will be removed; use `random_state`.",
@@ -299,7 +307,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         self.centralities_ = names
         self.offsets_ = rng.uniform(-extent, extent, size=(n, 2, 2))
         self.which_ = rng.integers(0, len(names), size=n)
-        self._drawn = (names, n, extent)
+        self._remember_parameters()
         return self
 
     def transform(self, X) -> np.ndarray:
@@ -307,15 +315,10 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "offsets_")
-        # parameters set after fit are checked, and those the drawn comparisons depend on must
-        # be the fitted ones (a new centrality was ignored, a bad orientation ran as "image")
-        drawn, fitted = self._drawn_with(), self._drawn
-        if drawn != fitted:
-            raise InputError(
-                "`centrality`, `n_comparisons` or `extent` changed since fit (comparisons of "
-                f"{', '.join(fitted[0])}, {fitted[1]} of them, extent {fitted[2]}; now {', '.join(drawn[0])}, "
-                f"{drawn[1]}, extent {drawn[2]}); call fit again."
-            )
+        # parameters set after fit are checked, and must be the fitted ones (a new centrality
+        # was ignored, a bad orientation ran as "image", a new reference mixed with the draw)
+        self._drawn_with()
+        self._check_unchanged()
         masks = self._masks(X)
         names = list(self.centralities_)
         if self.reference == "graph-centre" and "eccentricity" not in names:
@@ -504,6 +507,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
             n_jobs=self.n_jobs,
         ).fit(self.comparisons_.transform(masks), y)
         self.classes_ = self.forest_.classes_
+        self._remember_parameters()
         return self
 
     def predict_proba(self, X) -> np.ndarray:
@@ -522,6 +526,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "forest_")
+        self._check_unchanged()  # the forest was grown on the features of the fitted parameters
         return self.forest_.predict_proba(self.comparisons_.transform(self._masks(X)))
 
     def predict(self, X) -> np.ndarray:

@@ -13,13 +13,52 @@ from ._cache import SHAPE_CENTRALITIES, as_shape_images, is_connectivity, shape_
 __all__ = ["CentralityHistogram", "ShapeInputMixin", "resolve_centralities"]
 
 
+def _same(a, b) -> bool:
+    """Whether a parameter kept its value (a generator or a cache: the same object)."""
+    if a is b:
+        return True
+    try:
+        return type(a) is type(b) and bool(a == b)
+    except (TypeError, ValueError):  # (an array's ambiguous truth value)
+        return False
+
+
 class ShapeInputMixin:
     """How the shape estimators read images and get their centralities.
 
     Uses the parameters ``connectivity``, ``weights``, ``foreground``, ``threshold``,
     ``cache``, ``n_jobs`` and ``progress`` of the estimator (see
-    :func:`~centrality_vision.shapes.shape_centralities`).
+    :func:`~centrality_vision.shapes.shape_centralities`). After ``fit``, only ``cache``,
+    ``n_jobs`` and ``progress`` (how the work runs) may change: ``transform`` and
+    ``predict`` refuse any other parameter changed since fit, whose features would not be
+    the fitted ones.
     """
+
+    #: parameters of how the work runs, not of what it gives: they may change after fit
+    _RUN_PARAMETERS = frozenset({"progress", "cache", "n_jobs"})
+
+    def _result_parameters(self) -> dict:
+        return {
+            name: tuple(value) if isinstance(value, list) else value
+            for name, value in self.get_params(deep=False).items()
+            if name not in self._RUN_PARAMETERS
+        }
+
+    def _remember_parameters(self) -> None:
+        """At the end of fit: the parameters the fitted state was made with."""
+        self._fitted_parameters = self._result_parameters()
+
+    def _check_unchanged(self) -> None:
+        """After fit, every parameter but how the work runs must be the fit's: features (or a
+        forest's votes) of other settings would be mixed silently with the fitted ones."""
+        fitted, now = self._fitted_parameters, self._result_parameters()
+        changed = [name for name in now if not _same(now[name], fitted.get(name))]
+        if changed:
+            raise InputError(
+                "changed since fit: "
+                + ", ".join(f"`{name}` ({fitted.get(name)!r} at fit, now {now[name]!r})" for name in changed)
+                + "; call fit again."
+            )
 
     def _masks(self, X):
         fill = getattr(self, "fill_holes", False)
@@ -235,6 +274,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         self._masks(X)
         self.centralities_ = names
         self.n_features_out_ = len(names) * self.bins
+        self._remember_parameters()
         return self
 
     def transform(self, X) -> np.ndarray:
@@ -242,13 +282,8 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         from sklearn.utils.validation import check_is_fitted
 
         check_is_fitted(self, "centralities_")
-        names = self._validate_params()
-        if names != self.centralities_ or len(names) * self.bins != self.n_features_out_:
-            raise InputError(
-                f"`centrality` or `bins` changed since fit ({', '.join(self.centralities_)} in "
-                f"{self._fitted_bins} bins, now {', '.join(names)} in {self.bins}); "
-                "call fit again."
-            )
+        self._validate_params()
+        self._check_unchanged()
         records = self._centralities(self._masks(X), self.centralities_)
         out = np.empty((len(records), self.n_features_out_))
         for i, record in enumerate(records):
