@@ -10,6 +10,7 @@ chunks, and let a progress bar advance and Ctrl-C stop the work between chunks.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import threading
 from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
@@ -24,13 +25,20 @@ _lock = threading.Lock()
 _state = {"threads": None, "pool": None, "pool_size": 0}
 
 
+#: the most threads one may ask for (set_num_threads' bound too)
+_MAX_THREADS = 2**62
+
+
 def _default_threads() -> int:
     env = os.environ.get(_ENV)
     if env:
         try:
-            return max(1, int(env))
+            n = int(env)
         except ValueError:
-            raise InputError(f"`{_ENV}` (environment variable) must be a positive int; got {env!r}.") from None
+            n = 0
+        if not 1 <= n <= _MAX_THREADS:  # (0 and -3 were taken as 1, 10**20 failed later)
+            raise InputError(f"`{_ENV}` (environment variable) must be an int in [1, 2^62]; got {env!r}.")
+        return n
     return available_cores()
 
 
@@ -81,7 +89,19 @@ def set_num_threads(n: int) -> None:
     1
     >>> cv.set_num_threads(None)
     """
-    _state["threads"] = None if n is None else check_int(n, name="n", low=1)
+    _state["threads"] = None if n is None else check_int(n, name="n", low=1, high=_MAX_THREADS)
+
+
+@contextlib.contextmanager
+def num_threads(n: int | None):
+    """Within the block, :func:`set_num_threads` ``(n)``; after it, the setting before (also
+    when that was the default, so the environment is not read)."""
+    before = _state["threads"]
+    set_num_threads(n)
+    try:
+        yield
+    finally:
+        _state["threads"] = before
 
 
 def _pool(size: int) -> ThreadPoolExecutor:

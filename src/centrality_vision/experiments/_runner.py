@@ -188,14 +188,10 @@ def _watch_pid(pid: int, interval: float = 0.5) -> None:
 
 def _call(func, kwargs):
     """Run one unit with a single compiled-kernel thread (results independent of the machine)."""
-    from .._parallel import get_num_threads, set_num_threads
+    from .._parallel import num_threads
 
-    before = get_num_threads()
-    set_num_threads(1)
-    try:
+    with num_threads(1):
         return func(**kwargs)
-    finally:
-        set_num_threads(before)
 
 
 def _checksum(key: str, result) -> str:
