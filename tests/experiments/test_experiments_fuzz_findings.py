@@ -173,6 +173,26 @@ def test_lambdas_and_closures_are_keyed_by_their_code_and_captured_values():
     assert unit_id(Unit("u", _echo, {"values": first})) != unit_id(Unit("u", _echo, {"values": second}))
 
 
+def test_callable_objects_and_partials_are_keyed_by_their_state():
+    # found by fuzz round 7: a transform (an object with __call__) was keyed by its repr, which
+    # elides large arrays: two that differ in row 1000 of 2000 shared an id
+    import functools
+
+    from centrality_vision.transforms import NonRigidTransform
+
+    rng = np.random.default_rng(0)
+    points, weights = rng.random((2000, 2)), rng.random((2000, 2))
+    changed = weights.copy()
+    changed[1000] += 5.0
+    first, second = NonRigidTransform(points, weights, 1.0), NonRigidTransform(points, changed, 1.0)
+    assert unit_id(Unit("u", _echo, {"values": first})) != unit_id(Unit("u", _echo, {"values": second}))
+    same = NonRigidTransform(points.copy(), weights.copy(), 1.0)
+    assert unit_id(Unit("u", _echo, {"values": first})) == unit_id(Unit("u", _echo, {"values": same}))
+    # a partial by its function and arguments (its repr held an address: never found again)
+    keyed = [unit_id(Unit("u", functools.partial(_double, x=x), {})) for x in (3, 3, 4)]
+    assert keyed[0] == keyed[1] != keyed[2]
+
+
 def test_volatile_arguments_stay_out_of_the_id(tmp_path):
     here = Unit("u", _double, {"x": 3, "cache_dir": str(tmp_path / "a")}, volatile=("cache_dir",))
     there = Unit("u", _double, {"x": 3, "cache_dir": str(tmp_path / "b")}, volatile=("cache_dir",))

@@ -24,7 +24,10 @@ also get ``PR_SET_PDEATHSIG``), so a run killed with SIGKILL leaves no orphans.
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import hashlib
+import inspect
 import json
 import os
 import signal
@@ -80,8 +83,18 @@ def _canonical(value):
         return ["path", os.fspath(value)]
     if isinstance(value, (set, frozenset)):
         return ["set", sorted(json.dumps(v, sort_keys=True, default=_canonical) for v in value)]
-    if callable(value):
+    if isinstance(value, functools.partial):
+        return ["partial", _function_name(value.func), _keyed(list(value.args)), _keyed(value.keywords)]
+    if inspect.isroutine(value) or inspect.isclass(value):
         return ["function", _function_name(value)]
+    if callable(value) and (dataclasses.is_dataclass(value) or hasattr(value, "__dict__")):
+        # an object with __call__ (a transform) by its state: its repr elides large arrays
+        state = (
+            {f.name: getattr(value, f.name) for f in dataclasses.fields(value)}
+            if dataclasses.is_dataclass(value)
+            else vars(value)
+        )
+        return ["callable", type(value).__module__ + "." + type(value).__qualname__, _keyed(state)]
     text = repr(value)
     if " at 0x" in text:  # an object's default repr: its address, not its value
         raise InputError(
@@ -89,6 +102,11 @@ def _canonical(value):
             f"functions); got {type(value).__name__} {text[:60]}."
         )
     return ["repr", type(value).__qualname__, text]
+
+
+def _keyed(value):
+    """``value`` with every part JSON cannot write replaced by :func:`_canonical`."""
+    return json.loads(json.dumps(value, sort_keys=True, default=_canonical))
 
 
 def _function_name(func):
