@@ -623,3 +623,26 @@ def test_an_npy_of_masks_or_times_is_not_read_as_coordinates(tmp_path, array, sa
     np.save(tmp_path / "p.npy", array)
     with pytest.raises(InputError, match=said):
         read_points(tmp_path / "p.npy")
+
+
+def test_a_binary_ply_whose_last_list_runs_past_the_end_is_refused(tmp_path):
+    # found by fuzz round 7: the last vertex's list was not checked against the file's end
+    header = (
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+        b"property list uint int idx\nend_header\n"
+    )
+    first = struct.pack("<ffI", 1.0, 2.0, 0)
+    for last in (struct.pack("<ffI", 3.0, 4.0, 5) + b"\0" * 4, struct.pack("<ffI", 3.0, 4.0, 4_000_000_000)):
+        (tmp_path / "short.ply").write_bytes(header + first + last)
+        with pytest.raises(InputError, match="the file ends inside its elements"):
+            read_points(tmp_path / "short.ply")
+    (tmp_path / "whole.ply").write_bytes(header + first + struct.pack("<ffI", 3.0, 4.0, 1) + b"\0" * 4)
+    np.testing.assert_array_equal(read_points(tmp_path / "whole.ply"), [[1.0, 2.0], [3.0, 4.0]])
+
+
+def test_a_ply_comment_that_mentions_end_header_does_not_end_the_header(tmp_path):
+    (tmp_path / "c.ply").write_bytes(
+        b"ply\nformat ascii 1.0\ncomment written before end_header was known\nelement vertex 3\n"
+        b"property float x\nproperty float y\nend_header\n0 0\n1 0\n0 1\n"
+    )
+    np.testing.assert_array_equal(read_points(tmp_path / "c.ply"), [[0, 0], [1, 0], [0, 1]])

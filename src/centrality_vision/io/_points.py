@@ -649,7 +649,9 @@ def _ply_header(path: Path, data: bytes):
     The vertex count is checked against the bytes that follow the header (a binary
     element takes at least its scalar sizes, a list at least its count's bytes).
     """
-    end = data.find(b"end_header")
+    # the line that is "end_header" (a comment may hold the words)
+    found = re.search(rb"^end_header[ \t]*\r?$", data, flags=re.MULTILINE)
+    end = found.start() if found else -1
     if not data.startswith(b"ply") or end < 0:
         raise InputError(f"{path}: not a PLY file (no 'ply' ... 'end_header' header).")
     header = data[:end].decode("ascii", errors="replace").splitlines()
@@ -733,6 +735,8 @@ def _ply_instance(path: Path, data: bytes, offset: int, order: str, properties, 
             if length < 0:
                 raise InputError(f"{path}: not a readable PLY file (a list property of length {length}).")
             offset += _PLY_SIZES[count_type] + length * _PLY_SIZES[kind]
+            if offset > len(data):  # (a last list that runs past the end was read as whole)
+                raise InputError(f"{path}: the file ends inside its elements (at byte {len(data)}).")
     return offset
 
 
