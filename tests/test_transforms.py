@@ -261,6 +261,8 @@ def test_fit_similarity_takes_moving_and_fixed_and_its_former_names_with_a_warni
         np.testing.assert_array_equal(a, b)
     with pytest.raises(TypeError, match="`source` is the former name of `moving`; give `moving` only"):
         fit_similarity(fixed=fixed, moving=moving, source=moving)
+    with pytest.raises(TypeError, match="`source` is the former name of `moving`; give `moving` only"):
+        fit_similarity(moving, fixed, source=moving)  # Python said "multiple values for 'moving'"
     with pytest.raises(ValueError, match="`moving` and `fixed` must have the same shape"):
         fit_similarity(moving, fixed[:5])
     with pytest.raises(TypeError, match="`scale` must be"):

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import inspect
 import warnings
 
 __all__ = ["renamed_parameters"]
@@ -33,8 +34,11 @@ def renamed_parameters(**new_names: str):
         @functools.wraps(function)
         def wrapper(*args, **kwargs):
             given = [old for old in new_names if old in kwargs]
+            # the new names the positional arguments fill (Python's "multiple values" error
+            # named only the new name)
+            positional = list(inspect.signature(function).parameters)[: len(args)] if given else []
             for old in given:
-                if new_names[old] in kwargs:
+                if new_names[old] in kwargs or new_names[old] in positional:
                     new = new_names[old]
                     raise TypeError(f"`{old}` is the former name of `{new}`; give `{new}` only; got both.")
                 kwargs[new_names[old]] = kwargs.pop(old)

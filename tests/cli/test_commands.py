@@ -767,6 +767,10 @@ def test_output_places_are_checked_before_any_work(tmp_path, capsys):
         message = _one_line_error(capsys)
         assert start in message and end in message
     assert not (tmp_path / "side.csv").exists() and not (tmp_path / "g.json").exists()
+    # a name that is only the suffix has none ("'.json' must end in .json" contradicted itself)
+    with pytest.raises(SystemExit):
+        main([*graph, "--out", str(tmp_path / ".json")])
+    assert "/.json' is a name without a stem; give one, e.g. out.json" in capsys.readouterr().err
 
 
 def test_a_plot_that_cannot_be_drawn_leaves_no_output(tmp_path, capsys):

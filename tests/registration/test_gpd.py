@@ -211,3 +211,13 @@ def test_centrality_prior_takes_the_names_gpd_fit_uses():
     np.testing.assert_array_equal(old.log_weight, new.log_weight)
     with pytest.raises(ValueError, match="`fixed_centrality` must be normalised to"):
         centrality_prior([0.0, 1.0], [0.0, 2.0])
+
+
+def test_centrality_prior_names_nan_values():
+    # found by fuzz round 7: a NaN was reported as "got shape (11,)", a valid shape
+    from centrality_vision.registration import centrality_prior
+
+    values = np.linspace(0, 1, 11)
+    values[3] = np.nan
+    with pytest.raises(ValueError, match="`moving_centrality` must be finite; got 1 NaN or inf"):
+        centrality_prior(values, np.linspace(0, 1, 5))

@@ -142,6 +142,9 @@ def out_file(*suffixes: str):
 
     def check(text: str) -> str:
         if suffix(text) not in suffixes:
+            name = Path(text).name
+            if name.lower() in suffixes:  # ".json": a hidden file's name, with no suffix
+                raise argparse.ArgumentTypeError(f"{text!r} is a name without a stem; give one, e.g. out{name}")
             raise argparse.ArgumentTypeError(f"{text!r} must end in {' or '.join(suffixes)}")
         return text
 

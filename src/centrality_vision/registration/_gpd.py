@@ -193,8 +193,10 @@ def centrality_prior(moving_centrality, fixed_centrality, *, bins=10, phi=None, 
     vy = as_real_array(moving_centrality, name="moving_centrality", shape="a 1D array").astype(float)
     vx = as_real_array(fixed_centrality, name="fixed_centrality", shape="a 1D array").astype(float)
     for name, v in (("moving_centrality", vy), ("fixed_centrality", vx)):
-        if v.ndim != 1 or v.size == 0 or not np.all(np.isfinite(v)):
-            raise InputError(f"`{name}` must be a non-empty 1D finite array; got shape {v.shape}.")
+        if v.ndim != 1 or v.size == 0:
+            raise InputError(f"`{name}` must be a non-empty 1D array; got shape {v.shape}.")
+        if not np.all(np.isfinite(v)):
+            raise InputError(f"`{name}` must be finite; got {int(np.count_nonzero(~np.isfinite(v)))} NaN or inf.")
         if v.min() < -1e-12 or v.max() > 1 + 1e-12:
             raise InputError(f"`{name}` must be normalised to [0, 1]; got range [{v.min():.6g}, {v.max():.6g}].")
     _check_prior_options(bins, phi, kappa)
