@@ -43,7 +43,7 @@ CASES = [
     (lambda: nhdd_graph(5, connected="no"), "`connected` must be True or False"),
     (lambda: mwme_degrees([[[0, 0], [0, 0], [1, 1]]]), "`point_sets[0]` must not contain duplicate points"),
     (lambda: mwme_degrees(np.zeros((1, 3, 0))), "`point_sets` must have shape (n_sets, n_points, n_dims)"),
-    (lambda: shape_centralities([SQUARE], ["bogus"]), "`names` must be one of"),
+    (lambda: shape_centralities([SQUARE], ["bogus"]), "`centrality` must be one of"),
     (lambda: as_shape_images(np.array(2)), "must be a sequence of 2D binary images"),
     (lambda: pixel_coordinates([0], np.array(2)), "`shape` must be (n_rows, n_cols)"),
     (lambda: to_networkx(graphs.delaunay_graph(POINTS), weight=[]), "`weight` must be a str"),
@@ -66,7 +66,7 @@ CASES = [
         "`max_features` must be an int in [1, 2^62]",
     ),
     (lambda: CentralityCache().put(SQUARE, "closeness", np.full(9, np.nan)), "`values` must be finite"),
-    (lambda: CentralityCache().put(SQUARE, "bogus", np.ones(9)), "`name` must be one of"),
+    (lambda: CentralityCache().put(SQUARE, "bogus", np.ones(9)), "`centrality` must be one of"),
     (lambda: CentralityCache().put(SQUARE, "closeness", np.ones(9), connectivity=5), "`connectivity` must be 4 or 8"),
 ]
 

@@ -209,7 +209,7 @@ def test_bad_options_of_the_shape_layer_name_the_parameter():
         shape_centralities([square], "degree")[0]["degree"], shape_centralities([square], ["degree"])[0]["degree"]
     )
     cases = [
-        (lambda: shape_centralities([square], None), TypeError, "`names` must be a centrality name or a sequence"),
+        (lambda: shape_centralities([square], None), TypeError, "`centrality` must be a centrality name or a sequence"),
         (lambda: shape_centralities([square], ["degree"], connectivity=8.0), InputError, "`connectivity` must be 4"),
         (lambda: shape_centralities([square], ["degree"], progress="x"), TypeError, "`progress` must be True"),
         (lambda: CentralityHistogram(connectivity=8.0).fit([square]), InputError, "connectivity"),
@@ -267,7 +267,7 @@ def test_second_fuzz_round_shape_inputs_are_named(tmp_path):
     # the pair's own names, not the list's
     with pytest.raises(InputError, match=r"^`b` must have at least one foreground pixel"):
         shape_distance(mask, np.zeros((5, 5), bool))
-    with pytest.raises(InputError, match=r"`name` must be one of"):
+    with pytest.raises(InputError, match=r"`centrality` must be one of"):
         CentralityCache().lookup(mask, "foo")
 
 

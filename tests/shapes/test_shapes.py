@@ -295,3 +295,21 @@ def test_memory_hits_are_written_to_a_directory_set_later(tmp_path):
     cache.directory = tmp_path
     shape_centralities([image], ["degree"], cache=cache)
     assert len(list(tmp_path.glob("*-degree.npz"))) == 1
+
+
+def test_the_cache_and_shape_centralities_name_the_centrality_centrality():
+    # API audit F6: `name`/`names` here, `centrality` in GPD and the shape estimators
+    square = np.zeros((6, 6), dtype=bool)
+    square[1:5, 1:5] = True
+    cache = CentralityCache()
+    values, _ = cache.get(square, centrality="degree")
+    with pytest.warns(FutureWarning, match=r"`name` of get\(\) is renamed `centrality`"):
+        old, _ = cache.get(square, name="degree")
+    np.testing.assert_array_equal(old, values)
+    with pytest.warns(FutureWarning, match=r"`name` of lookup\(\) is renamed `centrality`"):
+        assert cache.lookup(square, name="degree") is not None
+    with pytest.warns(FutureWarning, match=r"`name` of put\(\) is renamed `centrality`"):
+        cache.put(square, name="closeness", values=np.ones(16))
+    with pytest.warns(FutureWarning, match=r"`names` of shape_centralities\(\) is renamed `centrality`"):
+        record = shape_centralities([square], names=["degree"])[0]
+    np.testing.assert_array_equal(record["degree"], shape_centralities([square], centrality="degree")[0]["degree"])

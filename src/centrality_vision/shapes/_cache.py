@@ -22,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._deprecation import renamed_parameters
 from .._provenance import code_digest
 from .._validation import as_binary_image, as_real_array, check_bool, check_choice, check_int, nearest_existing
 from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
@@ -336,7 +337,8 @@ class CentralityCache:
                 self._store.popitem(last=False)
             return dict(entry)  # a copy: the caller cannot change what the cache holds
 
-    def lookup(self, mask: np.ndarray, name: str, *, connectivity: int = 8, weights: bool = False):
+    @renamed_parameters(name="centrality")
+    def lookup(self, mask: np.ndarray, centrality: str, *, connectivity: int = 8, weights: bool = False):
         """The cached values (memory, then disk) or None; never computes.
 
         Parameters
@@ -344,8 +346,9 @@ class CentralityCache:
         mask : 2D array_like
             The shape: a boolean mask (True = shape), or a 0/1 or grey image split as
             :func:`as_shape_images` splits it with its defaults.
-        name : str
-            A centrality from :data:`centrality_vision.centrality.CENTRALITIES`.
+        centrality : str
+            A centrality from :data:`centrality_vision.centrality.CENTRALITIES` (formerly
+            ``name``).
         connectivity : {8, 4}, default=8
             Pixel neighbourhood.
         weights : bool, default=False
@@ -356,7 +359,7 @@ class CentralityCache:
         (values, nodes) or None
             As :meth:`get` returns them, or None when neither memory nor disk holds them.
         """
-        name = check_choice(name, CENTRALITIES, name="name")
+        name = check_choice(centrality, CENTRALITIES, name="centrality")
         mask = _as_mask(mask)
         key = _key(mask, connectivity, weights)
         with self._lock:
@@ -376,10 +379,11 @@ class CentralityCache:
         entry = self._remember(key, entry or {"nodes": np.flatnonzero(mask)}, name, values)
         return values, entry["nodes"]
 
+    @renamed_parameters(name="centrality")
     def get(
-        self, mask: np.ndarray, name: str, *, connectivity: int = 8, weights: bool = False, wait: bool = True
+        self, mask: np.ndarray, centrality: str, *, connectivity: int = 8, weights: bool = False, wait: bool = True
     ) -> tuple[np.ndarray, np.ndarray] | None:
-        """Centrality ``name`` of the pixel graph of ``mask`` and the pixel index of each node.
+        """Centrality ``centrality`` of the pixel graph of ``mask`` and the pixel index of each node.
 
         ``weights=True`` gives the shortest-path centralities (betweenness, closeness,
         harmonic, eccentricity) Euclidean edge lengths 1 and sqrt 2; degree and
@@ -391,8 +395,9 @@ class CentralityCache:
         mask : 2D array_like
             The shape: a boolean mask (True = shape), or a 0/1 or grey image split as
             :func:`as_shape_images` splits it with its defaults.
-        name : str
-            A centrality from :data:`centrality_vision.centrality.CENTRALITIES`.
+        centrality : str
+            A centrality from :data:`centrality_vision.centrality.CENTRALITIES` (formerly
+            ``name``).
         connectivity : {8, 4}, default=8
             Pixel neighbourhood.
         weights : bool, default=False
@@ -411,9 +416,10 @@ class CentralityCache:
             with ``wait=False`` while another process holds the lock.
         """
         mask = _as_mask(mask)
-        found = self.lookup(mask, name, connectivity=connectivity, weights=weights)
+        found = self.lookup(mask, centrality, connectivity=connectivity, weights=weights)
         if found is not None:
             return found
+        name = centrality  # (checked by lookup)
         key = _key(mask, connectivity, weights)
         while True:
             with self._claim(key, name) as mine:
@@ -433,7 +439,10 @@ class CentralityCache:
             if found is not None:
                 return found
 
-    def put(self, mask: np.ndarray, name: str, values: np.ndarray, *, connectivity: int = 8, weights: bool = False):
+    @renamed_parameters(name="centrality")
+    def put(
+        self, mask: np.ndarray, centrality: str, values: np.ndarray, *, connectivity: int = 8, weights: bool = False
+    ):
         """Store values computed elsewhere (e.g. by a worker) under ``mask``'s key.
 
         They are checked as :meth:`get` would compute them: a known centrality, a pixel
@@ -445,8 +454,9 @@ class CentralityCache:
         mask : 2D array_like
             The shape: a boolean mask (True = shape), or a 0/1 or grey image split as
             :func:`as_shape_images` splits it with its defaults.
-        name : str
-            A centrality from :data:`centrality_vision.centrality.CENTRALITIES`.
+        centrality : str
+            A centrality from :data:`centrality_vision.centrality.CENTRALITIES` (formerly
+            ``name``).
         values : array_like of shape (n_foreground,)
             Finite real values, one per foreground pixel in row-major order.
         connectivity : {8, 4}, default=8
@@ -458,11 +468,11 @@ class CentralityCache:
         -------
         dict
             A copy of the image's entry in memory: ``"nodes"`` (flat pixel indices) and each
-            centrality kept for it, ``name`` included, as read-only arrays. The values are also written to
+            centrality kept for it, ``centrality`` included, as read-only arrays. The values are also written to
             the ``directory``, unless a file for them is already there.
         """
         mask = _as_mask(mask)
-        name = check_choice(name, CENTRALITIES, name="name")
+        name = check_choice(centrality, CENTRALITIES, name="centrality")
         key = _key(mask, connectivity, weights)
         # (complex values lost their imaginary part, and a Python int beyond float64 raised OverflowError)
         values = as_real_array(values, name="values", shape="one value per foreground pixel")
@@ -589,9 +599,10 @@ def _effective_jobs(n_jobs) -> int:
     return effective_n_jobs(n_jobs)
 
 
+@renamed_parameters(names="centrality")
 def shape_centralities(
     images,
-    names=SHAPE_CENTRALITIES,
+    centrality=SHAPE_CENTRALITIES,
     *,
     connectivity: int = 8,
     weights: bool = False,
@@ -608,8 +619,9 @@ def shape_centralities(
     images : sequence of 2D arrays
         Shapes; sizes may differ. Masks (True/1 = shape) or grey images (see
         :func:`as_shape_images` for ``foreground`` and ``threshold``).
-    names : str or sequence of str
-        Centralities to compute (see :data:`centrality_vision.centrality.CENTRALITIES`).
+    centrality : str or sequence of str, default=SHAPE_CENTRALITIES
+        Centralities to compute (see :data:`centrality_vision.centrality.CENTRALITIES`;
+        formerly ``names``).
     connectivity : {8, 4}
     weights : bool, default=False
         False counts hops (the thesis). True gives pixel edges their Euclidean lengths,
@@ -647,13 +659,12 @@ def shape_centralities(
            [3., 5., 3.]])
     """
     masks = as_shape_images(images, foreground=foreground, threshold=threshold)
-    if isinstance(names, str):  # one name, not its letters
-        names = [names]
+    names = [centrality] if isinstance(centrality, str) else centrality  # one name, not its letters
     try:
         names = list(names)
     except TypeError:
-        raise TypeError(f"`names` must be a centrality name or a sequence of names; got {names!r}.") from None
-    names = [check_choice(n, CENTRALITIES, name="names") for n in names]
+        raise TypeError(f"`centrality` must be a centrality name or a sequence of names; got {names!r}.") from None
+    names = [check_choice(n, CENTRALITIES, name="centrality") for n in names]
     if not is_connectivity(connectivity):
         raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
     connectivity = int(connectivity)
