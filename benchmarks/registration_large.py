@@ -136,7 +136,7 @@ def main(argv=None):
     p.add_argument("--data", default=",".join(CASES), help="comma list of %s" % ", ".join(CASES))
     p.add_argument("--compare", action="store_true", help="also the full-resolution comparisons (minutes)")
     args = p.parse_args(argv)
-    print("MultiscaleCPD defaults (sizes=(5000, 20000), refine_iter=10); each case in a fresh process")
+    print("MultiscaleCPD defaults (sizes=(5000, 20000), refine_max_iter=10); each case in a fresh process")
     print(load_line())
     rows = []
     for data in [d.strip() for d in args.data.split(",") if d.strip()]:

@@ -239,7 +239,7 @@ def estimators(draw):
     if wrap == "gpd" and kw.get("method") != "fgt":
         return GPD(estimator, centrality=draw(st.sampled_from(["closeness", "degree"])), prior_schedule="anneal")
     if wrap == "multiscale":
-        return MultiscaleCPD(estimator, sizes=(draw(st.integers(2, 8)), 12), refine_iter=2)
+        return MultiscaleCPD(estimator, sizes=(draw(st.integers(2, 8)), 12), refine_max_iter=2)
     return estimator
 
 

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from sklearn.base import clone
 from sklearn.exceptions import NotFittedError
 
 from centrality_vision.exceptions import InputError
@@ -93,7 +94,7 @@ def test_multiscale_rigid_recovers_a_known_transform():
     rng = np.random.default_rng(4)
     y = rng.random((4000, 2))
     x = 1.1 * y @ _rotation(0.4).T + [0.2, -0.3]
-    reg = MultiscaleCPD(RigidCPD(tol=1e-9), sizes=(400, 4000), refine_iter=30).fit(y, x[rng.permutation(4000)])
+    reg = MultiscaleCPD(RigidCPD(tol=1e-9), sizes=(400, 4000), refine_max_iter=30).fit(y, x[rng.permutation(4000)])
     assert [level["n_moving"] for level in reg.levels_] == [400, 4000]
     assert np.abs(reg.moving_transformed_ - x).max() < 1e-6
     assert reg.transform_.scale == pytest.approx(1.1, rel=1e-8)
@@ -117,7 +118,7 @@ def test_multiscale_nonrigid_composes_fields_and_the_refinement_gets_closer():
     truth = y + 0.08 * np.sin(2 * y[:, ::-1])
     est = NonRigidCPD(beta=1.0, lam=3.0, tol=1e-5, max_iter=300)
     coarse = MultiscaleCPD(est, sizes=(200,)).fit(y, truth)
-    fine = MultiscaleCPD(est, sizes=(200, 800), refine_iter=20).fit(y, truth)
+    fine = MultiscaleCPD(est, sizes=(200, 800), refine_max_iter=20).fit(y, truth)
     assert isinstance(fine.transform_, ComposedTransform) and len(fine.transform_.transforms) == 2
     err0 = np.sqrt(np.mean((y - truth) ** 2))
     err_coarse = np.sqrt(np.mean((coarse.moving_transformed_ - truth) ** 2))
@@ -133,7 +134,7 @@ def test_multiscale_is_unit_free(units):
     rng = np.random.default_rng(8)
     y = rng.random((2000, 2))
     x = (y @ _rotation(0.5).T + 0.05 * rng.normal(size=y.shape))[rng.permutation(2000)]
-    make = lambda: MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(200, 2000), refine_iter=4)  # noqa: E731
+    make = lambda: MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(200, 2000), refine_max_iter=4)  # noqa: E731
     a, b = make().fit(y, x), make().fit(units * y, units * x)
     assert [lv["n_iter"] for lv in b.levels_] == [lv["n_iter"] for lv in a.levels_]
     np.testing.assert_allclose(
@@ -147,7 +148,7 @@ def test_multiscale_is_unit_free(units):
     [
         ({"sizes": (100, 50)}, "sizes"),
         ({"sizes": ()}, "sizes"),
-        ({"refine_iter": 0}, "refine_iter"),
+        ({"refine_max_iter": 0}, "refine_max_iter"),
         ({"random_state": -1}, "random_state"),
         ({"sizes": (1.5,)}, "sizes"),
     ],
@@ -217,3 +218,21 @@ def test_weighted_gram_in_chunks_is_the_same_for_any_thread_count(monkeypatch):
     for other in runs[1:]:
         np.testing.assert_array_equal(runs[0], other)
     np.testing.assert_allclose(runs[0], serial, rtol=1e-12, atol=1e-12 * np.abs(serial).max())
+
+
+def test_multiscale_refine_iter_is_renamed_refine_max_iter():
+    # API audit F12: the package's iteration limit is max_iter
+    rng = np.random.default_rng(9)
+    y = rng.random((400, 2))
+    x = y @ _rotation(0.2).T
+    cpd = RigidCPD(method="dense")
+    new = MultiscaleCPD(cpd, sizes=(100, 400), refine_max_iter=3).fit(y, x)
+    with pytest.warns(FutureWarning, match="`refine_iter` of MultiscaleCPD is renamed `refine_max_iter`"):
+        old = MultiscaleCPD(cpd, sizes=(100, 400), refine_iter=3).fit(y, x)
+    np.testing.assert_array_equal(old.moving_transformed_, new.moving_transformed_)
+    assert old.levels_[1]["n_iter"] <= 3
+    with pytest.raises(TypeError, match="give `refine_max_iter` only; got both"):
+        MultiscaleCPD(cpd, sizes=(100, 400), refine_iter=3, refine_max_iter=4).fit(y, x)
+    with pytest.warns(FutureWarning), pytest.raises(TypeError, match="`MultiscaleCPD.refine_iter` must be an int"):
+        MultiscaleCPD(cpd, sizes=(100, 400), refine_iter=2.5).fit(y, x)
+    assert clone(MultiscaleCPD(cpd, refine_iter=3)).get_params()["refine_iter"] == 3

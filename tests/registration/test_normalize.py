@@ -173,7 +173,7 @@ def test_out_of_range_spread_is_refused(fish):
     [
         lambda: RigidCPD(normalize=False),
         lambda: NonRigidCPD(max_iter=5, tol=0, normalize=False),
-        lambda: MultiscaleCPD(NonRigidCPD(max_iter=5, tol=0, normalize=False), sizes=(10, 40), refine_iter=2),
+        lambda: MultiscaleCPD(NonRigidCPD(max_iter=5, tol=0, normalize=False), sizes=(10, 40), refine_max_iter=2),
     ],
     ids=["rigid", "nonrigid", "multiscale"],
 )

@@ -183,7 +183,7 @@ def test_multiscale_nonrigid_levels_start_where_the_last_ended():
     x = np.vstack([y + 0.1 * np.sin(1.5 * y[:, ::-1]), rng.normal((1.6, 0.0), 0.1, (120, 2))])
     starts = []
     record = lambda info: starts.append(info.moving_transformed) if info.iteration == 0 else None  # noqa: E731
-    reg = MultiscaleCPD(NonRigidCPD(w=0.3, callback=record), sizes=(200, 1000), refine_iter=3).fit(y, x)
+    reg = MultiscaleCPD(NonRigidCPD(w=0.3, callback=record), sizes=(200, 1000), refine_max_iter=3).fit(y, x)
     assert len(starts) == 2
     np.testing.assert_allclose(starts[1], reg.transform_.transforms[0](y), atol=1e-12)
 

@@ -38,6 +38,9 @@ from ..transforms import NonRigidTransform, RigidTransform
 from ._estep import _nearest
 from ._lowrank import PivotedCholesky, nystrom_field
 
+#: MultiscaleCPD's refine_max_iter default
+_REFINE_MAX_ITER = 10
+
 __all__ = ["MultiscaleCPD", "ComposedTransform", "compress_field"]
 
 
@@ -131,11 +134,14 @@ class MultiscaleCPD(BaseEstimator):
         non-rigid warp, a first level of 2,000 points ended at RMS error 3.8e-2 (5,000:
         1.7e-3, as a plain full-resolution fit, 1.6e-3, in 8 s instead of 22 s).
         Measurements at 10^5 and 10^6 points: ``benchmarks/registration_large.py``.
-    refine_iter : int, default=10
+    refine_max_iter : int, default=10
         ``max_iter`` of every level after the first.
     random_state : int, Generator or None, default=0
         Seed of the subsamples, as the CPD estimators take it (None: fresh entropy; a
         Generator is drawn from, so two fits with one Generator take other subsamples).
+    refine_iter : deprecated
+        The former name of ``refine_max_iter`` (the package's iteration limit is
+        ``max_iter``); it still works, with a FutureWarning, and will be removed.
 
     Attributes
     ----------
@@ -155,17 +161,26 @@ class MultiscaleCPD(BaseEstimator):
     >>> from centrality_vision.registration import RigidCPD
     >>> y = np.random.default_rng(0).random((3000, 2))
     >>> r = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
-    >>> reg = MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(300, 3000), refine_iter=30).fit(y, y @ r.T + 0.1)
+    >>> reg = MultiscaleCPD(RigidCPD(tol=1e-8), sizes=(300, 3000), refine_max_iter=30).fit(y, y @ r.T + 0.1)
     >>> error = np.abs(reg.moving_transformed_ - (y @ r.T + 0.1)).max()
     >>> [level["n_moving"] for level in reg.levels_], bool(error < 1e-6)
     ([300, 3000], True)
     """
 
-    def __init__(self, estimator, *, sizes=(5_000, 20_000), refine_iter=10, random_state=0):
+    def __init__(
+        self,
+        estimator,
+        *,
+        sizes=(5_000, 20_000),
+        refine_max_iter=_REFINE_MAX_ITER,
+        random_state=0,
+        refine_iter="deprecated",
+    ):
         self.estimator = estimator
         self.sizes = sizes
-        self.refine_iter = refine_iter
+        self.refine_max_iter = refine_max_iter
         self.random_state = random_state
+        self.refine_iter = refine_iter
 
     def _check(self):
         from ._cpd import AffineCPD, NonRigidCPD, RigidCPD
@@ -182,9 +197,23 @@ class MultiscaleCPD(BaseEstimator):
             raise TypeError(f"`MultiscaleCPD.sizes` must be a sequence of ints; got {self.sizes!r}.") from None
         if not sizes or sorted(sizes) != sizes or len(set(sizes)) != len(sizes):
             raise InputError(f"`MultiscaleCPD.sizes` must be non-empty and strictly increasing; got {self.sizes!r}.")
-        check_int(self.refine_iter, name="MultiscaleCPD.refine_iter", low=1)
+        refine, name = self.refine_max_iter, "MultiscaleCPD.refine_max_iter"
+        if not (isinstance(self.refine_iter, str) and self.refine_iter == "deprecated"):
+            # (an estimator's parameters stay in its signature: get_params and clone read them)
+            if self.refine_max_iter != _REFINE_MAX_ITER:
+                raise TypeError(
+                    "`MultiscaleCPD.refine_iter` is the former name of `refine_max_iter`; give `refine_max_iter` "
+                    "only; got both."
+                )
+            warnings.warn(
+                "`refine_iter` of MultiscaleCPD is renamed `refine_max_iter`; the old name will be removed.",
+                FutureWarning,
+                stacklevel=3,
+            )
+            refine, name = self.refine_iter, "MultiscaleCPD.refine_iter"
+        refine = check_int(refine, name=name, low=1)
         as_generator(self.random_state, name="MultiscaleCPD.random_state")  # checked before any work
-        return sizes, isinstance(self.estimator, NonRigidCPD)
+        return sizes, isinstance(self.estimator, NonRigidCPD), refine
 
     def fit(self, moving, fixed):
         """Register ``moving`` (M x D) onto ``fixed`` (N x D); returns ``self``. Neither is modified.
@@ -215,7 +244,7 @@ class MultiscaleCPD(BaseEstimator):
         >>> reg.moving_transformed_.shape, bool(np.allclose(reg.moving_transformed_, y @ r.T + 0.1))
         ((60, 2), True)
         """
-        sizes, nonrigid = self._check()
+        sizes, nonrigid, refine_max_iter = self._check()
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
         fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
         rng = as_generator(self.random_state, name="MultiscaleCPD.random_state")
@@ -234,7 +263,7 @@ class MultiscaleCPD(BaseEstimator):
             if nonrigid and fields:
                 sub_moving = ComposedTransform(tuple(fields))(sub_moving)
             if i > 0:
-                est.max_iter = self.refine_iter
+                est.max_iter = refine_max_iter
                 # a refinement starts where the previous level ended: the last transform, or for
                 # non-rigid the warped subsample as it lies (the identity; without an init a
                 # normalised fit would centre it on the fixed set's mean, a jump wherever
