@@ -19,7 +19,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._parallel import get_num_threads
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
-from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity, power_of_two_scale
+from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity, power_of_two_scale, rms_radius
 from ._cpd import IterationInfo, _Frame, _one_point, _start_within_reach
 
 __all__ = ["ICP", "estimate_normals"]
@@ -399,7 +399,7 @@ class ICP(BaseEstimator):
                 )
             moving_t = transform(moving_n)
             iteration += 1
-        if fixed_n.shape[0] > 0 and np.ptp(fixed_n, axis=0).max() == 0 and np.ptp(moving_n, axis=0).max() > 0:
+        if rms_radius(fixed_n) == 0 and rms_radius(moving_n) > 0:  # as CPD's collapse check
             # every moving point pairs with the one fixed point: the rotation is arbitrary
             # (and a scale shrinks to 0), yet the residual stops changing
             converged = False
