@@ -953,12 +953,10 @@ class _CPD(BaseEstimator):
         return lambda moving_t, sigma2, w, prior: knn_posterior(moving_t, fixed, sigma2, w, prior, k=k, tree=tree)
 
     def _collapse(self, moving_n, fixed, moving_t, w, post) -> str | None:
+        one_point = one_point_fixed(moving_n, fixed)
+        if one_point is not None:
+            return one_point
         radius_y, radius_x, radius_t = rms_radius(moving_n), rms_radius(fixed), rms_radius(moving_t)
-        if radius_x == 0 and radius_y > 0:  # every model shrinks (or turns at random) onto one point
-            return (
-                f"`fixed` is {_one_point(fixed.shape[0])}, onto which no transform of the spread moving set is "
-                "determined; the result is not a registration."
-            )
         # (normalize=True is suggested only where it is off: the command line always has it on)
         advice = (
             "Try " + ("normalize=True, " if not self.normalize else "") + "a smaller `w`, or a starting pose (`init`)."
@@ -1166,9 +1164,17 @@ def _count(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
-def _one_point(n: int) -> str:
-    """A set of ``n`` copies of one point, in words."""
-    return "a single point" if n == 1 else f"one point repeated {n} times"
+def one_point_fixed(moving: np.ndarray, fixed: np.ndarray) -> str | None:
+    """Why no registration is possible when ``fixed`` is one point (repeated) and ``moving``
+    is spread (every model shrinks, or turns at random, onto the point); None otherwise."""
+    if rms_radius(fixed) > 0 or rms_radius(moving) == 0:
+        return None
+    n = fixed.shape[0]
+    copies = "a single point" if n == 1 else f"one point repeated {n} times"
+    return (
+        f"`fixed` is {copies}, onto which no transform of the spread moving set is determined; the result "
+        "is not a registration."
+    )
 
 
 def _span(points: np.ndarray) -> int:

@@ -19,8 +19,8 @@ from sklearn.utils.validation import check_is_fitted
 from .._parallel import get_num_threads
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
-from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity, power_of_two_scale, rms_radius
-from ._cpd import IterationInfo, _Frame, _one_point, _start_within_reach
+from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity, power_of_two_scale
+from ._cpd import IterationInfo, _Frame, _start_within_reach, one_point_fixed
 
 __all__ = ["ICP", "estimate_normals"]
 
@@ -399,16 +399,12 @@ class ICP(BaseEstimator):
                 )
             moving_t = transform(moving_n)
             iteration += 1
-        if rms_radius(fixed_n) == 0 and rms_radius(moving_n) > 0:  # as CPD's collapse check
-            # every moving point pairs with the one fixed point: the rotation is arbitrary
-            # (and a scale shrinks to 0), yet the residual stops changing
+        # every moving point pairs with the one fixed point: the rotation is arbitrary (and a
+        # scale shrinks to 0), yet the residual stops changing
+        one_point = one_point_fixed(moving_n, fixed_n)
+        if one_point is not None:
             converged = False
-            warnings.warn(
-                f"ICP: `fixed` is {_one_point(fixed_n.shape[0])}, onto which no pose of the spread moving set is "
-                "determined; the result is not a registration.",
-                CollapseWarning,
-                stacklevel=2,
-            )
+            warnings.warn(f"ICP: {one_point}", CollapseWarning, stacklevel=2)
         if free:
             # (a planar or linear fixed set: the pose slid freely along it and came back
             # "converged" at the start's position, 0.05 off on a shifted plane)
