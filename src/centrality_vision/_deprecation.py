@@ -6,7 +6,13 @@ import functools
 import inspect
 import warnings
 
-__all__ = ["renamed_parameters"]
+__all__ = ["renamed_parameters", "both_names_error"]
+
+
+def both_names_error(old: str, new: str, detail: str = "") -> TypeError:
+    """The error for a former parameter name given together with its new one (also for an
+    estimator's former parameter, which stays in its signature for ``get_params``)."""
+    return TypeError(f"`{old}` is the former name of `{new}`; give `{new}` only; got both{detail}.")
 
 
 def renamed_parameters(**new_names: str):
@@ -39,8 +45,7 @@ def renamed_parameters(**new_names: str):
             positional = list(inspect.signature(function).parameters)[: len(args)] if given else []
             for old in given:
                 if new_names[old] in kwargs or new_names[old] in positional:
-                    new = new_names[old]
-                    raise TypeError(f"`{old}` is the former name of `{new}`; give `{new}` only; got both.")
+                    raise both_names_error(old, new_names[old])
                 kwargs[new_names[old]] = kwargs.pop(old)
             if given:  # one warning per call
                 olds = " and ".join(f"`{old}`" for old in given)

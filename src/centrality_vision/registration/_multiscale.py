@@ -31,6 +31,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from .._deprecation import both_names_error
 from .._seeding import as_generator
 from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import ConvergenceWarning, InputError
@@ -201,10 +202,7 @@ class MultiscaleCPD(BaseEstimator):
         if not (isinstance(self.refine_iter, str) and self.refine_iter == "deprecated"):
             # (an estimator's parameters stay in its signature: get_params and clone read them)
             if self.refine_max_iter != _REFINE_MAX_ITER:
-                raise TypeError(
-                    "`MultiscaleCPD.refine_iter` is the former name of `refine_max_iter`; give `refine_max_iter` "
-                    "only; got both."
-                )
+                raise both_names_error("MultiscaleCPD.refine_iter", "refine_max_iter")
             warnings.warn(
                 "`refine_iter` of MultiscaleCPD is renamed `refine_max_iter`; the old name will be removed.",
                 FutureWarning,

@@ -8,6 +8,7 @@ import numpy as np
 from scipy import ndimage
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 
+from .._deprecation import both_names_error
 from .._seeding import as_generator
 from .._validation import check_choice, check_float, check_int, is_real_dtype
 from ..exceptions import InputError
@@ -145,10 +146,8 @@ def _random_state(estimator) -> np.random.Generator:
 
     default = inspect.signature(type(estimator).__init__).parameters["random_state"].default
     if not _same(estimator.random_state, default):  # as renamed_parameters does with both names
-        raise TypeError(
-            "`seed` is the former name of `random_state`; give `random_state` only; got both "
-            f"(seed={estimator.seed!r}, random_state={estimator.random_state!r})."
-        )
+        given = f" (seed={estimator.seed!r}, random_state={estimator.random_state!r})"
+        raise both_names_error("seed", "random_state", given)
 
     warnings.warn(
         f"`seed` of {type(estimator).__name__} is deprecated and will be removed; use `random_state`.",
