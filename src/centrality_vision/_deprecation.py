@@ -6,13 +6,52 @@ import functools
 import inspect
 import warnings
 
-__all__ = ["renamed_parameters", "both_names_error"]
+__all__ = ["renamed_parameters", "both_names_error", "FORMER", "former_parameter"]
+
+#: The default of an estimator's former parameter name: "not given".
+FORMER = "deprecated"
 
 
 def both_names_error(old: str, new: str, detail: str = "") -> TypeError:
     """The error for a former parameter name given together with its new one (also for an
     estimator's former parameter, which stays in its signature for ``get_params``)."""
     return TypeError(f"`{old}` is the former name of `{new}`; give `{new}` only; got both{detail}.")
+
+
+def former_parameter(estimator, old: str, new: str, default):
+    """The value to use of an estimator parameter renamed ``old`` -> ``new``, and the name
+    to check it under (``"Class.old"`` or ``"Class.new"``).
+
+    An estimator keeps its former parameter in its signature, with the default
+    :data:`FORMER`, because ``get_params`` and ``clone`` read every parameter. When it was
+    given, its value is used with a :class:`FutureWarning`; given together with a new
+    value other than ``default``, it is a :class:`TypeError`.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> class Fit:
+    ...     def __init__(self, max_iter=10, iters=FORMER):
+    ...         self.max_iter, self.iters = max_iter, iters
+    >>> former_parameter(Fit(max_iter=5), "iters", "max_iter", 10)
+    (5, 'Fit.max_iter')
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     former_parameter(Fit(iters=3), "iters", "max_iter", 10)
+    (3, 'Fit.iters')
+    >>> print(caught[0].message)
+    `iters` of Fit is renamed `max_iter`; the old name will be removed.
+    """
+    kind = type(estimator).__name__
+    value = getattr(estimator, old)
+    if isinstance(value, str) and value == FORMER:
+        return getattr(estimator, new), f"{kind}.{new}"
+    current = getattr(estimator, new)
+    if not (current is default or (type(current) is type(default) and current == default)):
+        raise both_names_error(f"{kind}.{old}", new)
+    # (called from the estimator's parameter check, called from its fit: the caller's line)
+    warnings.warn(f"`{old}` of {kind} is renamed `{new}`; the old name will be removed.", FutureWarning, stacklevel=4)
+    return value, f"{kind}.{old}"
 
 
 def renamed_parameters(**new_names: str):

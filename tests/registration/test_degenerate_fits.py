@@ -163,14 +163,14 @@ def test_estimate_normals_needs_a_plane_in_3d_and_says_when_a_normal_is_arbitrar
     from centrality_vision.registration import estimate_normals
 
     points = np.random.default_rng(2).random((12, 3))
-    with pytest.raises(ValueError, match=r"`k` must be an int in \[3, "):  # two points: any normal
-        estimate_normals(points, k=2)
+    with pytest.raises(ValueError, match=r"`n_neighbors` must be an int in \[3, "):  # two points: any normal
+        estimate_normals(points, n_neighbors=2)
     with pytest.raises(ValueError, match="`points` must have at least 3 points in 3D"):
         estimate_normals(points[:2])
     doubled = np.repeat(points, 3, axis=0)  # every point three times: k=3 sees one position
     with pytest.warns(UserWarning, match="36 of 36 points have neighbourhoods of one point or one line"):
-        estimate_normals(doubled, k=3)
+        estimate_normals(doubled, n_neighbors=3)
     with warnings.catch_warnings():
         warnings.simplefilter("error", UserWarning)
-        estimate_normals(doubled, k=9)  # three positions: a plane
-        estimate_normals(points[:, :2], k=2)  # a line through two points has a normal in 2D
+        estimate_normals(doubled, n_neighbors=9)  # three positions: a plane
+        estimate_normals(points[:, :2], n_neighbors=2)  # a line through two points has a normal in 2D

@@ -14,7 +14,7 @@ ESTIMATORS = [
     AffineCPD(max_iter=7),
     NonRigidCPD(beta=1.5),
     ICP(max_iter=5),
-    GPD(RigidCPD(w=0.05), k=4),
+    GPD(RigidCPD(w=0.05), graph_neighbors=4),
     MultiscaleCPD(RigidCPD(w=0.05), sizes=(50, 80)),
 ]
 
@@ -95,3 +95,40 @@ def test_huge_coordinates_do_not_hang_the_svd(method):
     else:
         t = fit_similarity(y, y)
         assert np.all(np.isfinite(t.rotation)) and t.scale == pytest.approx(1.0)
+
+
+def test_neighbour_counts_are_renamed_with_the_old_names_still_working():
+    from centrality_vision.registration import estimate_normals
+
+    rng = np.random.default_rng(5)
+    surface = rng.random((120, 3)) * [1.0, 1.0, 0.05]
+    with pytest.warns(FutureWarning, match=r"`k` of estimate_normals\(\) is renamed `n_neighbors`"):
+        old = estimate_normals(surface, k=7)
+    np.testing.assert_array_equal(old, estimate_normals(surface, n_neighbors=7))
+    with pytest.raises(TypeError, match="`k` is the former name of `n_neighbors`"):
+        estimate_normals(surface, k=7, n_neighbors=7)
+
+    rot = np.array([[np.cos(0.1), -np.sin(0.1), 0], [np.sin(0.1), np.cos(0.1), 0], [0, 0, 1]])
+    fixed = surface @ rot.T + 0.01
+    new = ICP(metric="point_to_plane", normal_neighbors=7, tol=1e-10).fit(surface, fixed)
+    with pytest.warns(FutureWarning, match="`k_normals` of ICP is renamed `normal_neighbors`"):
+        old = ICP(metric="point_to_plane", k_normals=7, tol=1e-10).fit(surface, fixed)
+    np.testing.assert_array_equal(old.moving_transformed_, new.moving_transformed_)
+    assert not np.array_equal(
+        new.moving_transformed_, ICP(metric="point_to_plane", tol=1e-10).fit(surface, fixed).moving_transformed_
+    )
+    with pytest.raises(TypeError, match="`ICP.k_normals` is the former name of `normal_neighbors`"):
+        ICP(k_normals=7, normal_neighbors=8).fit(surface, fixed)
+    with pytest.warns(FutureWarning), pytest.raises(ValueError, match=r"`ICP.k_normals` must be an int in \[3, "):
+        ICP(k_normals=2).fit(surface, fixed)
+
+    y = rng.random((40, 2))
+    x = y + 0.05
+    new = GPD(RigidCPD(tol=1e-8), graph="knn", graph_neighbors=3).fit(y, x)
+    with pytest.warns(FutureWarning, match="`k` of GPD is renamed `graph_neighbors`"):
+        old = GPD(RigidCPD(tol=1e-8), graph="knn", k=3).fit(y, x)
+    assert (old.moving_graph_ != new.moving_graph_).nnz == 0
+    assert new.moving_graph_.nnz != GPD(RigidCPD(tol=1e-8), graph="knn").fit(y, x).moving_graph_.nnz
+    with pytest.raises(TypeError, match="`GPD.k` is the former name of `graph_neighbors`"):
+        GPD(graph="knn", k=3, graph_neighbors=4).fit(y, x)
+    assert clone(GPD(k=3)).get_params()["k"] == 3

@@ -95,7 +95,7 @@ def test_normals_by_local_pca_on_a_sphere():
     rng = np.random.default_rng(5)
     p = rng.normal(size=(2000, 3))
     p /= np.linalg.norm(p, axis=1, keepdims=True)
-    n = estimate_normals(p, k=12)
+    n = estimate_normals(p, n_neighbors=12)
     assert np.median(np.abs(np.einsum("ij,ij->i", n, p))) > 0.99  # radial
 
 

@@ -332,7 +332,9 @@ def test_normals_do_not_depend_on_the_scale(factor):
 
     points = np.random.default_rng(0).random((10, 3))
     np.testing.assert_allclose(
-        np.abs(estimate_normals(points * factor, k=3)), np.abs(estimate_normals(points, k=3)), atol=1e-12
+        np.abs(estimate_normals(points * factor, n_neighbors=3)),
+        np.abs(estimate_normals(points, n_neighbors=3)),
+        atol=1e-12,
     )
 
 
@@ -408,7 +410,7 @@ def test_icp_converges_at_a_tight_tol_whatever_the_offset(offset):
     y = rng.random((60, 2))
     q = np.linalg.qr(rng.normal(size=(2, 2)))[0]
     x = np.vstack([y @ (np.eye(2) + 0.15 * (q - q.T) / 2).T + 0.03, rng.random((10, 2)) * 3])
-    icp = ICP(tol=1e-12, metric="point_to_plane", trim=0.1, k_normals=5)
+    icp = ICP(tol=1e-12, metric="point_to_plane", trim=0.1, normal_neighbors=5)
     at_origin = icp.fit(y, x)
     with warnings.catch_warnings():
         warnings.simplefilter("error", ConvergenceWarning)

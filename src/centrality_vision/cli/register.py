@@ -259,7 +259,7 @@ def _estimator(args: argparse.Namespace, callback):
         base = NonRigidCPD(beta=args.beta, lam=args.lam, **common)
     if args.method == "cpd":
         return base
-    return GPD(base, centrality=args.centrality, graph=args.graph, kappa=args.kappa, k=args.k)
+    return GPD(base, centrality=args.centrality, graph=args.graph, kappa=args.kappa, graph_neighbors=args.k)
 
 
 class _Watch:

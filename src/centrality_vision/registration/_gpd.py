@@ -11,7 +11,7 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils.validation import check_is_fitted
 
 from .. import graphs as _graphs
-from .._deprecation import renamed_parameters
+from .._deprecation import FORMER, former_parameter, renamed_parameters
 from .._validation import ANY_DIMS, as_graph, as_points, as_real_array, check_bool, check_choice, check_float, check_int
 from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
@@ -285,9 +285,14 @@ class GPD(BaseEstimator):
     weights : bool, default=False
         Use edge lengths in the centrality (shortest paths by length) instead of hop counts;
         path centralities only (betweenness, closeness, harmonic, eccentricity).
-    k : int, default=6
-        Neighbours for ``graph='knn'``; on a set of ``n <= k`` points, ``n - 1`` (the
-        complete graph).
+    graph_neighbors : int, default=6
+        Neighbours per point for ``graph='knn'`` (``n_neighbors`` of
+        :func:`~centrality_vision.graphs.knn_graph`; the base CPD's ``n_neighbors`` is its
+        E-step's); on a set of ``n <= graph_neighbors`` points, ``n - 1`` (the complete
+        graph).
+    k : deprecated
+        The former name of ``graph_neighbors``; it still works, with a FutureWarning, and
+        will be removed.
 
     Attributes
     ----------
@@ -339,7 +344,8 @@ class GPD(BaseEstimator):
         kappa=None,
         prior_schedule=None,
         weights=False,
-        k=6,
+        graph_neighbors=6,
+        k=FORMER,
     ):
         self.base_cpd = base_cpd
         self.centrality = centrality
@@ -349,6 +355,7 @@ class GPD(BaseEstimator):
         self.kappa = kappa
         self.prior_schedule = prior_schedule
         self.weights = weights
+        self.graph_neighbors = graph_neighbors
         self.k = k
 
     def __getattr__(self, name):
@@ -374,15 +381,17 @@ class GPD(BaseEstimator):
                 f"`weights=True` (shortest paths by edge length) applies to {', '.join(PATH_CENTRALITIES)}; "
                 f"got centrality={self.centrality!r}."
             )
-        check_int(self.k, name="k", low=1)
+        neighbors, name = former_parameter(self, "k", "graph_neighbors", 6)
+        neighbors = check_int(neighbors, name=name, low=1)
         _check_prior_options(self.bins, self.phi, self.kappa)
         schedule = self.prior_schedule
         if isinstance(schedule, str):
             check_choice(schedule, _SCHEDULES, name="prior_schedule")
         elif schedule is not None:
             check_float(schedule, name="prior_schedule", low=0.0, high=1.0, low_open=True, high_open=True)
+        return neighbors
 
-    def _centrality(self, points, graph, given, name):
+    def _centrality(self, points, graph, given, name, neighbors):
         if given is not None:
             values = as_real_array(given, name=f"{name}_centrality", shape="a 1D array").astype(float)
             if values.shape != (points.shape[0],):
@@ -398,7 +407,7 @@ class GPD(BaseEstimator):
                         f"From Python, you can also pass your own `{name}_graph` or `{name}_centrality`."
                     ) from None
             try:
-                graph = _build_graph(points, self.graph, self.k)
+                graph = _build_graph(points, self.graph, neighbors)
             except InputError as exc:
                 kind = getattr(self.graph, "__name__", self.graph)
                 # the Delaunay-based graphs take 2D and 3D points only
@@ -487,13 +496,13 @@ class GPD(BaseEstimator):
         >>> own.moving_graph_ is None, own.moving_centrality_[:3].round(3).tolist()
         (True, [0.0, 0.053, 0.105])
         """
-        self._check_params()
+        neighbors = self._check_params()
         base = RigidCPD() if self.base_cpd is None else self.base_cpd
         moving_arr = as_points(moving, name="moving", n_dims=ANY_DIMS)
         # the dimensions first: a graph of the wrong ones fails with a message about the graph
         fixed_arr = as_points(fixed, name="fixed", n_dims=(moving_arr.shape[1],))
-        vy, gy = self._centrality(moving_arr, moving_graph, moving_centrality, "moving")
-        vx, gx = self._centrality(fixed_arr, fixed_graph, fixed_centrality, "fixed")
+        vy, gy = self._centrality(moving_arr, moving_graph, moving_centrality, "moving", neighbors)
+        vx, gx = self._centrality(fixed_arr, fixed_graph, fixed_centrality, "fixed", neighbors)
         prior = centrality_prior(vy, vx, bins=self.bins, phi=self.phi, kappa=self.kappa)
         hook = prior if self.prior_schedule is None else _Schedule(prior, self.prior_schedule)
         # clone deep-copies parameters; the callback is a hook the caller watches, so it is shared

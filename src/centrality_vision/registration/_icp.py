@@ -16,6 +16,7 @@ from scipy.spatial import cKDTree
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
+from .._deprecation import FORMER, former_parameter, renamed_parameters
 from .._parallel import get_num_threads
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
@@ -30,16 +31,17 @@ METRICS = ("point_to_point", "point_to_plane")
 _COINCIDE = 1e-26
 
 
-def estimate_normals(points, *, k: int = 10) -> np.ndarray:
+@renamed_parameters(k="n_neighbors")
+def estimate_normals(points, *, n_neighbors: int = 10) -> np.ndarray:
     """Unit normals by local PCA: for each point, the direction of least variance of its
-    ``k`` nearest neighbours (itself included). The sign is arbitrary.
+    ``n_neighbors`` nearest neighbours (itself included). The sign is arbitrary.
 
     Parameters
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
         At least ``n_dims`` points.
-    k : int >= n_dims, default=10
-        Neighbours per point; at most ``n_points`` are used. A point whose neighbours are
+    n_neighbors : int >= n_dims, default=10
+        Neighbours per point (``k`` is its former name); at most ``n_points`` are used. A point whose neighbours are
         one point repeated (or, in 3D, lie on one line) has no normal; a
         :class:`UserWarning` counts such points.
 
@@ -53,7 +55,7 @@ def estimate_normals(points, *, k: int = 10) -> np.ndarray:
     >>> import numpy as np
     >>> g = np.stack(np.meshgrid(np.arange(5.0), np.arange(5.0)), -1).reshape(-1, 2)
     >>> plane = np.c_[g, np.zeros(25)]  # the plane z = 0
-    >>> bool(np.allclose(np.abs(estimate_normals(plane, k=6)[:, 2]), 1.0))
+    >>> bool(np.allclose(np.abs(estimate_normals(plane, n_neighbors=6)[:, 2]), 1.0))
     True
     """
     points = as_points(points, name="points", n_dims=(2, 3), min_points=2)
@@ -63,7 +65,7 @@ def estimate_normals(points, *, k: int = 10) -> np.ndarray:
             f"`points` must have at least {dim} points in {dim}D (a normal needs {dim}); got {points.shape[0]}."
         )
     # a line through 2 points has a normal in 2D; a plane takes 3 in 3D
-    k = min(check_int(k, name="k", low=dim), points.shape[0])
+    k = min(check_int(n_neighbors, name="n_neighbors", low=dim), points.shape[0])
     # normals do not depend on scale: a power-of-two scale to unit size is exact, and keeps
     # the k-d tree's squared distances from overflowing past 1e154 (it then reported no
     # neighbours) or underflowing below 1e-154
@@ -143,7 +145,7 @@ class ICP(BaseEstimator):
     ``scale=True``) transform of the kept moving points onto their partners in closed form
     (``metric='point_to_point'``), or the rigid motion minimising the squared distances to
     the partners' tangent planes (``'point_to_plane'``, normals of the fixed set by local
-    PCA over ``k_normals`` neighbours). Stops when the relative change of the objective
+    PCA over ``normal_neighbors`` neighbours). Stops when the relative change of the objective
     (the mean squared residual of the kept pairs) is at most ``tol``, or after ``max_iter``
     updates. ICP converges to the nearest local minimum: start it close (``init=``).
 
@@ -165,7 +167,7 @@ class ICP(BaseEstimator):
     metric : {'point_to_point', 'point_to_plane'}, default='point_to_point'
         With a flat (3D) or straight (2D) fixed set, point-to-plane leaves the motions along it
         free: a :class:`~centrality_vision.exceptions.ConvergenceWarning` then says so.
-    k_normals : int >= 3, default=10
+    normal_neighbors : int >= 3, default=10
         Neighbours for the normals of ``metric='point_to_plane'`` (the point itself
         included; :func:`estimate_normals` takes 2, enough in 2D only).
     init : RigidTransform or SimilarityTransform, optional
@@ -173,6 +175,9 @@ class ICP(BaseEstimator):
     callback : callable, optional
         Called with an :class:`IterationInfo` (``objective`` = mean squared residual,
         ``sigma2`` = NaN) after each matching; return ``True`` to stop.
+    k_normals : deprecated
+        The former name of ``normal_neighbors``; it still works, with a FutureWarning, and
+        will be removed.
 
     Attributes
     ----------
@@ -206,9 +211,10 @@ class ICP(BaseEstimator):
         max_distance=None,
         trim=0.0,
         metric="point_to_point",
-        k_normals=10,
+        normal_neighbors=10,
         init=None,
         callback=None,
+        k_normals=FORMER,
     ):
         self.scale = scale
         self.max_iter = max_iter
@@ -216,9 +222,10 @@ class ICP(BaseEstimator):
         self.max_distance = max_distance
         self.trim = trim
         self.metric = metric
-        self.k_normals = k_normals
+        self.normal_neighbors = normal_neighbors
         self.init = init
         self.callback = callback
+        self.k_normals = k_normals
 
     def _check_params(self):
         check_bool(self.scale, name="ICP.scale")
@@ -228,13 +235,15 @@ class ICP(BaseEstimator):
             check_float(self.max_distance, name="ICP.max_distance", low=0.0, low_open=True)
         check_float(self.trim, name="ICP.trim", low=0.0, high=1.0, high_open=True)
         check_choice(self.metric, METRICS, name="ICP.metric")
-        check_int(self.k_normals, name="ICP.k_normals", low=3)
+        neighbors, name = former_parameter(self, "k_normals", "normal_neighbors", 10)
+        neighbors = check_int(neighbors, name=name, low=3)
         if self.metric == "point_to_plane" and self.scale:
             raise InputError("`ICP.scale=True` needs metric='point_to_point'; point-to-plane fits a rigid motion.")
         if self.init is not None and not isinstance(self.init, SimilarityTransform):
             raise TypeError(f"`ICP.init` must be None or a RigidTransform/SimilarityTransform; got {self.init!r}.")
         if self.callback is not None and not callable(self.callback):
             raise TypeError(f"`ICP.callback` must be callable or None; got {self.callback!r}.")
+        return neighbors
 
     def fit(self, moving, fixed, *, true_moving=None):
         """Register ``moving`` onto ``fixed``; returns ``self``. See :meth:`RigidCPD.fit`.
@@ -270,7 +279,7 @@ class ICP(BaseEstimator):
         >>> icp.moving_to_fixed_[22:26].tolist(), int(icp.history_["n_pairs"][-1])  # -1: not kept
         ([22, 23, -1, -1], 24)
         """
-        self._check_params()
+        normal_neighbors = self._check_params()
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
         fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
         if true_moving is not None:
@@ -299,7 +308,7 @@ class ICP(BaseEstimator):
         peak = max(float(np.max(np.abs(moving))), float(np.max(np.abs(fixed)))) / frame.scale
         coincide = max(_COINCIDE, (16 * np.finfo(float).eps * peak) ** 2)
         max_d = None if self.max_distance is None else float(self.max_distance) / frame.scale
-        normals = estimate_normals(fixed_n, k=self.k_normals) if self.metric == "point_to_plane" else None
+        normals = estimate_normals(fixed_n, n_neighbors=normal_neighbors) if self.metric == "point_to_plane" else None
         tree = cKDTree(fixed_n)
         if self.init is None:
             transform = (

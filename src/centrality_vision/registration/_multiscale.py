@@ -31,7 +31,7 @@ import numpy as np
 from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
-from .._deprecation import both_names_error
+from .._deprecation import FORMER, former_parameter
 from .._seeding import as_generator
 from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import ConvergenceWarning, InputError
@@ -175,7 +175,7 @@ class MultiscaleCPD(BaseEstimator):
         sizes=(5_000, 20_000),
         refine_max_iter=_REFINE_MAX_ITER,
         random_state=0,
-        refine_iter="deprecated",
+        refine_iter=FORMER,
     ):
         self.estimator = estimator
         self.sizes = sizes
@@ -198,17 +198,7 @@ class MultiscaleCPD(BaseEstimator):
             raise TypeError(f"`MultiscaleCPD.sizes` must be a sequence of ints; got {self.sizes!r}.") from None
         if not sizes or sorted(sizes) != sizes or len(set(sizes)) != len(sizes):
             raise InputError(f"`MultiscaleCPD.sizes` must be non-empty and strictly increasing; got {self.sizes!r}.")
-        refine, name = self.refine_max_iter, "MultiscaleCPD.refine_max_iter"
-        if not (isinstance(self.refine_iter, str) and self.refine_iter == "deprecated"):
-            # (an estimator's parameters stay in its signature: get_params and clone read them)
-            if self.refine_max_iter != _REFINE_MAX_ITER:
-                raise both_names_error("MultiscaleCPD.refine_iter", "refine_max_iter")
-            warnings.warn(
-                "`refine_iter` of MultiscaleCPD is renamed `refine_max_iter`; the old name will be removed.",
-                FutureWarning,
-                stacklevel=3,
-            )
-            refine, name = self.refine_iter, "MultiscaleCPD.refine_iter"
+        refine, name = former_parameter(self, "refine_iter", "refine_max_iter", _REFINE_MAX_ITER)
         refine = check_int(refine, name=name, low=1)
         as_generator(self.random_state, name="MultiscaleCPD.random_state")  # checked before any work
         return sizes, isinstance(self.estimator, NonRigidCPD), refine
