@@ -76,6 +76,9 @@ def renamed_parameters(**new_names: str):
     """
 
     def decorate(function):
+        # a class is called by its name, not by its __init__
+        label = function.__qualname__.rsplit(".", 1)[0] if function.__name__ == "__init__" else function.__name__
+
         @functools.wraps(function)
         def wrapper(*args, **kwargs):
             given = [old for old in new_names if old in kwargs]
@@ -90,7 +93,7 @@ def renamed_parameters(**new_names: str):
                 olds = " and ".join(f"`{old}`" for old in given)
                 news = " and ".join(f"`{new_names[old]}`" for old in given)
                 warnings.warn(
-                    f"{olds} of {function.__name__}() {'is' if len(given) == 1 else 'are'} renamed {news}; "
+                    f"{olds} of {label}() {'is' if len(given) == 1 else 'are'} renamed {news}; "
                     f"the old name{'s' if len(given) > 1 else ''} will be removed.",
                     FutureWarning,
                     stacklevel=2,

@@ -132,3 +132,23 @@ def test_neighbour_counts_are_renamed_with_the_old_names_still_working():
     with pytest.raises(TypeError, match="`GPD.k` is the former name of `graph_neighbors`"):
         GPD(graph="knn", k=3, graph_neighbors=4).fit(y, x)
     assert clone(GPD(k=3)).get_params()["k"] == 3
+
+
+def test_centrality_prior_fields_are_renamed_with_the_old_names_still_working():
+    from centrality_vision.registration import CentralityPrior
+
+    args = (np.log([0.5, 0.5]), np.array([0.0, 1.0]), np.array([0.2, 0.9, 0.4]), 2.0)
+    prior = CentralityPrior(*args, strength=0.5)
+    with pytest.warns(FutureWarning, match=r"`scale` of CentralityPrior\(\) is renamed `strength`"):
+        old = CentralityPrior(*args, scale=0.5)
+    np.testing.assert_array_equal(old.matrix(), prior.matrix())
+    assert not np.array_equal(prior.matrix(), CentralityPrior(*args).matrix())
+    with pytest.raises(TypeError, match="`scale` is the former name of `strength`"):
+        CentralityPrior(*args, scale=0.5, strength=0.5)
+    for old_name, new_name in (
+        ("v_moving", "moving_centrality"),
+        ("v_fixed", "fixed_centrality"),
+        ("scale", "strength"),
+    ):
+        with pytest.warns(FutureWarning, match=f"`CentralityPrior.{old_name}` is renamed `{new_name}`"):
+            assert np.array_equal(getattr(prior, old_name), getattr(prior, new_name))

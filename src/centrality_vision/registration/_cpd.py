@@ -475,14 +475,14 @@ def _check_prior(prior, n_moving: int, n_fixed: int, name: str) -> None:
     """A :class:`CentralityPrior` whose arrays fit the sets and whose numbers are finite."""
     if not isinstance(prior, CentralityPrior):
         raise TypeError(f"`{name}` must be a CentralityPrior or None; got {prior!r} of type {type(prior).__name__}.")
-    for field, size in (("log_weight", n_moving), ("v_moving", n_moving), ("v_fixed", n_fixed)):
+    for field, size in (("log_weight", n_moving), ("moving_centrality", n_moving), ("fixed_centrality", n_fixed)):
         values = np.asarray(getattr(prior, field))
         if values.shape != (size,) or not np.issubdtype(values.dtype, np.floating) or not np.all(np.isfinite(values)):
             raise InputError(
                 f"`{name}`.{field} must be {size} finite floats (one per point); got {values.dtype} of shape "
                 f"{values.shape}."
             )
-    for field in ("inv2phi2", "scale"):
+    for field in ("inv2phi2", "strength"):
         value = getattr(prior, field)
         if not isinstance(value, numbers.Real) or not math.isfinite(value) or value < 0:
             raise InputError(f"`{name}`.{field} must be a finite number >= 0; got {value!r}.")

@@ -19,10 +19,12 @@ from __future__ import annotations
 import math
 import threading
 import time
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
+from .._deprecation import renamed_parameters
 from .._parallel import _pool, get_num_threads, run_chunks
 from .._validation import check_choice
 from ..exceptions import InputError
@@ -94,11 +96,25 @@ _SCORE_BAND_SAVED = 1000
 
 @dataclass(frozen=True)
 class CentralityPrior:
-    """GPD's log prior ``scale * (log_weight[m] - (v_fixed[n] - v_moving[m])^2 / (2 phi2))``.
+    """GPD's log prior ``strength * (log_weight[m] - (v_x[n] - v_y[m])^2 / (2 phi2))``,
+    ``v_y`` the moving points' centralities and ``v_x`` the fixed points'.
 
-    Kept in this separable form so that no M x N array is ever built. ``inv2phi2`` is
-    ``1 / (2 phi2)`` (0 drops the Gaussian term), ``scale`` weighs the prior against the
-    spatial term (1 = the thesis' eq. 5.10, 0 = CPD).
+    Kept in this separable form so that no M x N array is ever built.
+
+    Parameters
+    ----------
+    log_weight : ndarray of shape (M,)
+        ``log h(m)``, the log share of the moving points in ``m``'s centrality bin.
+    moving_centrality : ndarray of shape (M,)
+        ``v_y``, normalised to [0, 1] by :func:`centrality_prior`.
+    fixed_centrality : ndarray of shape (N,)
+        ``v_x``, normalised likewise.
+    inv2phi2 : float
+        ``1 / (2 phi2)``; 0 drops the Gaussian term.
+    strength : float, default=1
+        How much the prior counts against the spatial term: 1 is the thesis' eq. 5.10,
+        0 is CPD. (``scale``, ``v_moving`` and ``v_fixed`` are the former names of
+        ``strength`` and the centralities; they still work, with a FutureWarning.)
 
     Examples
     --------
@@ -115,10 +131,15 @@ class CentralityPrior:
     """
 
     log_weight: np.ndarray
-    v_moving: np.ndarray
-    v_fixed: np.ndarray
+    moving_centrality: np.ndarray
+    fixed_centrality: np.ndarray
     inv2phi2: float
-    scale: float = 1.0
+    strength: float = 1.0
+
+    # the former field names, read-only
+    v_moving = property(lambda self: _former_field(self, "v_moving", "moving_centrality"))
+    v_fixed = property(lambda self: _former_field(self, "v_fixed", "fixed_centrality"))
+    scale = property(lambda self: _former_field(self, "scale", "strength"))
 
     def bounds(self) -> tuple[float, float]:
         """Lower and upper bound of the prior over all pairs (for the truncated search).
@@ -133,11 +154,12 @@ class CentralityPrior:
         >>> bool(low <= prior.matrix().min() and prior.matrix().max() <= high)
         True
         """
-        if self.scale == 0 or self.log_weight.size == 0:
+        if self.strength == 0 or self.log_weight.size == 0:
             return 0.0, 0.0
-        span = (max(self.v_fixed.max(), self.v_moving.max()) - min(self.v_fixed.min(), self.v_moving.min())) ** 2
-        low = self.scale * (self.log_weight.min() - span * self.inv2phi2)
-        return float(low), float(self.scale * self.log_weight.max())
+        both = (self.fixed_centrality, self.moving_centrality)
+        span = (max(v.max() for v in both) - min(v.min() for v in both)) ** 2
+        low = self.strength * (self.log_weight.min() - span * self.inv2phi2)
+        return float(low), float(self.strength * self.log_weight.max())
 
     def matrix(self) -> np.ndarray:
         """The dense (M, N) prior, for tests and small problems.
@@ -146,12 +168,24 @@ class CentralityPrior:
         --------
         >>> import numpy as np
         >>> prior = CentralityPrior(np.log([0.5, 0.25]), np.array([0.0, 1.0]), np.array([0.5]), inv2phi2=2.0)
-        >>> prior.matrix().round(3)  # log_weight[m] - (0.5 - v_moving[m])^2 * 2
+        >>> prior.matrix().round(3)  # log_weight[m] - (0.5 - moving_centrality[m])^2 * 2
         array([[-1.193],
                [-1.886]])
         """
-        dv = self.v_fixed[None, :] - self.v_moving[:, None]
-        return self.scale * (self.log_weight[:, None] - dv * dv * self.inv2phi2)
+        dv = self.fixed_centrality[None, :] - self.moving_centrality[:, None]
+        return self.strength * (self.log_weight[:, None] - dv * dv * self.inv2phi2)
+
+
+CentralityPrior.__init__ = renamed_parameters(
+    v_moving="moving_centrality", v_fixed="fixed_centrality", scale="strength"
+)(CentralityPrior.__init__)
+
+
+def _former_field(prior, old, new):
+    warnings.warn(
+        f"`CentralityPrior.{old}` is renamed `{new}`; the old name will be removed.", FutureWarning, stacklevel=3
+    )
+    return getattr(prior, new)
 
 
 @dataclass(frozen=True)
@@ -213,10 +247,11 @@ def log_outlier_constant(sigma2: float, w: float, n_dims: int, n_moving: int, n_
 
 
 def _prior_arrays(prior: CentralityPrior | None):
-    if prior is None or prior.scale == 0:
+    if prior is None or prior.strength == 0:
         empty = np.empty(0)
         return empty, empty, empty, 0.0, 0.0
-    return prior.log_weight, prior.v_moving, prior.v_fixed, float(prior.scale), float(prior.inv2phi2)
+    centralities = prior.moving_centrality, prior.fixed_centrality
+    return prior.log_weight, *centralities, float(prior.strength), float(prior.inv2phi2)
 
 
 def _reduce_rows(work, n_rows, n_moving, n_dims):
@@ -314,7 +349,7 @@ def _dense_cost(moving_t, n_fixed, tau, prior, d2_nearest):
     n_moving = moving_t.shape[0]
     pairs = float(n_moving) * n_fixed
     extent = np.ptp(moving_t, axis=0)
-    has_prior = prior is not None and prior.scale != 0
+    has_prior = prior is not None and prior.strength != 0
     d2 = float(np.median(d2_nearest))
 
     def cost(sigma2):
@@ -881,7 +916,7 @@ def _model_costs(moving_t, fixed, sigma2, prior, tau, eps):
     candidates = max(float(visited.mean()), 1.0)
     row_floor = _COST_TRUNCATED_ROW * math.log2(n_moving + 1)
     costs["truncated"] = (_COST_TRUNCATED * candidates + row_floor) * n_fixed
-    if prior is None or prior.scale == 0:
+    if prior is None or prior.strength == 0:
         # rows whose transformed sum falls below the transform's error bound, 1e4 eps M, are
         # redone exactly (see _fgt); the sum is at most M times its largest term
         # exp(-d_min^2 / (2 sigma2)), so rows with that term below 1e4 eps surely are
@@ -1061,7 +1096,7 @@ class EStepPlanner:
     def _dense_times(self, prior):
         """The dense path's last (sigma2, seconds) in this fit, with a prior or without (the
         eight latest: older entries are dropped here, before the caller appends one)."""
-        times = self._dense_time.setdefault(prior is not None and prior.scale != 0, [])
+        times = self._dense_time.setdefault(prior is not None and prior.strength != 0, [])
         del times[:-8]
         return times
 
@@ -1230,7 +1265,7 @@ def _e_step(
         method, cached = _choose(moving_t, fixed, sigma2, log_prior, tau, eps)
     else:
         cached = {}
-    if method == "fgt" and log_prior is not None and log_prior.scale != 0:
+    if method == "fgt" and log_prior is not None and log_prior.strength != 0:
         raise InputError("`method` 'fgt' computes CPD's posterior only; GPD's prior needs 'dense' or 'truncated'.")
     if method == "fgt" and moving_t.shape[1] > 3:  # (its work grows as p^D: 300 4D points ran for minutes)
         raise InputError(
@@ -1245,7 +1280,7 @@ def dense_posterior(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | Non
     n_fixed = fixed.shape[0]
     d2 = np.sum((moving_t[:, None, :] - fixed[None, :, :]) ** 2, axis=2)
     s = -d2 / (2.0 * sigma2)
-    if log_prior is not None and log_prior.scale != 0:
+    if log_prior is not None and log_prior.strength != 0:
         s = s + log_prior.matrix()
     log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
     ref = np.maximum(s.max(axis=0), log_c)
@@ -1266,9 +1301,9 @@ def _knn_scores(moving_t, fixed, sigma2, prior, k, tree):
     if not found.all():
         rows, cols, dist = rows[found], cols[found], dist[found]
     s = -(dist**2) / (2.0 * sigma2)
-    if prior is not None and prior.scale != 0:
-        dv = prior.v_fixed[cols] - prior.v_moving[rows]
-        s = s + prior.scale * (prior.log_weight[rows] - dv * dv * prior.inv2phi2)
+    if prior is not None and prior.strength != 0:
+        dv = prior.fixed_centrality[cols] - prior.moving_centrality[rows]
+        s = s + prior.strength * (prior.log_weight[rows] - dv * dv * prior.inv2phi2)
     return rows, cols, s
 
 

@@ -240,7 +240,7 @@ class _Schedule:
 
     def __call__(self, sigma2_ratio: float):
         if self.schedule == "anneal":
-            return replace(self.prior, scale=self.prior.scale * min(1.0, sigma2_ratio))
+            return replace(self.prior, strength=self.prior.strength * min(1.0, sigma2_ratio))
         return self.prior if sigma2_ratio >= self.schedule else None
 
 
