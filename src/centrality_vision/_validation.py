@@ -185,8 +185,9 @@ def as_any_graph(graph, *, name: str = "graph", allow_directed: bool = False) ->
     :mod:`scipy.sparse.csgraph`); a networkx or igraph graph's edge attribute
     ``"weight"`` is the length (1 where missing), parallel edges keep the shortest, and
     the node order (and, for igraph, the ``"name"`` attribute) gives the labels.
-    Self-loops are dropped. A sparse or dense input that is not symmetric is a directed
-    graph, refused unless ``allow_directed``.
+    Self-loops are dropped. A sparse or dense input that is not symmetric (the same
+    entries both ways, each equal to its mirror to 1e-12 of the pair's own size, at any
+    scale) is a directed graph, refused unless ``allow_directed``.
     """
     labels = None
     directed = None
@@ -247,13 +248,15 @@ def as_any_graph(graph, *, name: str = "graph", allow_directed: bool = False) ->
 
 
 def _is_symmetric(mat: sparse.csr_array) -> bool:
-    """Same pattern (stored zeros included) and values equal to 1e-12 relative."""
+    """Same pattern (stored zeros included), and each value equal to its mirror's to 1e-12
+    of the larger of the two (relative to the pair itself: a graph-wide or absolute
+    tolerance took the arcs of a graph of small lengths, or the short arcs of a graph with
+    long ones, for edges)."""
     t = sparse.csr_array(mat.T)
     t.sort_indices()
     if not (np.array_equal(mat.indptr, t.indptr) and np.array_equal(mat.indices, t.indices)):
         return False
-    scale = max(1.0, float(np.max(mat.data, initial=0.0)))
-    return bool(np.all(np.abs(mat.data - t.data) <= 1e-12 * scale))
+    return bool(np.all(np.abs(mat.data - t.data) <= 1e-12 * np.maximum(np.abs(mat.data), np.abs(t.data))))
 
 
 def as_graph(graph, *, name: str = "graph") -> sparse.csr_array:

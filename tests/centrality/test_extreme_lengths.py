@@ -115,3 +115,48 @@ def test_katz_strengths_scale_with_alpha(n, seed, exponent):
     if graph.number_of_edges():
         with pytest.raises(InputError, match=r"`alpha` must be below 1 / \(largest eigenvalue"):
             cen.katz(scaled, strengths=True, alpha=math.ldexp(2.0 * n, -exponent))
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-13, 1e-200])
+def test_a_directed_graph_of_small_lengths_stays_directed(scale):
+    # asymmetries below 1e-12 of the largest length (or of 1) were taken for rounding: the
+    # arcs then counted as edges, closeness came out swapped and betweenness halved
+    arcs = sparse.csr_array(np.array([[0.0, 1.0], [3.0, 0.0]]) * scale)  # 0 -> 1: 1, 1 -> 0: 3
+    np.testing.assert_allclose(cen.closeness(arcs, weights=True) * scale, [1 / 3, 1.0], rtol=1e-12)
+    np.testing.assert_allclose(cen.harmonic(arcs, weights=True) * scale, [1 / 3, 1.0], rtol=1e-12)
+    triangle = sparse.csr_array(np.array([[0, 1, 3], [1, 0, 1], [1.5, 1, 0.0]]) * scale)
+    np.testing.assert_array_equal(cen.betweenness(triangle, weights=True), [0.0, 1.0, 0.0])
+    with pytest.raises(InputError, match="symmetric"):
+        cen.eigenvector(arcs, strengths=True)
+
+
+def test_short_arcs_beside_a_long_edge_stay_directed():
+    lengths = np.array([[0, 1e6, 0], [1e6, 0, 1e-7], [0, 5e-7, 0]])  # 1 -> 2: 1e-7, 2 -> 1: 5e-7
+    expected = nx.harmonic_centrality(nx.from_numpy_array(lengths, create_using=nx.DiGraph), distance="weight")
+    ours = cen.harmonic(sparse.csr_array(lengths), weights=True)
+    np.testing.assert_allclose(ours, [expected[i] for i in range(3)], rtol=1e-12)
+    np.testing.assert_allclose(ours, [2e-6, 2e6, 1e7], rtol=1e-6)  # paths into each node
+
+
+def _tied_square(extra_component):
+    # 0-1-2 is 2 long and 0-3-2 is 2 + 1e-9: not a tie (ties are within 1e-10)
+    rows, cols, lengths, n = [0, 1, 0, 3], [1, 2, 3, 2], [1.0, 1.0, 1.0 + 5e-10, 1.0 + 5e-10], 4
+    if extra_component:  # a separate path with nine other lengths
+        rows += list(range(4, 13))
+        cols += list(range(5, 14))
+        lengths += [2.0 + 0.37 * i for i in range(9)]
+        n = 14
+    half = sparse.coo_array((lengths, (rows, cols)), shape=(n, n))
+    return sparse.csr_array(half + half.T)
+
+
+def test_a_components_centralities_do_not_depend_on_the_lengths_of_another():
+    # with at most 8 distinct lengths, lengths within 1e-9 were merged into one: the square's
+    # two paths tied, and its distances were rounded down, until another component added lengths
+    alone, beside = _tied_square(False), _tied_square(True)
+    graph = nx.from_scipy_sparse_array(alone)
+    expected = nx.betweenness_centrality(graph, weight="weight", normalized=False)
+    np.testing.assert_array_equal(cen.betweenness(alone, weights=True), [expected[i] for i in range(4)])
+    np.testing.assert_array_equal(cen.betweenness(beside, weights=True)[:4], cen.betweenness(alone, weights=True))
+    closeness = nx.closeness_centrality(graph, distance="weight")
+    np.testing.assert_allclose(cen.closeness(alone, weights=True), [closeness[i] for i in range(4)], rtol=1e-15, atol=0)

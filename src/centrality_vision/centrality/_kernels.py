@@ -673,21 +673,22 @@ def brandes(indptr, indices, data, sources, weighted, rtol, force_log):
 # their counts agree, and differ by far more than ``TIE_RTOL`` otherwise.
 
 
-def length_classes(data, max_classes=8, rtol=1e-9):
-    """``(kind, lengths)`` when the arc lengths take at most ``max_classes`` distinct values
-    (up to ``rtol``), all positive; ``kind[j]`` is the class of arc ``j``. Else None."""
+def length_classes(data, max_classes=8):
+    """``(kind, lengths)`` when the arc lengths take at most ``max_classes`` distinct values,
+    all positive; ``kind[j]`` is the class of arc ``j``. Else None.
+
+    Classes are exact values: lengths that differ only in their last bits are two classes
+    (the search then ties paths by ``TIE_RTOL``, as the general one does). Merging lengths
+    within a tolerance rounded distances to a class's smallest length, and tied paths the
+    general search keeps apart, so that a component's results depended on whether the rest
+    of the graph had few lengths.
+    """
     if data.size == 0 or data.min() <= 0:
         return None
-    values = np.unique(data)
-    starts = [0]
-    for i in range(1, values.size):
-        if values[i] > values[starts[-1]] * (1.0 + rtol):
-            starts.append(i)
-            if len(starts) > max_classes:
-                return None
-    lengths = values[starts]
-    kind = (np.searchsorted(lengths * (1.0 + rtol), data)).astype(np.int8)
-    return kind, lengths.astype(np.float64)
+    lengths, kind = np.unique(data, return_inverse=True)
+    if lengths.size > max_classes:
+        return None
+    return kind.astype(np.int8), lengths.astype(np.float64)
 
 
 @njit(cache=True, nogil=True)
