@@ -347,3 +347,39 @@ def test_edges_to_graph_keeps_each_length_on_its_own_edge():
     graph = edges_to_graph(4, rows, cols, lengths=[30.0, 12.0, 1.0, 23.0, 99.0])
     assert graph[0, 3] == graph[3, 0] == 30.0 and graph[1, 2] == 12.0 and graph[0, 1] == 1.0
     assert graph[2, 3] == 23.0 and graph.nnz == 8
+
+
+@pytest.mark.parametrize("offset", [0.0, 1e4, 1e8, 1e12])
+def test_flat_sets_far_from_the_origin_get_their_path_or_plane_graph(offset):
+    # the flatness test centred on the mean, which at an offset rounds away the set's digits:
+    # a line looked 2D, and the triangulation that followed refused it
+    two = np.array([[0.0, 0.0], [1.0, 0.3]]) + offset
+    line = np.array([[-57.0, 19], [-54, 18], [-15, 5], [-3, 1], [0, 0]]) + [2 * offset, offset]
+    plane = np.array([[0.0, 1, 3], [2, 5, 3], [2, 7, 9], [5, 11, 3], [7, 22, 24], [9, 26, 24]]) + [
+        offset,
+        offset,
+        2 * offset,
+    ]
+    for points, n_edges in ((two, 1), (line, 4), (plane, 5)):
+        for build in (emst_graph, gabriel_graph):
+            graph = build(points)
+            assert graph.nnz // 2 >= n_edges and sparse.csgraph.connected_components(graph)[0] == 1
+        assert emst_graph(points).nnz // 2 == n_edges
+    assert gabriel_graph(line).nnz // 2 == 4  # the path along the line
+
+
+def test_a_gabriel_edge_of_points_on_a_tilted_plane_is_kept():
+    # the points were projected onto their plane about their bounding box's middle, which lies
+    # off the plane: distances came out distorted (here ~0.5%), and p-q, whose circle has r and s
+    # 0.1% outside it, lost to r-s in the Delaunay candidates
+    turn = 2.5364329801
+    rotation = np.array([[np.cos(turn), -np.sin(turn)], [np.sin(turn), np.cos(turn)]])
+    p, q, r, s, far = [-1.0, 0], [1.0, 0], [0, 1.001], [0, -1.001], [0.3, 3.0]
+    plane = np.linalg.qr([[-0.60412767, -0.74119306], [0.45183195, -0.62113495], [-0.65641272, 0.254606]])[0]
+    points = np.array([p, q, r, s, far]) @ rotation.T @ plane.T  # on a plane through the origin
+    centred = points - points.mean(axis=0)
+    in_plane = centred @ np.linalg.svd(centred)[2][:2].T  # an isometry onto 2D
+    graph, flat = gabriel_graph(points), gabriel_graph(in_plane)
+    assert graph[0, 1] > 0
+    np.testing.assert_array_equal(graph.indices, flat.indices)
+    np.testing.assert_allclose(graph.data, flat.data, rtol=1e-12)
