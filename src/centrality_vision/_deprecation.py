@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import functools
 import inspect
-import warnings
+
+from ._warnings import warn
 
 __all__ = ["renamed_parameters", "both_names_error", "FORMER", "former_parameter"]
 
@@ -49,8 +50,7 @@ def former_parameter(estimator, old: str, new: str, default):
     current = getattr(estimator, new)
     if not (current is default or (type(current) is type(default) and current == default)):
         raise both_names_error(f"{kind}.{old}", new)
-    # (called from the estimator's parameter check, called from its fit: the caller's line)
-    warnings.warn(f"`{old}` of {kind} is renamed `{new}`; the old name will be removed.", FutureWarning, stacklevel=4)
+    warn(f"`{old}` of {kind} is renamed `{new}`; the old name will be removed.", FutureWarning)
     return value, f"{kind}.{old}"
 
 
@@ -92,11 +92,10 @@ def renamed_parameters(**new_names: str):
             if given:  # one warning per call
                 olds = " and ".join(f"`{old}`" for old in given)
                 news = " and ".join(f"`{new_names[old]}`" for old in given)
-                warnings.warn(
+                warn(
                     f"{olds} of {label}() {'is' if len(given) == 1 else 'are'} renamed {news}; "
                     f"the old name{'s' if len(given) > 1 else ''} will be removed.",
                     FutureWarning,
-                    stacklevel=2,
                 )
             return function(*args, **kwargs)
 

@@ -16,6 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy import sparse
 
+from ._warnings import warn
 from .exceptions import InputError
 
 #: ``n_dims`` for functions that accept points of any (reasonable) dimension.
@@ -376,14 +377,11 @@ def as_binary_image(
     if check_inverted and (is_mask or foreground != "auto") and min(mask.shape) >= 8:
         border = _border(mask)
         if 2 * int(border.sum()) > border.size and not mask.all():
-            import warnings
-
-            warnings.warn(
+            warn(
                 f"`{name}` looks inverted: its shape (foreground) touches {int(border.sum())} of the "
                 f"{border.size} border pixels. Pass foreground='auto' (grey images), 'dark' or 'light' "
                 "if the shape is the other side.",
                 UserWarning,
-                stacklevel=3,
             )
     return mask
 

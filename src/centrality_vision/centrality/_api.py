@@ -27,7 +27,6 @@ Conventions shared by every function here:
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 from scipy import sparse
@@ -35,6 +34,7 @@ from scipy import sparse
 from .._deprecation import renamed_parameters
 from .._parallel import run_chunks
 from .._validation import GraphInput, as_any_graph, check_bool, check_choice, check_float
+from .._warnings import warn
 from ..exceptions import InputError
 from . import _kernels
 
@@ -180,11 +180,10 @@ def _strengths_option(strengths, weights, function: str) -> bool:
     if weights is not None:
         weights = check_bool(weights, name="weights")
         if weights:
-            warnings.warn(
+            warn(
                 f"{function}(weights=True) is deprecated: `weights` means edge lengths as distances in "
                 f"this package; use {function}(strengths=True) for the stored values as strengths.",
                 DeprecationWarning,
-                stacklevel=3,
             )
             return True
     return check_bool(strengths, name="strengths")

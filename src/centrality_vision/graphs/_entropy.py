@@ -16,7 +16,6 @@ ever receives a non-finite weight.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -26,6 +25,7 @@ from scipy.spatial.distance import pdist, squareform
 from .._deprecation import renamed_parameters
 from .._parallel import run_chunks
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int, is_real_dtype
+from .._warnings import warn
 from ..exceptions import InputError
 from . import _entropy_kernels as _k
 from ._pointsets import edges_to_graph
@@ -162,10 +162,9 @@ def _distance_matrix(points, *, min_points: int = 3) -> _Distances:
 
 
 def _former_solver_name(result) -> str:
-    warnings.warn(
+    warn(
         f"`{type(result).__name__}.method` is renamed `solver`; the old name will be removed.",
         FutureWarning,
-        stacklevel=3,
     )
     return result.solver
 

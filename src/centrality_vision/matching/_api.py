@@ -6,6 +6,7 @@ import numpy as np
 
 from .._deprecation import renamed_parameters
 from .._validation import as_points, check_bool, check_choice, check_float, check_int
+from .._warnings import warn
 from ..exceptions import InputError, MatchingWarning
 from ..transforms import RigidTransform, SimilarityTransform
 from ._common import (
@@ -39,14 +40,11 @@ _SCALED_CONSENSUS, _SCALED_RATIO = 1.1, 1.05
 def _warn_if_scaled(info: dict) -> None:
     ratio, rigid, similar = info["similarity_scale"], info["refined_consensus"], info["similarity_consensus"]
     if similar > _SCALED_CONSENSUS * rigid and max(ratio, 1 / ratio) > _SCALED_RATIO:
-        import warnings
-
-        warnings.warn(
+        warn(
             f"The sets seem to differ in scale: a similarity transform of scale {ratio:.3g} brings "
             f"{similar:.1f} points into agreement where the rigid fit brings {rigid:.1f}. A rigid "
             "transform cannot align them and its correspondences are not reliable; use `scale=True`.",
             MatchingWarning,
-            stacklevel=3,
         )
 
 
@@ -200,13 +198,10 @@ def match(
         correspondence, info = shape_context_assignment(norm_m.points, norm_f.points)
         pairs = correspondence >= 0
         if pairs.sum() < 2:
-            import warnings
-
-            warnings.warn(
+            warn(
                 f"shape-context matching paired {int(pairs.sum())} point(s): too few to fit a transform; the "
                 "transform returned only maps the centre of `moving` onto that of `fixed` and means nothing.",
                 UserWarning,
-                stacklevel=2,
             )
             rot, t, s = np.eye(2), np.zeros(2), 1.0
         else:
@@ -219,14 +214,11 @@ def match(
     if method == "robust" and not scale:
         _warn_if_scaled(info)
     if method == "robust" and refine == "cpd" and not info["cpd_kept"]:
-        import warnings
-
-        warnings.warn(
+        warn(
             f"`refine='cpd'` with `w={w:g}` ended in a pose that brings "
             f"{info['cpd_consensus']:.1f} points into agreement where the consensus pose it started from "
             f"brings {info['refined_consensus']:.1f}: CPD's result was dropped and the consensus pose kept. "
             "A lower `w` lets CPD refine it.",
             MatchingWarning,
-            stacklevel=2,
         )
     return MatchResult(correspondence, transform, method, int(np.sum(correspondence >= 0)), info)

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import warnings
-
 import numpy as np
 from scipy.spatial import cKDTree
 
 from .._deprecation import renamed_parameters
 from .._validation import as_points, check_bool
+from .._warnings import warn
 from ..exceptions import InputError, MatchingWarning
 from ..graphs import mwme_graph
 from ..transforms import SimilarityTransform
@@ -121,12 +120,11 @@ def mwme_match(
     nearest = cKDTree(norm_f.points).query(moved)[1]
     disagree = int(np.count_nonzero(nearest != chosen))
     if disagree:
-        warnings.warn(
+        warn(
             f"mwme_match: {disagree} of {n} matched pairs are not nearest neighbours under the fitted "
             "transform, so the two MWME graphs differ (noise, sets that are not similar copies, or "
             "tied optima on regular grids) and the correspondences are not reliable. "
             "match(method='robust') handles noise and missing parts.",
             MatchingWarning,
-            stacklevel=2,
         )
     return chosen, similarity_to_units(*fit, norm_m, norm_f)

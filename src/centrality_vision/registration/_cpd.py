@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import math
 import numbers
-import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -35,6 +34,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._seeding import as_generator
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
+from .._warnings import warn
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
 from ..transforms import (
     AffineTransform,
@@ -859,17 +859,16 @@ class _CPD(BaseEstimator):
                 bar.close()
         name = type(self).__name__
         if stopped is not None:
-            warnings.warn(f"{name}: {stopped}", ConvergenceWarning, stacklevel=3)
+            warn(f"{name}: {stopped}", ConvergenceWarning)
         elif not converged and iteration >= self.max_iter and self.max_iter > 0 and self.tol > 0:
-            warnings.warn(
+            warn(
                 f"{name} stopped at `max_iter={self.max_iter}` before the relative change of the "
                 f"objective fell below `tol={self.tol}`.",
                 ConvergenceWarning,
-                stacklevel=3,
             )
         collapse = self._collapse(moving_n, fixed, moving_t, w_fraction, post)
         if collapse is not None:
-            warnings.warn(f"{name}: {collapse}", CollapseWarning, stacklevel=3)
+            warn(f"{name}: {collapse}", CollapseWarning)
             converged = False
         scale2 = frame.scale**2
         self.transform_ = self._make_transform(state, moving, frame)
@@ -1023,11 +1022,10 @@ class _CPD(BaseEstimator):
     def correspondence_(self) -> np.ndarray:
         """Deprecated alias of ``fixed_to_moving_`` (for each fixed point, its moving point)."""
         check_is_fitted(self, "fixed_to_moving_")
-        warnings.warn(
+        warn(
             f"`{type(self).__name__}.correspondence_` is deprecated; use `fixed_to_moving_` (same values: for each "
             "fixed point the most probable moving point, -1 for an outlier).",
             FutureWarning,
-            stacklevel=2,
         )
         return self.fixed_to_moving_
 
@@ -1285,12 +1283,11 @@ class RigidCPD(_CPD):
         moving, fixed, true_moving = super()._validate(moving, fixed, true_moving)
         dim, rank = moving.shape[1], _span(moving)
         if rank < dim - 1:
-            warnings.warn(
+            warn(
                 f"`moving` spans {rank} of {dim} dimensions ({_count(moving.shape[0], 'point')}): a rotation is not "
                 f"determined by it (it takes points not all on one {'point' if dim == 2 else 'line'}); `transform_` "
                 "is right on `moving` only.",
                 UserWarning,
-                stacklevel=3,
             )
         return moving, fixed, true_moving
 
@@ -1346,12 +1343,11 @@ class AffineCPD(_CPD):
         moving, fixed, true_moving = super()._validate(moving, fixed, true_moving)
         dim, rank = moving.shape[1], _span(moving)
         if rank < dim:
-            warnings.warn(
+            warn(
                 f"`moving` spans {rank} of {dim} dimensions ({_count(moving.shape[0], 'point')}): an affine transform "
                 f"is not determined by it (it takes at least {dim + 1} points, not all on one "
                 f"{'line' if dim == 2 else 'hyperplane'}); `transform_` is right on `moving` only.",
                 UserWarning,
-                stacklevel=3,
             )
         return moving, fixed, true_moving
 
@@ -1514,12 +1510,11 @@ class NonRigidCPD(_CPD):
             if isinstance(self.low_rank, str) and n_moving <= _AUTO_EXACT_FALLBACK:
                 kernel = gaussian_kernel(work, work, beta)  # too narrow a kernel to pay off
             else:
-                warnings.warn(
+                warn(
                     f"`low_rank={self.low_rank!r}`: the {len(kernel.values)} eigenpairs kept leave {lost:.2g} of the "
                     "kernel's trace out, so the motion field is smoother than the model asks; pass a larger "
                     "low_rank (None: the exact kernel) or a larger `beta`.",
                     ConvergenceWarning,
-                    stacklevel=4,
                 )
         return {"kernel": kernel, "coefficients": np.zeros_like(moving), "g_term": 0.0}
 

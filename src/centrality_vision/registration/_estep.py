@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 import threading
 import time
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +26,7 @@ import numpy as np
 from .._deprecation import renamed_parameters
 from .._parallel import _pool, get_num_threads, run_chunks
 from .._validation import check_choice
+from .._warnings import warn
 from ..exceptions import InputError
 from . import _kernels as K
 
@@ -182,9 +182,7 @@ CentralityPrior.__init__ = renamed_parameters(
 
 
 def _former_field(prior, old, new):
-    warnings.warn(
-        f"`CentralityPrior.{old}` is renamed `{new}`; the old name will be removed.", FutureWarning, stacklevel=3
-    )
+    warn(f"`CentralityPrior.{old}` is renamed `{new}`; the old name will be removed.", FutureWarning)
     return getattr(prior, new)
 
 

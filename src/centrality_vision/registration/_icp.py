@@ -9,7 +9,6 @@ trimmed ICP: the worst fraction dropped at each iteration).
 from __future__ import annotations
 
 import math
-import warnings
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -19,6 +18,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._deprecation import FORMER, former_parameter, renamed_parameters
 from .._parallel import get_num_threads
 from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
+from .._warnings import warn
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
 from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity, power_of_two_scale
 from ._cpd import IterationInfo, _Frame, _start_within_reach, one_point_fixed
@@ -82,12 +82,11 @@ def estimate_normals(points, *, n_neighbors: int = 10) -> np.ndarray:
     floor = np.maximum(_FLAT_PATCH * values[:, -1], k * (8 * np.finfo(float).eps) ** 2)
     undetermined = int(np.count_nonzero(values[:, 1] <= floor))
     if undetermined:
-        warnings.warn(
+        warn(
             f"estimate_normals: {undetermined} of {points.shape[0]} points have neighbourhoods of one point"
             f"{' or one line' if dim == 3 else ''} (their {k} nearest points), so their normals are arbitrary; "
             "deduplicate the points or raise `k`.",
             UserWarning,
-            stacklevel=2,
         )
     return np.ascontiguousarray(vectors[:, :, 0])
 
@@ -413,24 +412,22 @@ class ICP(BaseEstimator):
         one_point = one_point_fixed(moving_n, fixed_n)
         if one_point is not None:
             converged = False
-            warnings.warn(f"ICP: {one_point}", CollapseWarning, stacklevel=2)
+            warn(f"ICP: {one_point}", CollapseWarning)
         if free:
             # (a planar or linear fixed set: the pose slid freely along it and came back
             # "converged" at the start's position, 0.05 off on a shifted plane)
-            warnings.warn(
+            warn(
                 f"ICP: the fixed set's normals leave {free} of the {3 if dim == 2 else 6} rigid motions free (a "
                 "flat or straight fixed set): the pose along them is the start's, not a fit. Use "
                 "`metric='point_to_point'`.",
                 ConvergenceWarning,
-                stacklevel=2,
             )
         if stopped is not None:
-            warnings.warn(f"ICP: {stopped}", ConvergenceWarning, stacklevel=2)
+            warn(f"ICP: {stopped}", ConvergenceWarning)
         elif not converged and iteration >= self.max_iter and self.max_iter > 0 and self.tol > 0:
-            warnings.warn(
+            warn(
                 f"ICP stopped at `max_iter={self.max_iter}` before meeting `tol={self.tol}`.",
                 ConvergenceWarning,
-                stacklevel=2,
             )
         self.transform_ = frame.linear_out(transform)
         self.moving_transformed_ = frame.points_out(moving_t)
@@ -484,9 +481,8 @@ class ICP(BaseEstimator):
     def correspondence_(self) -> np.ndarray:
         """Deprecated alias of ``fixed_to_moving_``."""
         check_is_fitted(self, "fixed_to_moving_")
-        warnings.warn(
+        warn(
             "`ICP.correspondence_` is deprecated; use `fixed_to_moving_` (same values) or `moving_to_fixed_`.",
             FutureWarning,
-            stacklevel=2,
         )
         return self.fixed_to_moving_

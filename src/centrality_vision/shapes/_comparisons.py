@@ -11,6 +11,7 @@ from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 from .._deprecation import both_names_error
 from .._seeding import as_generator
 from .._validation import check_choice, check_float, check_int, is_real_dtype
+from .._warnings import warn
 from ..exceptions import InputError
 from ._histogram import ShapeInputMixin, _same, resolve_centralities
 
@@ -142,17 +143,15 @@ def _random_state(estimator) -> np.random.Generator:
     if estimator.seed is None:
         return as_generator(estimator.random_state, name="random_state")
     import inspect
-    import warnings
 
     default = inspect.signature(type(estimator).__init__).parameters["random_state"].default
     if not _same(estimator.random_state, default):  # as renamed_parameters does with both names
         given = f" (seed={estimator.seed!r}, random_state={estimator.random_state!r})"
         raise both_names_error("seed", "random_state", given)
 
-    warnings.warn(
+    warn(
         f"`seed` of {type(estimator).__name__} is deprecated and will be removed; use `random_state`.",
         FutureWarning,
-        stacklevel=3,
     )
     return as_generator(estimator.seed)
 
