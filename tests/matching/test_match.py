@@ -361,3 +361,24 @@ def test_shape_context_pairs_do_not_depend_on_the_order_of_the_points(seed):
     again = match(moving[p], fixed[q], method="shape-context").correspondence
     expected = np.where(first[p] >= 0, np.argsort(q)[np.maximum(first[p], 0)], -1)
     np.testing.assert_array_equal(again, expected)
+
+
+def test_robust_matching_does_not_depend_on_how_moving_is_turned():
+    # its whole-outline poses sat at fixed angles, so which of them came closest to the truth,
+    # and won, depended on the turn of `moving`: here a wrong pose (error ~2) at 0, 17 and 120
+    # degrees and the right one at 111
+    def outline(u):
+        return np.c_[(1 + 0.3 * np.cos(3 * u + 0.4)) * np.cos(u), (1 + 0.2 * np.sin(2 * u)) * np.sin(u)]
+
+    rng = np.random.default_rng(7)
+    fixed = outline(np.sort(rng.uniform(0, 2 * np.pi, int(rng.integers(30, 70)))))
+    inliers = outline(np.sort(rng.uniform(0, 1.6 * np.pi, 22))) + rng.normal(0, 0.01, (22, 2))
+    moving = np.vstack([inliers, rng.uniform(-1.5, 1.5, (5, 2))])  # the truth: the identity
+    results = []
+    for degrees in (0, 17, 111, 120):
+        a = np.deg2rad(degrees)
+        turned = moving @ np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]]).T
+        result = match(turned, fixed)
+        assert np.abs(result.transform(turned)[:22] - inliers).max() < 0.05
+        results.append(result.correspondence)
+    assert all(np.array_equal(results[0], other) for other in results[1:])

@@ -201,10 +201,22 @@ def _pose_score(moving, fixed_tree, rot, t, s, tau) -> float:
     return float(_distinct_score(d[None], j[None], fixed_tree.n, tau)[0])
 
 
+def _axis_angle(points: np.ndarray) -> float:
+    """The angle of the principal axis of 2D points (modulo pi), which turns with them."""
+    d = points - points.mean(axis=0)
+    xx, yy, xy = (d[:, 0] ** 2).mean(), (d[:, 1] ** 2).mean(), (d[:, 0] * d[:, 1]).mean()
+    return 0.5 * float(np.arctan2(2 * xy, xx - yy))
+
+
 def _global_hypotheses(moving, fixed, *, scale: bool, unit_ratio: float, n_angles: int = 36):
     """Poses that align the centroids and RMS radii at ``n_angles`` rotations: right when
-    both sets are whole outlines, whatever their local noise (the local signatures' blind spot)."""
-    angle = 2 * np.pi * np.arange(n_angles) / n_angles
+    both sets are whole outlines, whatever their local noise (the local signatures' blind spot).
+
+    The rotations start from the turn that aligns the sets' principal axes, so that they turn
+    with the data: at fixed angles, which poses came closest (and so won) depended on how
+    ``moving`` was turned."""
+    offset = _axis_angle(fixed) - _axis_angle(moving)
+    angle = offset + 2 * np.pi * np.arange(n_angles) / n_angles
     c, s_ = np.cos(angle), np.sin(angle)
     rot = np.stack([np.stack([c, -s_], axis=1), np.stack([s_, c], axis=1)], axis=1)
     cm, cf = moving.mean(axis=0), fixed.mean(axis=0)
