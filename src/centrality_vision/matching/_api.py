@@ -37,6 +37,26 @@ METHODS = ("robust", "mwme", "shape-context")
 _SCALED_CONSENSUS, _SCALED_RATIO = 1.1, 1.05
 
 
+def _warn_unless_pairs_agree(moving, partners, rot, t, s) -> None:
+    """Shape contexts pair points by their descriptors alone: on a symmetric set (a regular
+    polygon, a grid) several pairings tie and the assignment may mix them, and the
+    least-squares pose of mixed pairs shrinks towards the centroid (an exact copy of an
+    octagon at scale 0.5 came back at 0.125). Say so when the pose brings the pairs less
+    than halfway together: their residuals hold more than half the partners' spread
+    (under noise or resampling the pairs are off by a few sampling steps, a few percent)."""
+    residual = float(np.sum((s * moving @ rot.T + t - partners) ** 2))
+    spread = float(np.sum((partners - partners.mean(axis=0)) ** 2))
+    if residual > 0.5 * spread:
+        warn(
+            f"shape-context matching: the transform fitted to the {moving.shape[0]} matched pairs leaves "
+            f"{min(residual / max(spread, np.finfo(float).tiny), 99.0):.0%} of the fixed partners' spread "
+            "unexplained: many pairs join unrelated points (a symmetric set, whose pairings tie; noise, clutter "
+            "or missing parts that change the descriptors), and the transform, fitted to them all, is not "
+            "reliable. match(method='robust') scores poses on all points.",
+            MatchingWarning,
+        )
+
+
 def _warn_if_scaled(info: dict) -> None:
     ratio, rigid, similar = info["similarity_scale"], info["refined_consensus"], info["similarity_consensus"]
     if similar > _SCALED_CONSENSUS * rigid and max(ratio, 1 / ratio) > _SCALED_RATIO:
@@ -82,7 +102,10 @@ def match(
         ``"shape-context"``: the baseline: Belongie et al.'s log-polar shape contexts
         (angles from each point's tangent), chi-squared costs and a one-to-one Hungarian
         assignment (:func:`scipy.optimize.linear_sum_assignment`) with dummy partners
-        of cost 0.25 for unmatched points; the transform is fitted to the pairs. The
+        of cost 0.25 for unmatched points; the transform is fitted to the pairs, and a
+        ``MatchingWarning`` says when it leaves more than half the partners' spread
+        unexplained (symmetric sets, whose pairings tie; on the matching benchmark's
+        outlines it warned for 10 of 68 resampled copies, 49 of 68 at noise 0.02). The
         assignment is square in ``m + f`` points: memory grows as ``(m + f)^2`` and time
         as ``(m + f)^3`` (measured on 2 cores: 1.4 s and 0.3 GB for 1000 points against
         1000, 3.3 s and 0.4 GB for 2000 against 2000).
@@ -210,6 +233,8 @@ def match(
             s = unit_ratio
             if pairs.sum() >= 2:
                 t = norm_f.points[correspondence[pairs]].mean(axis=0) - s * rot @ norm_m.points[pairs].mean(axis=0)
+        if pairs.sum() >= 2:
+            _warn_unless_pairs_agree(norm_m.points[pairs], norm_f.points[correspondence[pairs]], rot, t, s)
     transform = _rigid_if_unscaled(similarity_to_units(rot, t, s, norm_m, norm_f), scale)
     if method == "robust" and not scale:
         _warn_if_scaled(info)
