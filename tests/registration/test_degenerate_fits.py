@@ -174,3 +174,21 @@ def test_estimate_normals_needs_a_plane_in_3d_and_says_when_a_normal_is_arbitrar
         warnings.simplefilter("error", UserWarning)
         estimate_normals(doubled, n_neighbors=9)  # three positions: a plane
         estimate_normals(points[:, :2], n_neighbors=2)  # a line through two points has a normal in 2D
+
+
+def test_a_field_whose_rounding_shows_says_so():
+    # at a tiny lam an exact fit interpolates without smoothing: coefficients of 1e10 and more,
+    # and transform_(moving) missed moving_transformed_ by 6e-5 (lam 1e-8) with no warning
+    from centrality_vision.registration import NonRigidCPD
+
+    rng = np.random.default_rng(1)
+    y = rng.normal(size=(200, 2))
+    x = y + 0.2 * np.sin(1.5 * y[:, ::-1]) + 0.1
+    with pytest.warns(UserWarning, match=r"carry rounding of about \de-0\d of the moving set's RMS radius"):
+        reg = NonRigidCPD(lam=1e-8).fit(y, x)
+    gap = np.abs(reg.transform_(y) - reg.moving_transformed_).max()
+    assert gap > 1e-6  # what it warns about
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        reg = NonRigidCPD().fit(y, x)  # lam 2: quiet, and within rounding
+    assert np.abs(reg.transform_(y) - reg.moving_transformed_).max() < 1e-7
