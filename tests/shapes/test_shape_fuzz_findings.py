@@ -297,3 +297,20 @@ def test_the_forest_predicts_only_with_its_fitted_parameters():
     np.testing.assert_array_equal(forest.predict(shapes), before)  # how it runs may change
     with pytest.raises(TypeError, match="`seed` is the former name of `random_state`; give `random_state` only"):
         CentralityComparisonForest(random_state=7, seed=3).fit(shapes, labels)  # seed silently won
+
+
+def test_an_off_shape_pixel_goes_to_the_first_of_its_tied_nearest_pixels():
+    # the k-d tree returned one of the tied pixels, not the first in row-major order as
+    # documented (126 of 551 tied queries on random masks)
+    from centrality_vision.shapes._comparisons import _nearest_pixels
+
+    rng = np.random.default_rng(0)
+    for _ in range(40):
+        mask = rng.random((12, 12)) < 0.15
+        mask[rng.integers(12), rng.integers(12)] = True
+        pixels = np.argwhere(~mask)
+        rows, cols = _nearest_pixels(mask, pixels)
+        foreground = np.argwhere(mask)
+        squared = ((pixels[:, None, :] - foreground[None]) ** 2).sum(axis=2)
+        first = foreground[np.argmax(squared == squared.min(axis=1, keepdims=True), axis=1)]
+        np.testing.assert_array_equal(np.c_[rows, cols], first)
