@@ -14,6 +14,7 @@ from scipy.optimize import linear_sum_assignment
 from scipy.spatial import cKDTree
 from scipy.spatial.distance import pdist
 
+from .._neighbours import query_with_ties
 from ..transforms import centred
 
 __all__ = ["shape_context", "shape_context_assignment"]
@@ -32,15 +33,8 @@ def _tangent_angles(points: np.ndarray, k: int = 5) -> np.ndarray:
     The neighbours tied with the k-th all count: which of them the k-d tree returned
     depended on the order of the points (on grids, 39 of 50 sets turned a tangent when
     their rows were permuted)."""
-    n = points.shape[0]
-    k = min(k, n - 1)
-    tree, fetch = cKDTree(points), min(n, 2 * k + 2)
-    while True:
-        dist, index = tree.query(points, k=fetch)
-        tied = dist <= dist[:, k : k + 1] * (1 + 1e-12)
-        if fetch == n or not tied[:, -1].any():
-            break
-        fetch = min(n, 2 * fetch)  # more ties than fetched
+    k = min(k, points.shape[0] - 1)
+    _, index, tied = query_with_ties(cKDTree(points), points, k, rtol=1e-12)
     weight = tied.astype(float)
     centre = np.einsum("nk,nki->ni", weight, points[index]) / weight.sum(axis=1, keepdims=True)
     neigh = (points[index] - centre[:, None]) * weight[:, :, None]

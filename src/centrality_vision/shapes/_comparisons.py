@@ -9,6 +9,7 @@ from scipy import ndimage
 from sklearn.base import BaseEstimator, ClassifierMixin, TransformerMixin
 
 from .._deprecation import both_names_error
+from .._neighbours import query_with_ties
 from .._seeding import as_generator
 from .._validation import check_choice, check_float, check_int, is_real_dtype
 from .._warnings import warn
@@ -132,13 +133,9 @@ def _nearest_pixels(mask: np.ndarray, pixels: np.ndarray) -> tuple[np.ndarray, n
         from scipy.spatial import cKDTree
 
         foreground = np.argwhere(mask)  # row-major order
-        tree, queries, fetch = cKDTree(foreground), pixels[off], min(8, foreground.shape[0])
-        while True:  # the tree returns one of the tied pixels, not the first: fetch them all
-            dist, index = tree.query(queries, k=[*range(1, fetch + 1)])
-            tied = dist == dist[:, :1]  # integer coordinates: equal distances are equal exactly
-            if fetch == foreground.shape[0] or not tied[:, -1].any():
-                break
-            fetch = min(2 * fetch, foreground.shape[0])
+        # the tree returns one of the tied pixels, not the first: take them all (integer
+        # coordinates: equal distances are equal exactly)
+        _, index, tied = query_with_ties(cKDTree(foreground), pixels[off], 0)
         nearest = np.where(tied, index, foreground.shape[0]).min(axis=1)
         rows[off], cols[off] = foreground[nearest, 0], foreground[nearest, 1]
     return rows, cols
