@@ -19,14 +19,14 @@ def both_names_error(old: str, new: str, detail: str = "") -> TypeError:
     return TypeError(f"`{old}` is the former name of `{new}`; give `{new}` only; got both{detail}.")
 
 
-def former_parameter(estimator, old: str, new: str, default):
+def former_parameter(estimator, old: str, new: str):
     """The value to use of an estimator parameter renamed ``old`` -> ``new``, and the name
     to check it under (``"Class.old"`` or ``"Class.new"``).
 
     An estimator keeps its former parameter in its signature, with the default
     :data:`FORMER`, because ``get_params`` and ``clone`` read every parameter. When it was
     given, its value is used with a :class:`FutureWarning`; given together with a new
-    value other than ``default``, it is a :class:`TypeError`.
+    value other than the new parameter's default, it is a :class:`TypeError`.
 
     Examples
     --------
@@ -34,11 +34,11 @@ def former_parameter(estimator, old: str, new: str, default):
     >>> class Fit:
     ...     def __init__(self, max_iter=10, iters=FORMER):
     ...         self.max_iter, self.iters = max_iter, iters
-    >>> former_parameter(Fit(max_iter=5), "iters", "max_iter", 10)
+    >>> former_parameter(Fit(max_iter=5), "iters", "max_iter")
     (5, 'Fit.max_iter')
     >>> with warnings.catch_warnings(record=True) as caught:
     ...     warnings.simplefilter("always")
-    ...     former_parameter(Fit(iters=3), "iters", "max_iter", 10)
+    ...     former_parameter(Fit(iters=3), "iters", "max_iter")
     (3, 'Fit.iters')
     >>> print(caught[0].message)
     `iters` of Fit is renamed `max_iter`; the old name will be removed.
@@ -48,6 +48,7 @@ def former_parameter(estimator, old: str, new: str, default):
     if isinstance(value, str) and value == FORMER:
         return getattr(estimator, new), f"{kind}.{new}"
     current = getattr(estimator, new)
+    default = inspect.signature(type(estimator).__init__).parameters[new].default
     if not (current is default or (type(current) is type(default) and current == default)):
         raise both_names_error(f"{kind}.{old}", new)
     warn(f"`{old}` of {kind} is renamed `{new}`; the old name will be removed.", FutureWarning)

@@ -1558,13 +1558,13 @@ class NonRigidCPD(_CPD):
         # (and only beyond what the result's own coordinates round off: a field that carries
         # the set 1e12 away sums to 1e12 with nothing cancelling)
         eps = np.finfo(float).eps
-        radius = float(np.sqrt(np.mean(np.sum((moving - moving.mean(axis=0)) ** 2, axis=1))))
+        radius = rms_radius(moving)
         rounding = eps * float(np.abs(self.transform_.coefficients).sum(axis=0).max())
         own = 16 * eps * float(np.abs(self.moving_transformed_).max())
         if not rounding > max(_FIELD_ROUNDING * radius, own):
             return None
         return (
-            f"the field's coefficients sum to {rounding / np.finfo(float).eps:.1e}, so its values carry "
+            f"the field's coefficients sum to {rounding / eps:.1e}, so its values carry "
             f"rounding of about {rounding / radius:.0e} of the moving set's RMS radius (`transform_` and "
             "`moving_transformed_` may differ by that much): the fit interpolates almost without smoothing, "
             f"as happens when sigma2 shrinks to nothing at a small `lam` ({self.lam:g}). A larger `lam` or "

@@ -381,7 +381,7 @@ class GPD(BaseEstimator):
                 f"`weights=True` (shortest paths by edge length) applies to {', '.join(PATH_CENTRALITIES)}; "
                 f"got centrality={self.centrality!r}."
             )
-        neighbors, name = former_parameter(self, "k", "graph_neighbors", 6)
+        neighbors, name = former_parameter(self, "k", "graph_neighbors")
         neighbors = check_int(neighbors, name=name, low=1)
         _check_prior_options(self.bins, self.phi, self.kappa)
         schedule = self.prior_schedule

@@ -234,7 +234,7 @@ class ICP(BaseEstimator):
             check_float(self.max_distance, name="ICP.max_distance", low=0.0, low_open=True)
         check_float(self.trim, name="ICP.trim", low=0.0, high=1.0, high_open=True)
         check_choice(self.metric, METRICS, name="ICP.metric")
-        neighbors, name = former_parameter(self, "k_normals", "normal_neighbors", 10)
+        neighbors, name = former_parameter(self, "k_normals", "normal_neighbors")
         neighbors = check_int(neighbors, name=name, low=3)
         if self.metric == "point_to_plane" and self.scale:
             raise InputError("`ICP.scale=True` needs metric='point_to_point'; point-to-plane fits a rigid motion.")

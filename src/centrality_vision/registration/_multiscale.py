@@ -198,7 +198,7 @@ class MultiscaleCPD(BaseEstimator):
             raise TypeError(f"`MultiscaleCPD.sizes` must be a sequence of ints; got {self.sizes!r}.") from None
         if not sizes or sorted(sizes) != sizes or len(set(sizes)) != len(sizes):
             raise InputError(f"`MultiscaleCPD.sizes` must be non-empty and strictly increasing; got {self.sizes!r}.")
-        refine, name = former_parameter(self, "refine_iter", "refine_max_iter", _REFINE_MAX_ITER)
+        refine, name = former_parameter(self, "refine_iter", "refine_max_iter")
         refine = check_int(refine, name=name, low=1)
         as_generator(self.random_state, name="MultiscaleCPD.random_state")  # checked before any work
         return sizes, isinstance(self.estimator, NonRigidCPD), refine
