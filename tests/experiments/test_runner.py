@@ -104,6 +104,7 @@ def test_damaged_or_edited_lines_are_recomputed_never_read(tmp_path):
     assert edited != line
     damaged = [b"\xff\xfe\x00garbage\x80\n", b"[1,2]\n", b"null\n", b"{}\n", b'"abc"\n', b'{"key":[1],"result":1}\n']
     damaged += [b'{"key":"' + unit_id(unit).encode() + b'","result":null}\n', edited]
+    damaged += [b"[" * 200_000 + b"\n"]  # nested past the JSON parser: was a RecursionError
     for text in damaged:
         path.write_bytes(text)
         assert load_results(path) == {}
@@ -145,6 +146,42 @@ def test_unit_ids_change_with_every_parameter_the_version_and_the_code(monkeypat
     monkeypatch.undo()
     monkeypatch.setattr(centrality_vision, "__version__", "0.0.0-other")
     assert base != unit_id(Unit("k", _square, {"x": 1, "marker_dir": "d"}))
+
+
+class _Hidden:
+    """An object whose repr does not show its state."""
+
+    def __init__(self, value):
+        self.value = value
+
+    def __repr__(self):
+        return "_Hidden()"
+
+
+def test_unit_ids_tell_apart_values_that_print_alike():
+    """An estimator was keyed by its repr, which rounds an ``init`` transform's arrays to 8
+    digits: translations 0.1 and 0.100000001 shared a unit id, and the second run was handed
+    the first one's result. JSON writes dict keys as strings ({1: x} and {"1": x} collided;
+    keys of mixed types raised a bare TypeError)."""
+    import numpy as np
+
+    from centrality_vision.registration import RigidCPD
+    from centrality_vision.transforms import SimilarityTransform
+
+    def key(value):
+        return unit_id(Unit("k", _square, {"x": value}))
+
+    def init(shift):
+        return RigidCPD(init=SimilarityTransform(rotation=np.eye(2), translation=np.array([shift, 0.0])))
+
+    assert repr(init(0.1)) == repr(init(0.100000001))
+    assert key(init(0.1)) != key(init(0.100000001))
+    assert key(init(0.1)) == key(init(0.1))
+    assert key(RigidCPD(w=0.1)) != key(RigidCPD(w=0.2))
+    assert key({1: "a"}) != key({"1": "a"})
+    assert key({1: "a", "b": 2}) == key({"b": 2, 1: "a"})
+    assert key(_Hidden(1)) != key(_Hidden(2))
+    assert key(_Hidden(1)) == key(_Hidden(1))
 
 
 _KILL_SCRIPT = """

@@ -87,14 +87,22 @@ def _canonical(value):
         return ["partial", _function_name(value.func), _keyed(list(value.args)), _keyed(value.keywords)]
     if inspect.isroutine(value) or inspect.isclass(value):
         return ["function", _function_name(value)]
-    if callable(value) and (dataclasses.is_dataclass(value) or hasattr(value, "__dict__")):
-        # an object with __call__ (a transform) by its state: its repr elides large arrays
+    if hasattr(value, "get_params") and not isinstance(value, type):
+        # an estimator by its parameters: its repr rounds arrays (an ``init`` transform) to 8 digits
+        try:
+            params = value.get_params(deep=False)
+        except TypeError:
+            params = None
+        if isinstance(params, dict):
+            return ["estimator", type(value).__module__ + "." + type(value).__qualname__, _keyed(params)]
+    if dataclasses.is_dataclass(value) or hasattr(value, "__dict__"):
+        # an object (a transform) by its state: its repr rounds and elides arrays, or hides state
         state = (
             {f.name: getattr(value, f.name) for f in dataclasses.fields(value)}
             if dataclasses.is_dataclass(value)
             else vars(value)
         )
-        return ["callable", type(value).__module__ + "." + type(value).__qualname__, _keyed(state)]
+        return ["object", type(value).__module__ + "." + type(value).__qualname__, _keyed(state)]
     text = repr(value)
     if " at 0x" in text:  # an object's default repr: its address, not its value
         raise InputError(
@@ -106,7 +114,21 @@ def _canonical(value):
 
 def _keyed(value):
     """``value`` with every part JSON cannot write replaced by :func:`_canonical`."""
-    return json.loads(json.dumps(value, sort_keys=True, default=_canonical))
+    return json.loads(json.dumps(_string_keyed(value), sort_keys=True, default=_canonical))
+
+
+def _string_keyed(value):
+    """``value`` with every dict that has a key other than a string written as a sorted list of
+    ``[key, value]`` pairs: JSON turns keys into strings, so ``{1: x}`` and ``{"1": x}`` would
+    share a unit id (and keys of mixed types would not sort)."""
+    if isinstance(value, dict):
+        if all(isinstance(key, str) for key in value):
+            return {key: _string_keyed(item) for key, item in value.items()}
+        pairs = [[_keyed(key), _keyed(item)] for key, item in value.items()]
+        return ["dict", sorted(pairs, key=lambda pair: json.dumps(pair, sort_keys=True))]
+    if isinstance(value, (list, tuple)):
+        return [_string_keyed(item) for item in value]
+    return value
 
 
 def _function_name(func):
@@ -149,7 +171,9 @@ def unit_id(unit: Unit) -> str:
 
     kwargs = {k: v for k, v in unit.kwargs.items() if k not in unit.volatile}
     payload = json.dumps(
-        [_function_name(unit.func), kwargs, __version__, code_digest()], sort_keys=True, default=_canonical
+        [_function_name(unit.func), _string_keyed(kwargs), __version__, code_digest()],
+        sort_keys=True,
+        default=_canonical,
     )
     return f"{unit.key}#{hashlib.sha256(payload.encode()).hexdigest()[:16]}"
 
@@ -235,7 +259,7 @@ def load_results(path) -> dict:
                 break  # the process died while writing this line
             try:
                 record = json.loads(raw.decode("utf-8"))
-            except (UnicodeDecodeError, json.JSONDecodeError):
+            except (UnicodeDecodeError, json.JSONDecodeError, RecursionError):  # damage, nested past the parser
                 continue
             if not isinstance(record, dict) or not isinstance(record.get("key"), str) or "result" not in record:
                 continue
