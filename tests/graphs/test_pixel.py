@@ -144,7 +144,7 @@ def test_extreme_spacing_gives_the_true_lengths(spacing):
 @pytest.mark.parametrize("spacing", [(1.5e308, 1.5e308), (1.5e308, 1.5e308, 1e-200)], ids=["scaled", "stepwise"])
 def test_spacing_whose_lengths_overflow_is_refused(spacing):
     """Diagonals above 1.8e308, on both paths (entries within 1e150 of each other, and not)."""
-    with pytest.raises(ValueError, match="`spacing` must give edge lengths"):
+    with pytest.raises(ValueError, match="`spacing` must lie between"):
         pixel_graph(np.ones((2,) * len(spacing), dtype=bool), spacing=spacing)
 
 
@@ -177,3 +177,31 @@ def test_foreground_chooses_the_side_in_2d_and_3d():
     assert int(salt_noise(image, 0.25, seed=0, threshold=100, foreground="light").sum()) == 36
     with pytest.raises(ValueError, match="`foreground` must be one of 'auto', 'dark', 'light'; got 'white'"):
         pixel_graph(volume, threshold=100, foreground="white")
+
+
+@pytest.mark.parametrize("connectivity", [8, 4])
+def test_spacing_keeps_path_sums_within_float64(connectivity):
+    """Spacings of 1e306 (40x40 pixels) gave closeness 0 and wrong betweenness from overflowed
+    path sums, and subnormal spacings (1e-310) harmonic NaN and betweenness with the diagonal
+    rounded to the axis step: such spacings are refused, and at the accepted extremes the
+    weighted centralities are the unit-spacing ones, scaled."""
+    from centrality_vision import centrality as cen
+
+    mask = np.ones((12, 12), dtype=bool)
+    mask[3:9, 6] = False
+    n = int(mask.sum())
+    biggest = np.finfo(np.float64).max
+    for bad in (1e306, 1e-310, 5e-324):
+        with pytest.raises(ValueError, match=r"`spacing` must lie between .* for an image of 138 foreground"):
+            pixel_graph(mask, connectivity=connectivity, spacing=(bad, bad))
+    unit, _ = pixel_graph(mask, connectivity=connectivity)
+    high = 0.99 * biggest / (n * n * np.sqrt(2))
+    low = 1.01 * max(np.finfo(np.float64).tiny, n / biggest)
+    for step in (high, low):
+        graph, _ = pixel_graph(mask, connectivity=connectivity, spacing=(step, step))
+        np.testing.assert_allclose(
+            cen.betweenness(graph, weights=True), cen.betweenness(unit, weights=True), rtol=1e-12
+        )
+        for name in ("closeness", "harmonic"):
+            got = getattr(cen, name)(graph, weights=True) * step  # both go as 1 / length
+            np.testing.assert_allclose(got, getattr(cen, name)(unit, weights=True), rtol=1e-12)

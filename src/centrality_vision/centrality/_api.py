@@ -671,7 +671,7 @@ def closeness(
 
 def _check_inverse(values: np.ndarray) -> None:
     """Refuse inverse distances beyond float64 (edge lengths near its smallest numbers)."""
-    if np.any(np.isinf(values)):
+    if not np.all(np.isfinite(values)):
         raise InputError(
             "`graph` has inverse distances beyond float64's largest number (about 1.8e308) with these "
             "edge lengths (near 1e-308); rescale them."

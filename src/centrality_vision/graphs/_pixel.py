@@ -179,7 +179,9 @@ def pixel_graph(
         Neighbourhood; the default is the full one (8 in 2D, the thesis' choice; 26 in 3D).
     spacing : sequence of float, optional
         Distance between pixel centres along each axis (default 1 everywhere), e.g. the
-        voxel size of an anisotropic scan.
+        voxel size of an anisotropic scan. Each entry must keep path lengths and their sums
+        within float64: at least the smallest normal float (about 2.2e-308) and ``n`` over the
+        largest, at most the largest over ``n**2 * sqrt(ndim)``, for ``n`` foreground pixels.
     threshold : float, optional
         Grey level that splits a numeric image. 2D: as
         :func:`centrality_vision.io.read_shape` with ``foreground="auto"`` splits it (default
@@ -244,6 +246,17 @@ def pixel_graph(
             raise TypeError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing!r}.") from None
         if spacing.shape != (mask.ndim,) or not np.all(np.isfinite(spacing)) or np.any(spacing <= 0):
             raise InputError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing.tolist()!r}.")
+        # every path length (at most n steps) and closeness' sum of n of them, and harmonic's
+        # sum of n inverse lengths, must stay finite and keep full precision (no subnormals)
+        n = max(int(np.count_nonzero(mask)), 1)
+        biggest = float(np.finfo(np.float64).max)
+        low = max(float(np.finfo(np.float64).tiny), n / biggest)
+        high = biggest / (float(n) * n * np.sqrt(mask.ndim))
+        if spacing.min() < low or spacing.max() > high:
+            raise InputError(
+                f"`spacing` must lie between {low:.3g} and {high:.3g} for an image of {n} foreground "
+                f"pixels (so that path lengths and their sums stay within float64); got {spacing.tolist()!r}."
+            )
     # skimage squares the spacing: it gets the spacing over its largest entry (squares no
     # smaller than 1e-300 while the entries are within 1e150 of each other) and the lengths
     # are scaled back; beyond that ratio they are computed step by step (slower, exact)
@@ -253,18 +266,11 @@ def pixel_graph(
     graph = PixelGraph(graph)
     graph.sort_indices()
     if spacing is not None:
-        with np.errstate(over="ignore"):
-            lengths = (
-                _spaced_lengths(graph, np.asarray(nodes, dtype=np.int64), mask.shape, spacing)
-                if unit is None
-                else graph.data * top
-            )
-        if lengths.size and not (np.all(np.isfinite(lengths)) and lengths.min() > 0):
-            raise InputError(
-                f"`spacing` must give edge lengths that fit in float64 (about 5e-324 to 1.8e308); "
-                f"got {spacing.tolist()!r}."
-            )
-        graph.data = lengths
+        graph.data = (  # finite and normal, by the check on `spacing` above
+            _spaced_lengths(graph, np.asarray(nodes, dtype=np.int64), mask.shape, spacing)
+            if unit is None
+            else graph.data * top
+        )
     graph.indices = graph.indices.astype(np.int32, copy=False)
     graph.indptr = graph.indptr.astype(np.int32, copy=False)
     remembered = mask.copy()
