@@ -258,3 +258,14 @@ def test_an_estimators_parameter_reads_as_the_option():
     args = parser.parse_args(["m.txt", "f.txt", "--out", "x.json"])
     said = _in_cli_words("`NonRigidCPD.lam` must be positive; `RigidCPD.tol` too, and `tol`.", parser, args)
     assert said == "--lam must be positive; --tol too, and --tol."
+
+
+def test_a_fit_ended_by_a_collapse_is_not_said_to_reach_max_iter(tmp_path, capsys, fish):
+    """A collapse onto a one-point fixed set ended CPD after 25 of 150 iterations, and the status
+    line said "stopped at --max-iter without converging"."""
+    _register(tmp_path, fish, fish[:1], "--method", "cpd")
+    err = capsys.readouterr().err
+    assert "stopped early without converging (see the warning above)" in err
+    assert "stopped at --max-iter" not in err
+    _register(tmp_path, fish, fish[::-1] + 0.1, "--method", "cpd", "--max-iter", "2", name="limited.json")
+    assert "stopped at --max-iter without converging after 2 iterations" in capsys.readouterr().err

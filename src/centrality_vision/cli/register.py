@@ -379,7 +379,13 @@ def run(args: argparse.Namespace) -> int:
     finally:
         watch.close()
     seconds = time.perf_counter() - started
-    status = "converged" if estimator.converged_ else "stopped at --max-iter without converging"
+    limit = getattr(estimator, "max_iter", None) or getattr(getattr(estimator, "base_cpd", None), "max_iter", None)
+    if estimator.converged_:
+        status = "converged"
+    elif limit is not None and estimator.n_iter_ >= limit:
+        status = "stopped at --max-iter without converging"
+    else:  # a collapse or a non-finite step ended it: its warning says which
+        status = "stopped early without converging (see the warning above)"
     say(f"{label}: {status} after {estimator.n_iter_} iterations in {seconds:.2f} s")
 
     history = {
