@@ -379,10 +379,9 @@ def run(args: argparse.Namespace) -> int:
     finally:
         watch.close()
     seconds = time.perf_counter() - started
-    limit = getattr(estimator, "max_iter", None) or getattr(getattr(estimator, "base_cpd", None), "max_iter", None)
     if estimator.converged_:
         status = "converged"
-    elif limit is not None and estimator.n_iter_ >= limit:
+    elif estimator.n_iter_ >= args.max_iter:  # the method's own limit when not given (_method_defaults)
         status = "stopped at --max-iter without converging"
     else:  # a collapse or a non-finite step ended it: its warning says which
         status = "stopped early without converging (see the warning above)"

@@ -87,7 +87,7 @@ def _canonical(value):
         return ["partial", _function_name(value.func), _keyed(list(value.args)), _keyed(value.keywords)]
     if inspect.isroutine(value) or inspect.isclass(value):
         return ["function", _function_name(value)]
-    if hasattr(value, "get_params") and not isinstance(value, type):
+    if hasattr(value, "get_params"):  # (a class was keyed by its name above)
         # an estimator by its parameters: its repr rounds arrays (an ``init`` transform) to 8 digits
         try:
             params = value.get_params(deep=False)
