@@ -2,23 +2,69 @@
 
 Results kept on disk (the experiments' unit files, :class:`~centrality_vision.shapes.CentralityCache`
 files) carry :func:`code_digest` in their key: a result computed by another version of the
-package, or by the same version edited (a development install), has another key and is
-recomputed, never reused.
+package, by the same version edited (a development install), with other bundled data, or under
+other versions of the libraries the package runs on, has another key and is recomputed, never
+reused.
 """
 
 from __future__ import annotations
 
 import functools
 import hashlib
+import importlib.metadata
+import platform
+import re
 from pathlib import Path
 
 __all__ = ["code_digest"]
 
+#: Folders and suffixes of files that are caches of the package, not part of it.
+_CACHE_DIRS = frozenset({"__pycache__"})
+_CACHE_SUFFIXES = frozenset({".pyc", ".pyo", ".nbi", ".nbc"})
+
+
+def _package_files(root: Path) -> list[Path]:
+    """Every file under ``root`` (sources and bundled data), without interpreter and numba caches."""
+    return sorted(
+        path
+        for path in root.rglob("*")
+        if path.is_file()
+        and path.suffix not in _CACHE_SUFFIXES
+        and not _CACHE_DIRS.intersection(path.relative_to(root).parts)
+    )
+
+
+def _runtime_versions() -> list[str]:
+    """``name==version`` for Python and each installed runtime dependency of the package.
+
+    The dependencies are read from the installed package's metadata (extras left out); without
+    metadata (the sources used from a checkout without installing) only Python's version is given.
+    """
+    versions = [f"python=={platform.python_version()}"]
+    try:
+        requirements = importlib.metadata.requires("centrality-vision") or []
+    except importlib.metadata.PackageNotFoundError:
+        requirements = []
+    names = sorted(
+        {
+            re.match(r"[A-Za-z0-9._-]+", requirement).group(0).lower()
+            for requirement in requirements
+            if "extra" not in requirement.partition(";")[2]
+        }
+    )
+    for name in names:
+        try:
+            versions.append(f"{name}=={importlib.metadata.version(name)}")
+        except importlib.metadata.PackageNotFoundError:
+            versions.append(f"{name}==missing")
+    return versions
+
 
 @functools.lru_cache(maxsize=1)
 def code_digest() -> str:
-    """The first 16 hex digits of a SHA-256 over every Python source file of the package (each
-    file's path inside the package and its bytes), read once per process.
+    """The first 16 hex digits of a SHA-256 over the package and what it runs on, read once per
+    process: every file of the package (its Python sources and bundled data, each by its path
+    inside the package and its bytes) and the versions of Python and of each runtime dependency.
 
     Examples
     --------
@@ -28,9 +74,12 @@ def code_digest() -> str:
     """
     root = Path(__file__).resolve().parent
     hasher = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
+    for path in _package_files(root):
         hasher.update(path.relative_to(root).as_posix().encode())
         hasher.update(b"\0")
         hasher.update(path.read_bytes())
+        hasher.update(b"\0")
+    for version in _runtime_versions():
+        hasher.update(version.encode())
         hasher.update(b"\0")
     return hasher.hexdigest()[:16]
