@@ -145,6 +145,17 @@ def test_table_5_1_cells_follow_from_the_sets(tmp_path, capsys):
     assert len((tmp_path / "table-5.1-quick.jsonl").read_text().splitlines()) == 40  # 2 seeds x 20 units, kept
 
 
+def test_table_5_1_a_tie_for_the_fewest_iterations_is_no_method_s_win():
+    """Ties went to the method listed first: the shipped full run's contour tie (closeness and
+    eigenvector both at 1443/99 iterations, seed 1) counted as closeness being fastest."""
+    row = {m: {"mean": 20.0} for m in table_5_1.METHODS}
+    row["closeness"] = {"mean": 14.0}
+    assert table_5_1._fastest(row) == "closeness"
+    assert table_5_1._fastest(row | {"eigenvector": {"mean": 14.0}}) is None
+    assert table_5_1._fastest(row | {"CPD": {"mean": 13.0}, "degree": {"mean": None}}) == "CPD"
+    assert table_5_1._fastest({m: {"mean": None} for m in table_5_1.METHODS}) is None
+
+
 def test_table_5_1_never_reports_another_seeds_numbers(tmp_path):
     """Re-running with another seed into the same folder computes that seed, never reuses the old one."""
     kwargs = dict(quick=True, out=tmp_path, scheduler="serial", progress=False, n_sets=1)
