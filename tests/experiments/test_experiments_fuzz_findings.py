@@ -173,6 +173,43 @@ def test_lambdas_and_closures_are_keyed_by_their_code_and_captured_values():
     assert unit_id(Unit("u", _echo, {"values": first})) != unit_id(Unit("u", _echo, {"values": second}))
 
 
+def test_closures_that_capture_dicts_with_keys_that_print_alike_are_told_apart():
+    """Captured values went through plain JSON, which writes dict keys as strings: closures over
+    ``{1: x}`` and ``{"1": x}`` shared an id (so did defaults)."""
+
+    def over(table):
+        def inner(x):
+            return {"x": table}
+
+        return inner
+
+    def with_default(table):
+        return lambda x, t=table: {"x": t}
+
+    assert unit_id(Unit("u", over({1: 2}), {"x": 1})) != unit_id(Unit("u", over({"1": 2}), {"x": 1}))
+    assert unit_id(Unit("u", with_default({1: 2}), {"x": 1})) != unit_id(Unit("u", with_default({"1": 2}), {"x": 1}))
+    assert unit_id(Unit("u", over({1: 2}), {"x": 1})) == unit_id(Unit("u", over({1: 2}), {"x": 1}))
+
+
+def test_a_module_run_as_main_keys_its_units_under_its_import_name(monkeypatch):
+    """``python -m centrality_vision.experiments.fig_5_5`` keyed its units under
+    ``__main__.seed_unit`` and ``reproduce fig-5.5`` under the module's name: neither resumed
+    the other's run."""
+    import types
+
+    def as_main(func):
+        copy = types.FunctionType(func.__code__, func.__globals__, func.__name__, func.__defaults__, func.__closure__)
+        copy.__qualname__, copy.__module__ = func.__qualname__, "__main__"
+        return copy
+
+    main = types.ModuleType("__main__")
+    main.__spec__ = types.SimpleNamespace(name=_double.__module__)
+    monkeypatch.setitem(sys.modules, "__main__", main)
+    assert unit_id(Unit("u", as_main(_double), {"x": 1})) == unit_id(Unit("u", _double, {"x": 1}))
+    main.__spec__ = None  # `python script.py`: no import name to go by
+    assert unit_id(Unit("u", as_main(_double), {"x": 1})) != unit_id(Unit("u", _double, {"x": 1}))
+
+
 def test_callable_objects_and_partials_are_keyed_by_their_state():
     # found by fuzz round 7: a transform (an object with __call__) was keyed by its repr, which
     # elides large arrays: two that differ in row 1000 of 2000 shared an id

@@ -132,9 +132,14 @@ def _string_keyed(value):
 
 
 def _function_name(func):
-    """A function's identity in a unit id: its qualified name; for a lambda or a closure (whose
-    name does not tell two apart) also a digest of its code, defaults and captured values."""
-    name = f"{getattr(func, '__module__', '?')}.{getattr(func, '__qualname__', repr(func))}"
+    """A function's identity in a unit id: its module's import name (also when the module runs
+    as ``python -m``) and qualified name; for a lambda or a closure (whose name does not tell two
+    apart) also a digest of its code, defaults and captured values."""
+    module = getattr(func, "__module__", None) or "?"
+    if module == "__main__":  # `python -m package.module`: the name the module has when imported
+        spec = getattr(sys.modules.get("__main__"), "__spec__", None)
+        module = getattr(spec, "name", None) or module
+    name = f"{module}.{getattr(func, '__qualname__', repr(func))}"
     if "<lambda>" not in name and "<locals>" not in name:
         return name
     code = getattr(func, "__code__", None)
@@ -145,8 +150,8 @@ def _function_name(func):
                 code.co_code.hex() if code is not None else None,
                 repr(code.co_consts) if code is not None else None,
                 list(code.co_names) if code is not None else None,
-                getattr(func, "__defaults__", None),
-                cells,
+                _string_keyed(getattr(func, "__defaults__", None)),
+                _string_keyed(cells),
             ],
             sort_keys=True,
             default=_canonical,
