@@ -30,6 +30,28 @@ def test_results_are_appended_and_reused(tmp_path):
     assert again == out and _calls(tmp_path) == 5  # nothing recomputed
 
 
+def _shaped(x):
+    return {"pair": (x, x + 1), "by_index": {0: x}}
+
+
+def _unstorable(x):
+    return {"values": __import__("numpy").arange(x)}
+
+
+def test_a_run_and_its_resumption_hand_out_the_same_values(tmp_path):
+    """The first run returned the unit's own objects (a tuple, int keys) and a resumed run the
+    JSON it read back (a list, str keys): the same experiment saw different types."""
+    units = [Unit(f"u{i}", _shaped, {"x": i}) for i in range(3)]
+    first = run_units(units, tmp_path / "r.jsonl", scheduler="serial", progress=False)
+    again = run_units(units, tmp_path / "r.jsonl", scheduler="serial", progress=False)
+    assert first == again == {f"u{i}": {"pair": [i, i + 1], "by_index": {"0": i}} for i in range(3)}
+
+
+def test_a_result_json_cannot_hold_is_named_with_its_unit(tmp_path):
+    with pytest.raises(TypeError, match=r"unit 'u3' returned a result that cannot be stored as JSON.*ndarray"):
+        run_units([Unit("u3", _unstorable, {"x": 3})], tmp_path / "r.jsonl", scheduler="serial", progress=False)
+
+
 def test_a_crash_keeps_what_finished_and_a_rerun_does_the_rest(tmp_path):
     units = [Unit(f"u{i}", _square, {"x": i if i != 3 else -1, "marker_dir": str(tmp_path)}) for i in range(5)]
     with pytest.raises(RuntimeError, match="boom"):

@@ -290,13 +290,21 @@ class _Appender:
                 os.replace(tmp, path)
         self.fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
 
-    def add(self, key: str, result) -> None:
-        # the checksum of the result as it will be read back (tuples become lists, int keys text)
-        stored = json.loads(json.dumps(result))
+    def add(self, key: str, result):
+        """Append ``result`` under ``key`` and return it as it will be read back (tuples become
+        lists, dict keys text), so that a run and its resumption hand out the same values."""
+        try:
+            stored = json.loads(json.dumps(result))
+        except (TypeError, ValueError) as error:
+            raise TypeError(
+                f"unit {key.partition('#')[0]!r} returned a result that cannot be stored as JSON "
+                f"({error}); return dicts, lists, str, int, float, bool or None."
+            ) from None
         record = {"key": key, "result": stored, "check": _checksum(key, stored)}
         data = (json.dumps(record, separators=(",", ":")) + "\n").encode()
         os.write(self.fd, data)
         os.fsync(self.fd)
+        return stored
 
     def close(self):
         os.close(self.fd)
@@ -323,6 +331,10 @@ def run_units(
     units, path, *, scheduler: str = "processes", workers: int | None = None, progress: bool = True, desc: str = ""
 ) -> dict:
     """Run the units missing from ``path`` and return ``{unit.key: result}`` for all of them.
+
+    Each result is returned as it is stored, in JSON's types (a tuple comes back as a list, a
+    dict's keys as strings), whether it was computed now or read from an earlier run; a unit
+    must return what JSON can hold.
 
     A stored result is used only for the unit with the same :func:`unit_id` (same label,
     function, keyword arguments, package version and code); results of other runs kept in the
@@ -383,8 +395,7 @@ def run_units(
     appender = _Appender(path)
 
     def finished(key, result):
-        done[key] = result
-        appender.add(ids[key], result)
+        done[key] = appender.add(ids[key], result)
         if bar is not None:
             bar.update(1)
 
