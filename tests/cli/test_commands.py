@@ -940,6 +940,8 @@ def test_an_interrupt_is_reported_as_one_even_from_inside_a_kernel(monkeypatch, 
             "--mwme-solver is an option of --method mwme; got --method robust",
         ),
         (["reproduce", "table-2.1", "--workers", "3"], "--workers applies to"),
+        (["register", "m.txt", "f.txt", "--seed", "3"], "--seed is an option of --init global; got --init none"),
+        (["classify", "shapes", "--trees", "50"], "--trees is an option of --classifier forest; got --classifier nb"),
     ],
 )
 def test_an_option_the_run_would_ignore_is_refused(tmp_path, capsys, argv, message):

@@ -195,12 +195,12 @@ def test_classify_classifiers_and_the_confusion_matrix_figure(tmp_path, shapes_f
             classifier,
             "--out",
             str(out),
-        ] + (["--plot", str(tmp_path / "nb.png")] if classifier == "nb" else ["--trees", "25"])
+        ] + {"nb": ["--plot", str(tmp_path / "nb.png")], "svm": [], "forest": ["--trees", "25"]}[classifier]
         assert main(argv) == 0
         record = json.loads(out.read_text())
         assert record["classes"] == ["bar", "disk"] and np.sum(record["confusion"]) == 8
         assert record["parameters"]["classifier"] == classifier
-        assert record["parameters"]["trees"] == (300 if classifier == "nb" else 25)
+        assert record["parameters"]["trees"] == (25 if classifier == "forest" else 300)
         assert record["accuracy"] == pytest.approx(np.mean(record["fold_accuracy"]))
     assert (tmp_path / "nb.png").stat().st_size > 0
 

@@ -19,6 +19,7 @@ from ._common import (
     options,
     progress_on,
     pyplot,
+    refuse_unused,
     say,
     subparser,
 )
@@ -145,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
     from ..exceptions import InputError
     from ..io import IMAGE_SUFFIXES, read_shape
 
+    refuse_unused(args, {"trees": ("classifier", ("forest",))}, {"classifier": args.classifier})
     started = time.perf_counter()
     folder = Path(args.images_dir)
     if not folder.is_dir():

@@ -199,6 +199,7 @@ _APPLIES = {
     **dict.fromkeys(("centrality", "graph", "k", "kappa"), ("method", ("gpd",))),
     **dict.fromkeys(("max_distance", "trim", "metric"), ("method", ("icp",))),
     **dict.fromkeys(("beta", "lam"), ("transform", ("nonrigid",))),
+    "seed": ("init", ("global",)),  # the only random choice of a registration
 }
 
 
@@ -219,7 +220,7 @@ def _estimator(args: argparse.Namespace, callback):
     from ..exceptions import InputError
     from ..registration import GPD, ICP, AffineCPD, NonRigidCPD, RigidCPD
 
-    refuse_unused(args, _APPLIES, {"method": args.method, "transform": args.transform})
+    refuse_unused(args, _APPLIES, {"method": args.method, "transform": args.transform, "init": args.init})
     if given(args, "k") and args.graph != "knn":
         raise InputError(f"--k is an option of --graph knn; got --graph {args.graph}.")
     if args.method == "icp":
