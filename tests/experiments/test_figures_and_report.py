@@ -180,3 +180,34 @@ def test_fig_5_1_a_partner_tied_with_others_is_ranked_after_them():
     assert partner_ranks(prior) == [12, 2]
     prior[0, 0] = 0.06
     assert partner_ranks(prior)[0] == 1
+
+
+def test_a_report_place_that_cannot_be_written_is_refused_before_any_experiment_runs(tmp_path, monkeypatch):
+    """A folder named report.md was found only after every experiment had run (78 s quick,
+    about 80 min full), as a bare ``[Errno 21] Is a directory``."""
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.experiments import table_2_1
+    from centrality_vision.experiments.report import run_all
+
+    (tmp_path / "report.md").mkdir()
+    ran = []
+    monkeypatch.setattr(table_2_1, "main", lambda argv: ran.append(argv) or 0)
+    with pytest.raises(InputError, match=r"`out`: .*report.md is a folder, not a file"):
+        run_all(tmp_path, quick=True, only=["table-2.1"])
+    assert not ran
+
+
+def test_a_file_in_the_staging_folder_s_place_or_a_folder_in_the_results_file_s_is_handled(tmp_path):
+    """A file where a run stages its outputs gave ``[Errno 20] Not a directory``; a folder
+    where the results file goes gave ``[Errno 21] Is a directory``."""
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.experiments._common import outputs_of, run_outputs
+    from centrality_vision.experiments._runner import Unit, run_units
+
+    (tmp_path / ".writing-fig-0").write_text("debris")
+    with run_outputs(tmp_path, "fig-0", quick=False) as stage:
+        (stage / "fig-0.txt").write_text("table")
+    assert [path.name for path in outputs_of(tmp_path, "fig-0", quick=False)] == ["fig-0.txt"]
+    (tmp_path / "fig-0.jsonl").mkdir()
+    with pytest.raises(InputError, match=r"`path` must be a results file .*fig-0.jsonl.*which is a folder"):
+        run_units([Unit("u", abs, {"x": 1})], tmp_path / "fig-0.jsonl", scheduler="serial", progress=False)

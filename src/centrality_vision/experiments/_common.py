@@ -221,8 +221,10 @@ def run_outputs(out: Path, name: str, *, quick: bool):
     True
     """
     stage = out / f".writing-{run_stem(name, quick)}"
-    if stage.exists():  # left by a run that was killed
+    if stage.is_dir() and not stage.is_symlink():  # left by a run that was killed
         shutil.rmtree(stage)
+    elif stage.exists() or stage.is_symlink():  # a file (or a link) where the staging folder goes
+        stage.unlink()
     stage.mkdir()
     try:
         yield stage

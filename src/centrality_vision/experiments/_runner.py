@@ -364,6 +364,8 @@ def run_units(
             f"`units` must have unique keys; got duplicates, e.g. {next(k for k in keys if keys.count(k) > 1)!r}."
         )
     path = Path(path)
+    if path.exists() and not path.is_file():
+        raise InputError(f"`path` must be a results file (JSON lines); got {str(path)!r}, which is a folder.")
     ids = {u.key: unit_id(u) for u in units}
     stored = load_results(path)
     done = {key: stored[i] for key, i in ids.items() if i in stored}

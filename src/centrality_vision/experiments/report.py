@@ -161,6 +161,7 @@ def run_all(
         for name in names
     }
     out = make_out_folder(out)
+    _check_report_place(out / "report.md")
     timings, skipped = {}, {}
     for name in names:
         module = import_module(f"{__package__}.{REGISTRY[name].module}")
@@ -181,6 +182,25 @@ def run_all(
             raise RuntimeError(f"experiment {name} failed with exit code {code}")
         timings[name] = time.perf_counter() - started
     return write_report(out, names, quick=quick, seed=seed, seeds=seeds, timings=timings, skipped=skipped)
+
+
+def _check_report_place(report: Path) -> None:
+    """Before any experiment runs: ``report`` can be written (it was found out only after every
+    experiment had run, as a bare OS error)."""
+    import os
+    import tempfile
+
+    from ..exceptions import InputError
+
+    if report.is_dir() or (report.exists() and not report.is_file()):
+        raise InputError(f"`out`: {report} is a folder, not a file; the report is written there.")
+    try:
+        with tempfile.TemporaryFile(dir=report.parent):
+            pass
+    except OSError as exc:
+        raise InputError(f"`out`: cannot write {report}: {report.parent} refuses new files ({exc.strerror}).") from None
+    if report.exists() and not os.access(report, os.W_OK):
+        raise InputError(f"`out`: cannot write {report}: the file is read-only.")
 
 
 def _check_only(only) -> list[str]:
