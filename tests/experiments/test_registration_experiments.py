@@ -61,6 +61,12 @@ def test_median_iterations_count_a_seed_that_never_reached_1_percent_as_beyond_t
     text = fig_5_3.explain(result)
     assert "CPD more than 40 (not reached" in text and "CPD needs more than 10.00x, more than 6.67x" in text
     assert "closeness more than 40" in fig_5_5.explain(result) and "nan" not in fig_5_5.explain(result)
+    # exactly half the seeds beyond the cap: closeness's median is (3 + x) / 2 and CPD's
+    # (12 + x) / 2 with x > 40, so more than 21.5 and 26, not more than 40 (printed before)
+    per_seed.append({"below": {m: {"0.01": k} for m, k in zip(fig_5_3.METHODS, [4, 3, 6, 5, 12])}})
+    text = fig_5_3.explain(result)
+    assert "betweenness 4, closeness more than 21.5, degree 6, eigenvector 5, CPD more than 26 (" in text
+    assert "CPD needs more than 6.50x, more than 4.33x, more than 5.20x the iterations" in text
 
 
 def test_fig_5_3_transform_is_a_seeded_similarity():

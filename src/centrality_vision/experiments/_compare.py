@@ -105,26 +105,40 @@ def unreached(per_seed: list, level: str = "0.01") -> str:
     )
 
 
-def median_iterations(per_seed: list, level: str = "0.01") -> dict:
-    """Each method's median number of iterations to reach ``level`` of the initial error.
+def median_iterations(per_seed: list, cap: int, level: str = "0.01") -> dict:
+    """Each method's median number of iterations to reach ``level`` of the initial error, as
+    ``(value, exact)``: ``exact`` is False when the median is censored and ``value`` is then a
+    lower bound (the median is more than ``value``).
 
-    A seed that never reached it within the iteration cap counts as beyond the cap
-    (``inf``), so the median is censored, not taken over the seeds that did reach it
-    (which would make a method that often fails look fast).
+    A seed that never reached the level within the iteration ``cap`` counts as beyond the cap,
+    so the median is censored, not taken over the seeds that did reach it (which would make a
+    method that often fails look fast). With more than half the seeds beyond the cap the median
+    is more than ``cap``; with exactly half (an even count), it is the mean of the largest
+    iteration count reached and a count beyond the cap, so more than their mean with ``cap``.
 
-    >>> per_seed = [{"below": {m: {"0.01": k} for m in METHODS}} for k in (4, None, 6)]
-    >>> median_iterations(per_seed)["CPD"], median_iterations(per_seed[1:])["CPD"]
-    (6.0, inf)
+    >>> per_seed = [{"below": {m: {"0.01": k} for m in METHODS}} for k in (4, None, 6, None)]
+    >>> median_iterations(per_seed[:3], 150)["CPD"], median_iterations(per_seed[1:], 150)["CPD"]
+    ((6.0, True), (150.0, False))
+    >>> median_iterations(per_seed, 150)["CPD"]  # exactly half beyond the cap: more than (6 + 150) / 2
+    (78.0, False)
     """
-    return {
-        m: float(np.median([np.inf if r["below"][m][level] is None else r["below"][m][level] for r in per_seed]))
-        for m in METHODS
-    }
+    out = {}
+    for m in METHODS:
+        reached = sorted(float(r["below"][m][level]) for r in per_seed if r["below"][m][level] is not None)
+        n, beyond = len(per_seed), len(per_seed) - len(reached)
+        if 2 * beyond < n:
+            out[m] = (float(np.median(reached + [np.inf] * beyond)), True)
+        elif 2 * beyond == n:
+            out[m] = ((reached[-1] + cap) / 2, False)
+        else:
+            out[m] = (float(cap), False)
+    return out
 
 
-def iterations_text(value: float, cap: int) -> str:
-    """``'12'``, or ``'more than 150'`` for a median beyond the iteration cap."""
-    return f"{value:.0f}" if np.isfinite(value) else f"more than {cap}"
+def iterations_text(median: tuple) -> str:
+    """``'12'``, or ``'more than 78'`` for a censored median (see :func:`median_iterations`)."""
+    value, exact = median
+    return f"{value:.0f}" if exact else f"more than {value:g}"
 
 
 def odds_sentences(odds: dict, n_label: str = "seeds") -> list[str]:

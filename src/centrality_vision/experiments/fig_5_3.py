@@ -127,18 +127,19 @@ def explain(result: dict) -> str:
     per_seed = result.get("per_seed") or [seed_summary(result)]
     n = len(per_seed)
     cap = result["max_iter"]
-    med = median_iterations(per_seed)
-    # CPD's iterations over each GPD variant's; a median beyond the cap gives a bound
+    med = median_iterations(per_seed, cap)
+    # CPD's iterations over each GPD variant's; a censored CPD median gives a bound
+    cpd, cpd_exact = med["CPD"]
     ratio = {
-        m: (f"{med['CPD'] / med[m]:.2f}x" if np.isfinite(med["CPD"]) else f"more than {cap / med[m]:.2f}x")
+        m: f"{cpd / med[m][0]:.2f}x" if cpd_exact else f"more than {cpd / med[m][0]:.2f}x"
         for m in METHODS[:-1]
-        if 0 < med[m] < np.inf
+        if med[m][1] and med[m][0] > 0
     }
     parts = [
         f"Over {n} seeds, each a new similarity transform (the thesis does not state its own), the median number of "
         "iterations to bring the alignment error to 1% of its initial value (a seed that never gets there counts as "
         f"beyond the cap of {cap}) is "
-        + ", ".join(f"{m} {iterations_text(med[m], cap)}" for m in METHODS)
+        + ", ".join(f"{m} {iterations_text(med[m])}" for m in METHODS)
         + unreached(per_seed)
         + (
             "; CPD needs " + ", ".join(ratio.values()) + " the iterations of GPD with " + ", ".join(ratio)
