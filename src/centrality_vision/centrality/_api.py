@@ -351,15 +351,19 @@ def betweenness(
     reach each other contribute nothing.
 
     Exact where other libraries are not: path counts that overflow float64 (long thin
-    shapes) are recomputed in log space for that source, and with ``weights=True``
-    path lengths that are equal tie: on graphs with few distinct edge lengths (pixel
-    graphs: 1 and sqrt 2) distances are kept as integer counts of each length, so
-    ``1 + sqrt 2`` and ``sqrt 2 + 1`` are the same number; on other graphs two lengths
-    tie within a relative ``1e-10``. A zero-length edge counts as infinitesimally long:
-    among paths of tied length, only those with the fewest zero-length edges are
-    shortest. (Counting every tied path is ill-defined here, since a cycle of zero-length
-    edges gives infinitely many; networkx's result then depends on the order its search
-    settles nodes at equal distance, and nodes that are interchangeable can differ.)
+    shapes) are recomputed in log space for that source, and with ``weights=True`` path
+    lengths that are equal tie: on graphs with few distinct edge lengths (pixel graphs: 1
+    and sqrt 2) distances are kept as integer counts of each length, so ``1 + sqrt 2`` and
+    ``sqrt 2 + 1`` are the same number, and lengths computed from two different counts tie
+    within a relative ``1e-10``, as two lengths do on other graphs. That is exact on pixel
+    graphs with equal spacing (distinct lengths of images up to a million pixels differ by
+    about 1e-7 relative) and with spacing ratios up to about 1e4; beyond, distinct lengths
+    can differ by less than ``1e-10`` relative and tie (a diagonal step and a step along the
+    farther-spaced axis differ by ``1 / (2 ratio^2)``). A zero-length edge counts as
+    infinitesimally long: among paths of tied length, only those with the fewest zero-length
+    edges are shortest. (Counting every tied path is ill-defined here, since a cycle of
+    zero-length edges gives infinitely many; networkx's result then depends on the order its
+    search settles nodes at equal distance, and nodes that are interchangeable can differ.)
 
     On the graph :func:`~centrality_vision.graphs.pixel_graph` returns (hop counts, exact
     values) the searches walk the pixel grid itself, about twice as fast, and a mask that

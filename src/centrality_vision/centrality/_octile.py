@@ -563,6 +563,11 @@ def takes(n_dims: int, n_neighbours: int, n_pixels: int) -> bool:
     return n_dims == 2 and n_neighbours == 8 and n_pixels < 1 << 21
 
 
+#: The largest relative rounding error the inverse-distance prefix tables may bring (see
+#: :meth:`OctileGrid.inverse_tables`); beyond it inverse distances are divided pixel by pixel.
+_TABLE_LOSS = 1e-12
+
+
 class OctileGrid:
     """The bit masks and components :func:`octile_stats` takes, from a grid whose steps
     are the 8 neighbours of a 2D mask (see :meth:`of`)."""
@@ -624,10 +629,16 @@ class OctileGrid:
         difference instead of a division per pixel. Empty when they would be too large."""
         width, n_words = self.north.shape
         rows = 64 * n_words
-        if (width + 1) * (max(width, rows) + 1) > self._MAX_TABLE:
+        len_x, len_y, len_d = self.lengths
+        # the tables hold float64 prefix sums (of about log(terms) / smallest length), and a
+        # difference of two loses about eps * (largest / smallest length) * log2(terms) of
+        # a term: with very unequal spacings (rows 1e6 times farther apart than columns) the
+        # small terms cancel away, so each pixel is divided instead
+        ratio = max(self.lengths) / min(self.lengths)
+        lost = np.finfo(np.float64).eps * ratio * np.log2(max(width, rows) + 2)
+        if (width + 1) * (max(width, rows) + 1) > self._MAX_TABLE or lost > _TABLE_LOSS:
             empty = np.empty((0, 0))
             return empty, empty
-        len_x, len_y, len_d = self.lengths
         k = np.arange(width + 1)[:, None]
         d = np.arange(min(width, rows) + 1)[None, :]
         with np.errstate(divide="ignore"):
