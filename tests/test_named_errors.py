@@ -119,3 +119,67 @@ def test_an_unbounded_side_reads_open(value):
         SimilarityTransform(np.eye(2), [0.0, 0.0], scale=value)
     with pytest.raises(InputError, match=r"`x` must be a finite number in \(-inf, 1\]; got"):
         check_float(math.inf if value != 0 else 2.0, name="x", high=1.0)
+
+
+def _masked(values, where):
+    array = np.ma.masked_array(np.array(values, dtype=float))
+    array[where] = np.ma.masked
+    return array
+
+
+_PICTURE = np.zeros((5, 6))
+_PICTURE[1:4, 1:4] = 255.0
+_DISTANCES = np.abs(np.subtract.outer(np.arange(4.0), np.arange(4.0))) + ~np.eye(4, dtype=bool)
+
+# fuzz round 10: each was accepted with its mask ignored, or raised numpy's own error, or
+# described a reshaped array instead of the argument given
+ROUND_10 = [
+    (lambda: pixel_graph(_masked(_PICTURE, (0, 0))), TypeError, "`image` must be a plain array; got a masked array"),
+    (
+        lambda: pixel_graph(_masked(np.ones((2, 3, 3)), (0, 0, 0))),
+        TypeError,
+        "`image` must be a plain array; got a masked array",
+    ),
+    (lambda: pixel_graph([[0, 1], [1]]), InputError, "`image` must be a 2D or 3D array; got [[0, 1], [1]]"),
+    (
+        lambda: pixel_graph(np.stack([_PICTURE] * 3, axis=-1)),
+        InputError,
+        "(an image of 3 colour channels? average them, image.mean(axis=-1)",
+    ),
+    (lambda: pixel_graph(np.ones((3, 3, 2)), threshold=True), TypeError, "`threshold` must be a finite real number"),
+    (lambda: pixel_graph(SQUARE, spacing=(True, True)), TypeError, "`spacing` must be 2 positive finite numbers; got"),
+    (lambda: pixel_graph(SQUARE, spacing=[[1, 2]]), InputError, "`spacing` must be 2 positive finite numbers"),
+    (
+        lambda: mwme_graph(_masked(_DISTANCES, (0, 3)), metric="precomputed"),
+        TypeError,
+        "(metric='precomputed') must be a plain array",
+    ),
+    (lambda: mwme_graph(_DISTANCES > 0, metric="precomputed"), TypeError, "must hold real numbers (not booleans)"),
+    (lambda: mwme_degrees(np.zeros((0, 5, 2))), InputError, "with n_sets >= 1, 3 <= n_points <= 20"),
+    (lambda: mwme_degrees(np.zeros((1, 4, 65))), InputError, "1 <= n_dims <= 64; got shape (1, 4, 65)"),
+    (
+        lambda: mwme_degrees(
+            np.where(np.arange(3)[:, None, None] == 2, np.nan, np.random.default_rng(0).random((3, 5, 2)))
+        ),
+        InputError,
+        "`point_sets[2]` must be finite",
+    ),
+    (lambda: mwme_degrees(None), TypeError, "`point_sets` must hold real numbers; got None"),
+    (lambda: to_networkx(None), TypeError, "`graph` must be a scipy.sparse matrix, a square array"),
+    (lambda: to_networkx(-_DISTANCES), InputError, "non-negative edge lengths; got min -4."),
+]
+
+
+@pytest.mark.parametrize(("call", "kind", "message"), ROUND_10, ids=[message for _, _, message in ROUND_10])
+def test_masked_ragged_and_reshaped_inputs_are_named(call, kind, message):
+    with pytest.raises(kind) as info:
+        call()
+    assert message in str(info.value)
+
+
+def test_a_boolean_3d_image_is_a_mask_whatever_the_threshold_as_in_2d():
+    """A 2D mask ignored ``threshold`` and a 3D mask applied it (and failed: no foreground)."""
+    volume = np.zeros((2, 3, 3), dtype=bool)
+    volume[0] = True
+    assert pixel_graph(volume, threshold=5)[0].shape == pixel_graph(volume)[0].shape == (9, 9)
+    assert pixel_graph(SQUARE, threshold=5)[0].shape == (9, 9)

@@ -69,7 +69,7 @@ def as_real_array(value, *, name: str, shape: str = "an array") -> np.ndarray:
     if np.iscomplexobj(arr):
         raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
     if not is_real_dtype(arr.dtype):
-        raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
+        raise TypeError(f"`{name}` must hold real numbers; got {_describe(value if arr.dtype == object else arr)}.")
     return arr
 
 
@@ -207,6 +207,12 @@ def as_any_graph(graph, *, name: str = "graph", allow_directed: bool = False) ->
         except (TypeError, ValueError):
             raise TypeError(f"`{name}` must hold real edge lengths; got {_describe(graph)}.") from None
     else:
+        if graph is None or np.ma.is_masked(graph):
+            raise TypeError(
+                f"`{name}` must be a scipy.sparse matrix, a square array of edge lengths, or a networkx "
+                f"or igraph graph; got "
+                + ("None." if graph is None else "a masked array with masked entries (the mask would be ignored).")
+            )
         try:
             dense = np.asarray(graph)
             if np.iscomplexobj(dense):
@@ -229,7 +235,7 @@ def as_any_graph(graph, *, name: str = "graph", allow_directed: bool = False) ->
     if not np.all(np.isfinite(mat.data)):
         raise InputError(f"`{name}` must have finite edge lengths; got NaN or inf entries.")
     if np.any(mat.data < 0):
-        raise InputError(f"`{name}` must have non-negative edge lengths; got min {mat.data.min()!r}.")
+        raise InputError(f"`{name}` must have non-negative edge lengths; got min {float(mat.data.min()):g}.")
     # Drop the diagonal but keep explicitly stored zeros: they are edges of length 0.
     mat.sum_duplicates()
     coo = mat.tocoo()
@@ -279,6 +285,15 @@ def _border(mask: np.ndarray) -> np.ndarray:
     if mask.shape[0] <= 2 or mask.shape[1] <= 2:
         return mask.ravel()
     return np.concatenate([mask[0], mask[-1], mask[1:-1, 0], mask[1:-1, -1]])
+
+
+def check_threshold(threshold):
+    """``threshold`` checked: None, or a finite real number (not a bool)."""
+    if threshold is not None and (isinstance(threshold, bool) or not isinstance(threshold, numbers.Real)):
+        raise TypeError(f"`threshold` must be a finite real number or None; got {threshold!r}.")
+    if threshold is not None and not _finite_real(threshold):
+        raise InputError(f"`threshold` must be a finite real number or None; got {threshold!r}.")
+    return threshold
 
 
 def as_binary_image(
@@ -331,21 +346,14 @@ def as_binary_image(
         raise TypeError(f"`{name}` must be a dense 2D array; got {_describe(image)}.")
     if not isinstance(foreground, str) or foreground not in FOREGROUNDS:
         raise InputError(f"`foreground` must be one of {', '.join(map(repr, FOREGROUNDS))}; got {foreground!r}.")
-    arr = np.asarray(image)
-    if np.iscomplexobj(arr):
-        raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
-    if not is_real_dtype(arr.dtype):
-        raise TypeError(f"`{name}` must be a numeric or boolean 2D array; got {_describe(arr)}.")
+    arr = as_real_array(image, name=name, shape="a 2D array")  # masked entries, ragged lists: named errors
     if arr.ndim != 2:
         raise InputError(f"`{name}` must be a 2D array; got shape {arr.shape}.")
     if arr.size == 0:
         raise InputError(f"`{name}` must not be empty; got shape {arr.shape}.")
     if arr.dtype != bool and not np.all(np.isfinite(arr)):
         raise InputError(f"`{name}` must be finite; got NaN or inf values.")
-    if threshold is not None and (isinstance(threshold, bool) or not isinstance(threshold, numbers.Real)):
-        raise TypeError(f"`threshold` must be a finite real number or None; got {threshold!r}.")
-    if threshold is not None and not _finite_real(threshold):
-        raise InputError(f"`threshold` must be a finite real number or None; got {threshold!r}.")
+    check_threshold(threshold)
     is_mask = arr.dtype == bool or (threshold is None and bool(np.all((arr == 0) | (arr == 1))))
     if is_mask:
         light = arr.astype(bool)  # a new array: the input is never returned

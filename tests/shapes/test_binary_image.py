@@ -85,7 +85,7 @@ def test_input_not_modified_and_not_returned():
         (np.ones((4, 4)), {"threshold": np.nan}, ValueError, "`threshold` must be a finite real"),
         (np.ones((2, 2, 3)), {}, ValueError, "2D array"),
         (np.array([[1 + 1j, 0]]), {}, TypeError, "real numbers"),
-        (np.array([["a"]]), {}, TypeError, "numeric or boolean"),
+        (np.array([["a"]]), {}, TypeError, "`image` must hold real numbers"),
     ],
 )
 def test_bad_inputs_name_the_parameter(image, kwargs, error, match):

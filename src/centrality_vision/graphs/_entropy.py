@@ -24,7 +24,16 @@ from scipy.spatial.distance import pdist, squareform
 
 from .._deprecation import renamed_parameters
 from .._parallel import run_chunks
-from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int, is_real_dtype
+from .._validation import (
+    ANY_DIMS,
+    as_points,
+    as_real_array,
+    check_bool,
+    check_choice,
+    check_float,
+    check_int,
+    is_real_dtype,
+)
 from .._warnings import warn
 from ..exceptions import InputError
 from . import _entropy_kernels as _k
@@ -215,12 +224,19 @@ def _precomputed(distances) -> _Distances:
     """A user's distance matrix, checked like points are, rescaled by a power of two."""
     if sparse.issparse(distances):
         distances = distances.toarray()
+    if np.ma.is_masked(distances):
+        raise TypeError(
+            "`points` (metric='precomputed') must be a plain array; got a masked array with masked entries "
+            "(the mask would be ignored)."
+        )
     try:
         arr = np.asarray(distances)
     except (TypeError, ValueError) as exc:
         raise InputError(f"`points` (metric='precomputed') must be a square distance matrix; got {exc}.") from None
-    if not is_real_dtype(arr.dtype):
-        raise TypeError(f"`points` (metric='precomputed') must hold real numbers; got dtype {arr.dtype}.")
+    if not is_real_dtype(arr.dtype, bool_ok=False):
+        raise TypeError(
+            f"`points` (metric='precomputed') must hold real numbers (not booleans); got dtype {arr.dtype}."
+        )
     arr = np.array(arr, dtype=np.float64)
     if arr.ndim != 2 or arr.shape[0] != arr.shape[1] or arr.shape[0] < 3:
         raise InputError(
@@ -375,19 +391,18 @@ def mwme_degrees(point_sets, /) -> np.ndarray:
     >>> bool(np.all(degrees[1] == mwme_graph(sets[1], solver="exact").degrees))
     True
     """
-    try:
-        arr = np.asarray(point_sets)
-    except ValueError:  # ragged: sets of different sizes
+    # None, text, masked entries: TypeError; sets of different sizes: a named InputError
+    arr = as_real_array(point_sets, name="point_sets", shape="one array of shape (n_sets, n_points, n_dims)")
+    if arr.ndim != 3 or arr.shape[0] < 1 or not 3 <= arr.shape[1] <= MAX_EXACT or arr.shape[2] not in ANY_DIMS:
         raise InputError(
-            "`point_sets` must be one array of shape (n_sets, n_points, n_dims): sets of one size; "
-            "got sets of different sizes."
-        ) from None
-    if arr.ndim != 3 or not 3 <= arr.shape[1] <= MAX_EXACT or arr.shape[2] < 1:
-        raise InputError(
-            f"`point_sets` must have shape (n_sets, n_points, n_dims) with 3 <= n_points <= {MAX_EXACT}; "
-            f"got shape {arr.shape}."
+            f"`point_sets` must have shape (n_sets, n_points, n_dims) with n_sets >= 1, "
+            f"3 <= n_points <= {MAX_EXACT} and {ANY_DIMS[0]} <= n_dims <= {ANY_DIMS[-1]}; got shape {arr.shape}."
         )
     n_sets, n, dims = arr.shape
+    if arr.dtype != bool:
+        finite = np.isfinite(arr).all(axis=(1, 2))
+        if not finite.all():
+            raise InputError(f"`point_sets[{int(np.argmin(finite))}]` must be finite; got NaN or inf.")
     flat = as_points(arr.reshape(-1, dims), name="point_sets", n_dims=ANY_DIMS).reshape(arr.shape)
     joining = nhdd_joining(n)
     # degree of position k: the joining positions after it, plus all earlier ones if it joins

@@ -9,7 +9,14 @@ from numba import njit
 from scipy import sparse
 
 from .._seeding import as_generator
-from .._validation import FOREGROUNDS, as_binary_image, check_choice, check_float, is_real_dtype
+from .._validation import (
+    FOREGROUNDS,
+    as_binary_image,
+    as_real_array,
+    check_choice,
+    check_float,
+    check_threshold,
+)
 from ..exceptions import InputError
 from ._pointsets import _robust_norms
 
@@ -129,21 +136,28 @@ def _csr_is_grid(indptr, indices, data, raster, node_of, offs, lengths):
 def _volume_mask(image, threshold, foreground: str = "auto") -> np.ndarray:
     """Boolean mask of a 3D image: a boolean or 0/1 array, or ``image > threshold``; the
     other side with ``foreground="dark"``."""
-    arr = np.asarray(image)
-    if not is_real_dtype(arr.dtype):
-        raise TypeError(f"`image` must be a real numeric or boolean array; got dtype {arr.dtype}.")
+    arr = as_real_array(image, name="image", shape="a 3D array")  # masked entries: a named error
     if arr.size == 0:
         raise InputError(f"`image` must not be empty; got shape {arr.shape}.")
     if arr.dtype != bool and not np.all(np.isfinite(arr)):
         raise InputError("`image` must be finite; got NaN or inf values.")
-    if threshold is not None:
-        mask = arr > check_float(threshold, name="threshold")
-    elif arr.dtype == bool:
+    check_threshold(threshold)
+    if arr.dtype == bool:  # a mask, as in 2D
         mask = arr.copy()
+    elif threshold is not None:
+        mask = arr > threshold
     elif np.all((arr == 0) | (arr == 1)):
         mask = arr == 1
     else:
-        raise InputError("`image` must be binary (bool or 0/1) in 3D, or come with `threshold`; got other values.")
+        colour = (
+            f" (an image of {arr.shape[2]} colour channels? average them, image.mean(axis=-1), or read it with "
+            "centrality_vision.io.read_shape)"
+            if arr.shape[2] in (3, 4)
+            else ""
+        )
+        raise InputError(
+            "`image` must be binary (bool or 0/1) in 3D, or come with `threshold`; got other values" + colour + "."
+        )
     if foreground == "dark":
         mask = ~mask
     if not mask.any():
@@ -187,8 +201,11 @@ def pixel_graph(
         :func:`centrality_vision.io.read_shape` with ``foreground="auto"`` splits it (default
         half the image's range; the shape is the side that touches fewer border pixels, so
         dark shapes on white and white shapes on black both come out as the shape). 3D: the
-        foreground is ``image > threshold``. (:func:`centrality_vision.datasets.load_kimia99`
-        already returns masks.)
+        foreground is ``image > threshold``. A boolean image is a mask in 2D and 3D, and
+        ``threshold`` does not apply to it. (:func:`centrality_vision.datasets.load_kimia99`
+        already returns masks.) A colour picture is not an image here (in 3D it would be
+        read as planes): average its channels, or read it with
+        :func:`centrality_vision.io.read_shape`.
     foreground : {"auto", "dark", "light"}, default="auto"
         Which side is the shape: ``"light"`` the pixels above ``threshold`` (of a mask, the
         True or 1 pixels), ``"dark"`` the others. ``"auto"``: in 2D, the side that touches
@@ -227,7 +244,8 @@ def pixel_graph(
 
     if sparse.issparse(image):
         raise TypeError("`image` must be a dense 2D or 3D array; got a sparse matrix.")
-    ndim = np.ndim(image)
+    image = as_real_array(image, name="image", shape="a 2D or 3D array")  # not copied
+    ndim = image.ndim
     foreground = check_choice(foreground, FOREGROUNDS, name="foreground")
     if ndim == 3:
         mask = _volume_mask(image, threshold, foreground)
@@ -240,10 +258,14 @@ def pixel_graph(
         choices = " or ".join(str(c) for c in sorted(allowed, reverse=True))
         raise InputError(f"`connectivity` must be {choices} for a {mask.ndim}D image; got {connectivity!r}.")
     if spacing is not None:
+        given = spacing
         try:
-            spacing = np.asarray(spacing, dtype=np.float64).reshape(-1)
+            raw = np.asarray(spacing)
+            spacing = raw.astype(np.float64)
         except (TypeError, ValueError):
-            raise TypeError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing!r}.") from None
+            raise TypeError(f"`spacing` must be {mask.ndim} positive finite numbers; got {given!r}.") from None
+        if raw.dtype == bool:
+            raise TypeError(f"`spacing` must be {mask.ndim} positive finite numbers; got booleans {given!r}.")
         if spacing.shape != (mask.ndim,) or not np.all(np.isfinite(spacing)) or np.any(spacing <= 0):
             raise InputError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing.tolist()!r}.")
         # every path length (at most n steps) and closeness' sum of n of them, and harmonic's
