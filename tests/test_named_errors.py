@@ -183,3 +183,44 @@ def test_a_boolean_3d_image_is_a_mask_whatever_the_threshold_as_in_2d():
     volume[0] = True
     assert pixel_graph(volume, threshold=5)[0].shape == pixel_graph(volume)[0].shape == (9, 9)
     assert pixel_graph(SQUARE, threshold=5)[0].shape == (9, 9)
+
+
+def _weightless_edge(kind):
+    if kind == "networkx":
+        import networkx as nx
+
+        graph = nx.Graph()
+        graph.add_edge(0, 1, weight=2.0)
+        graph.add_edge(1, 2, weight=None)
+        return graph
+    igraph = pytest.importorskip("igraph")
+    graph = igraph.Graph([(0, 1), (1, 2)])
+    graph.es[0]["weight"] = 2.0  # the other edge gets None
+    return graph
+
+
+@pytest.mark.parametrize("kind", ["networkx", "igraph"])
+def test_an_edge_with_weight_none_is_named_not_called_nan(kind):
+    from centrality_vision import centrality
+
+    with pytest.raises(TypeError, match=r"edge \(1, 2\) has weight None"):
+        centrality.closeness(_weightless_edge(kind), weights=True)
+
+
+def test_pixel_coordinates_of_no_nodes_and_of_shapes_past_int64():
+    """An empty list (float64 to numpy) was refused; a shape of 2^80 pixels wrapped around in
+    np.prod and the message blamed node 1."""
+    assert pixel_coordinates([], (5, 6)).shape == (0, 2)
+    with pytest.raises(InputError, match=r"`shape` must have fewer than 2\^63 pixels"):
+        pixel_coordinates([1], (2**40, 2**40))
+
+
+def test_read_shape_of_extreme_grey_values_warns_nothing(tmp_path):
+    """np.ptp overflowed on values of +-1e308 (a RuntimeWarning, an error under -W error)."""
+    tifffile = pytest.importorskip("tifffile")
+    from centrality_vision.io import read_shape
+
+    picture = np.full((6, 6), -1e308)
+    picture[2:4, 2:4] = 1e308
+    tifffile.imwrite(tmp_path / "extreme.tif", picture)
+    assert read_shape(tmp_path / "extreme.tif").sum() == 4

@@ -138,6 +138,8 @@ def _from_networkx(graph, name: str):
     index = {node: i for i, node in enumerate(labels)}
     rows, cols, lengths = [], [], []
     for u, v, w in graph.edges(data="weight", default=1.0):
+        if w is None:  # (numpy reads None as NaN, and the error then spoke of NaN or inf)
+            raise TypeError(f"`{name}` must have numeric edge attribute 'weight'; edge ({u!r}, {v!r}) has weight None.")
         rows.append(index[u])
         cols.append(index[v])
         lengths.append(w)
@@ -150,6 +152,9 @@ def _from_igraph(graph, name: str):
     rows = [e[0] for e in edges]
     cols = [e[1] for e in edges]
     lengths = graph.es["weight"] if "weight" in graph.es.attributes() else [1.0] * len(edges)
+    if any(w is None for w in lengths):  # an edge added without the attribute others have
+        u, v = edges[next(i for i, w in enumerate(lengths) if w is None)]
+        raise TypeError(f"`{name}` must have numeric edge attribute 'weight'; edge ({u}, {v}) has weight None.")
     labels = list(graph.vs["name"]) if "name" in graph.vs.attributes() else list(range(graph.vcount()))
     return labels, rows, cols, lengths, bool(graph.is_directed())
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 from numba import njit
@@ -353,6 +354,8 @@ def pixel_coordinates(nodes, shape) -> np.ndarray:
            [1, 1]])
     """
     nodes = np.asarray(nodes)
+    if nodes.ndim == 1 and nodes.size == 0:  # an empty list is float64 to numpy
+        nodes = nodes.astype(np.int64)
     if nodes.ndim != 1 or not np.issubdtype(nodes.dtype, np.integer):
         raise InputError(f"`nodes` must be a 1D integer array; got shape {nodes.shape} and dtype {nodes.dtype}.")
     if isinstance(shape, (str, bytes)) or not hasattr(shape, "__iter__") or getattr(shape, "ndim", 1) != 1:
@@ -362,7 +365,9 @@ def pixel_coordinates(nodes, shape) -> np.ndarray:
     shape = tuple(int(s) for s in shape)
     if len(shape) not in (2, 3) or min(shape) < 1:
         raise InputError(f"`shape` must be (n_rows, n_cols) or (n_planes, n_rows, n_cols); got {shape!r}.")
-    if nodes.size and (nodes.min() < 0 or nodes.max() >= np.prod(shape)):
+    if math.prod(shape) >= 2**63:  # (np.prod wrapped around, and blamed the nodes)
+        raise InputError(f"`shape` must have fewer than 2^63 pixels; got {shape!r}.")
+    if nodes.size and (nodes.min() < 0 or nodes.max() >= math.prod(shape)):
         raise InputError(
             f"`nodes` must index into an image of shape {shape}; got values in [{nodes.min()}, {nodes.max()}]."
         )

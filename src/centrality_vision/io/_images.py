@@ -148,7 +148,7 @@ def read_shape(path, /, *, foreground: str = "auto", threshold: float | None = N
            [0, 0, 0, 0, 0]])
     """
     pixels = read_image(path)
-    if threshold is None and np.ptp(pixels) == 0:  # (0.5, set below, would be blamed for it)
+    if threshold is None and pixels.min() == pixels.max():  # (0.5, set below, would be blamed for it)
         raise InputError(
             f"{Path(path)}: the image is uniform (every pixel is {pixels.flat[0]:g}): there is no shape in it."
         )
