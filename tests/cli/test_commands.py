@@ -427,6 +427,10 @@ def test_classify_cross_validates_with_fewer_folds_when_classes_are_small(tmp_pa
     assert all(image["label"] == image["file"].removesuffix(".png").rstrip("0123456789") for image in images)
     assert record["accuracy"] == pytest.approx(np.mean([image["label"] == image["predicted"] for image in images]))
     assert np.sum(record["confusion"]) == 6
+    # the folds' mean weighs folds equally; the pooled share counts images, as the matrix does
+    right = sum(image["label"] == image["predicted"] for image in images)
+    assert record["images_correct"] == right == np.trace(record["confusion"])
+    assert record["pooled_accuracy"] == pytest.approx(right / 6)
     assert record["parameters"]["seed"] == 3 and record["parameters"]["histogram"]["bins"] == 8
     captured = capsys.readouterr()
     assert "using 3 folds" in captured.err and "warning:" not in captured.err and captured.out.startswith("accuracy")

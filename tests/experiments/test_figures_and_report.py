@@ -211,3 +211,25 @@ def test_a_file_in_the_staging_folder_s_place_or_a_folder_in_the_results_file_s_
     (tmp_path / "fig-0.jsonl").mkdir()
     with pytest.raises(InputError, match=r"`path` must be a results file .*fig-0.jsonl.*which is a folder"):
         run_units([Unit("u", abs, {"x": 1})], tmp_path / "fig-0.jsonl", scheduler="serial", progress=False)
+
+
+def test_a_folder_in_an_output_file_s_place_changes_nothing_in_the_run_s_folder(tmp_path):
+    """The move failed half way: the last run's manifest was gone and some of its files were
+    replaced by the failed run's, though the docstring promises no change on an error."""
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.experiments._common import outputs_of, run_outputs, tally
+
+    with run_outputs(tmp_path, "fig-0", quick=False) as stage:
+        (stage / "fig-0.json").write_text("first")
+        (stage / "fig-0.txt").write_text("first")
+    (tmp_path / "fig-0.txt").unlink()
+    (tmp_path / "fig-0.txt").mkdir()
+    before = {path.name: path.is_dir() or path.read_text() for path in tmp_path.iterdir()}
+    with pytest.raises(InputError, match=r"fig-0.txt is a folder where fig-0 writes a file"):
+        with run_outputs(tmp_path, "fig-0", quick=False) as stage:
+            (stage / "fig-0.json").write_text("second")
+            (stage / "fig-0.txt").write_text("second")
+    assert {path.name: path.is_dir() or path.read_text() for path in tmp_path.iterdir()} == before
+    assert [path.name for path in outputs_of(tmp_path, "fig-0", quick=False)] == ["fig-0.json"]
+    with pytest.raises(TypeError, match="claim 'c' must be True or False in every draw; got nan"):
+        tally([{"c": True}, {"c": float("nan")}])  # bool(nan) is True: it counted as holding

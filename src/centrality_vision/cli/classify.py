@@ -216,6 +216,8 @@ def run(args: argparse.Namespace) -> int:
         f"({time.perf_counter() - started:.1f} s)"
     )
     confusion = confusion_matrix(labels, predicted, labels=classes)
+    # the folds' mean accuracy weighs unequal folds equally: the matrix counts every image once
+    correct = int(np.trace(confusion))
     histogram_params = {key: value for key, value in histogram.get_params().items() if key not in ("progress", "cache")}
     record = {
         "command": NAME,
@@ -226,6 +228,8 @@ def run(args: argparse.Namespace) -> int:
         "cross_validation": {"splitter": "StratifiedKFold(shuffle=True)", "n_splits": n_splits, "note": note},
         "accuracy": accuracy,
         "accuracy_std": float(np.std(scores)),
+        "images_correct": correct,
+        "pooled_accuracy": correct / labels.size,
         "fold_accuracy": scores,
         "classes": classes.tolist(),
         "class_counts": counts,
@@ -244,14 +248,17 @@ def run(args: argparse.Namespace) -> int:
         del record["images"]  # the table holds them
     written = write_output(args.out, record, table=table)
     if args.plot:
-        _plot(args, labels, predicted, classes, accuracy, n_splits)
+        _plot(args, labels, predicted, classes, correct, n_splits)
         written.append(Path(args.plot))
-    print(f"accuracy {accuracy:.3f} ({n_splits}-fold cross-validation, {len(files)} images, {classes.size} classes)")
+    print(
+        f"accuracy {accuracy:.3f} (mean of {n_splits} cross-validation folds; {correct} of {len(files)} images "
+        f"right, {classes.size} classes)"
+    )
     say(f"wrote {', '.join(map(str, written))}")
     return 0
 
 
-def _plot(args, labels, predicted, classes, accuracy, n_splits) -> None:
+def _plot(args, labels, predicted, classes, correct, n_splits) -> None:
     from sklearn.metrics import ConfusionMatrixDisplay
 
     from ..plotting import save_figure
@@ -269,5 +276,8 @@ def _plot(args, labels, predicted, classes, accuracy, n_splits) -> None:
         xticks_rotation="vertical",
         include_values=classes.size <= 20,
     )
-    ax.set_title(f"{args.centrality} histograms, {args.classifier}: accuracy {accuracy:.2f} ({n_splits}-fold CV)")
+    ax.set_title(
+        f"{args.centrality} histograms, {args.classifier}: {correct} of {labels.size} right "
+        f"({correct / labels.size:.2f}; {n_splits}-fold CV)"
+    )
     save_figure(fig, args.plot)

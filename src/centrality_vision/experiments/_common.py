@@ -229,9 +229,17 @@ def run_outputs(out: Path, name: str, *, quick: bool):
     try:
         yield stage
         manifest = out / f"{run_stem(name, quick)}.files.json"
+        staged = sorted(stage.iterdir())
+        # every place checked before anything moves: a folder in a file's place failed the
+        # move half way, after the last run's manifest was gone and some files replaced
+        for place in [manifest, *(out / _quick_name(path.name, quick) for path in staged)]:
+            if place.is_dir() and not place.is_symlink():
+                from ..exceptions import InputError
+
+                raise InputError(f"`out`: {place} is a folder where {name} writes a file; move it and run again.")
         manifest.unlink(missing_ok=True)  # never a list that names files of two runs
         names = []
-        for path in sorted(stage.iterdir()):
+        for path in staged:
             final = _quick_name(path.name, quick)
             os.replace(path, out / final)
             names.append(final)
@@ -308,9 +316,13 @@ def tally(draws) -> dict:
     >>> t["a"]["k"], t["a"]["n"]
     (2, 3)
     """
+    import numpy as np
+
     out = {}
     for draw in draws:
         for claim, holds in draw.items():
+            if not isinstance(holds, (bool, np.bool_)):  # bool(nan) is True: a claim is a bool or absent
+                raise TypeError(f"claim {claim!r} must be True or False in every draw; got {holds!r}.")
             cell = out.setdefault(claim, {"k": 0, "n": 0})
             cell["k"] += bool(holds)
             cell["n"] += 1
