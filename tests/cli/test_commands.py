@@ -1015,3 +1015,14 @@ def test_centrality_option_is_named_as_in_register_and_classify_and_measure_stil
         assert record["parameters"]["centrality"] == "harmonic"
         outputs.append(record["centrality"]["harmonic"])
     assert outputs[0] == outputs[1]
+
+
+def test_a_single_experiment_says_the_report_beside_it_does_not_show_it(tmp_path, capsys):
+    """Running one experiment after 'reproduce all' replaced its files and left report.md as
+    it was, without a word."""
+    out = tmp_path / "results"
+    assert main(["reproduce", "table-2.1", "--quick", "--out", str(out)]) == 0
+    assert "report.md" not in capsys.readouterr().err  # no report there: nothing to say
+    (out / "report.md").write_text("# an earlier report\n")
+    assert main(["reproduce", "table-2.1", "--quick", "--out", str(out)]) == 0
+    assert "report.md is from an earlier 'reproduce all' and does not show this run" in capsys.readouterr().err

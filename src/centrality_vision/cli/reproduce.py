@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
         if value is not None and args.experiment not in takers:
             # (`option` reads --option in the printed message)
             raise InputError(f"`{option}` applies to {', '.join(takers)} (and all); got it for {args.experiment}.")
-    return run_experiment(
+    code = run_experiment(
         args.experiment,
         Path(args.out) / args.experiment,
         quick=args.quick,
@@ -86,3 +86,12 @@ def run(args: argparse.Namespace) -> int:
         scheduler=args.scheduler,
         workers=args.workers,
     )
+    report = Path(args.out) / "report.md"
+    if code == 0 and report.is_file():  # a snapshot of its own run: it does not follow this one
+        from ._common import say
+
+        say(
+            f"note: {report} is from an earlier 'reproduce all' and does not show this run; run "
+            f"'reproduce all' again to refresh it (the long experiments' stored results are reused)"
+        )
+    return code
