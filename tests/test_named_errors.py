@@ -224,3 +224,13 @@ def test_read_shape_of_extreme_grey_values_warns_nothing(tmp_path):
     picture[2:4, 2:4] = 1e308
     tifffile.imwrite(tmp_path / "extreme.tif", picture)
     assert read_shape(tmp_path / "extreme.tif").sum() == 4
+
+
+def test_a_tiff_of_too_many_dimensions_is_described_as_decoded(tmp_path):
+    """The message gave the shape after the first page was taken, (2, 12, 10), not the file's."""
+    tifffile = pytest.importorskip("tifffile")
+    from centrality_vision.io import read_image
+
+    tifffile.imwrite(tmp_path / "stack.tif", np.zeros((2, 2, 12, 10), dtype=np.uint8))
+    with pytest.raises(InputError, match=r"got an array of shape \(2, 2, 12, 10\) \(its first page: \(2, 12, 10\)\)"):
+        read_image(tmp_path / "stack.tif")

@@ -72,6 +72,7 @@ def read_image(path, /) -> np.ndarray:
         raise InputError(f"{path}: not a readable {kind} image (pixel type {pixels.dtype}).")
     if pixels.size == 0:
         raise InputError(f"{path}: not a readable {kind} image (it decodes to no pixels, shape {pixels.shape}).")
+    decoded = pixels.shape
     stacked = pixels.ndim == 4 or (pixels.ndim == 3 and pixels.shape[2] not in (1, 2, 3, 4))
     if kind in ("TIF", "TIFF") and stacked:
         # tifffile reads a multi-page TIFF as one series of pages: its first page
@@ -88,7 +89,15 @@ def read_image(path, /) -> np.ndarray:
         else:
             pixels = pixels.mean(axis=2)
     if pixels.ndim != 2:
-        raise InputError(f"{path}: must be a 2D grey or colour image; got an array of shape {pixels.shape}.")
+        raise InputError(
+            f"{path}: must be a 2D grey or colour image; got an array of shape {decoded}"
+            + (
+                f" (its first page: {pixels.shape})"
+                if decoded != pixels.shape and pixels.ndim == len(decoded) - 1
+                else ""
+            )
+            + "."
+        )
     pixels = pixels.astype(np.float64)
     if not np.all(np.isfinite(pixels)):
         raise InputError(f"{path}: the image holds NaN or inf values.")
