@@ -192,3 +192,62 @@ def test_a_field_whose_rounding_shows_says_so():
         warnings.simplefilter("error")
         reg = NonRigidCPD().fit(y, x)  # lam 2: quiet, and within rounding
     assert np.abs(reg.transform_(y) - reg.moving_transformed_).max() < 1e-7
+
+
+@pytest.mark.parametrize("offset", [1e2, 1e4, 1e8, 1e10])
+def test_a_line_far_from_the_origin_is_a_line(offset):
+    """Far from the origin the caller's rounding made a collinear moving set a thin plane: the
+    rank warning stopped at an offset of 100, and at 1e8 AffineCPD fitted a linear map of 5e7
+    to the rounding (the result moved by 0.41 of the extent; at 1e10 it said converged with
+    ``transform_(moving)`` 1.7 extents from ``moving_transformed_``)."""
+    rng = np.random.default_rng(0)
+    direction, along, fixed = rng.normal(size=2), rng.random(20), rng.random((25, 2))
+    line = np.outer(along, direction)
+    with pytest.warns(UserWarning, match="spans 1 of 2 dimensions"):
+        origin = AffineCPD(tol=1e-12).fit(line, fixed)
+    with pytest.warns(UserWarning, match="spans 1 of 2 dimensions"):
+        far = AffineCPD(tol=1e-12).fit(line + offset, fixed + offset)
+    rounding = 1e3 * np.finfo(float).eps * offset  # the inputs' own rounding, with a margin
+    assert far.converged_ and far.n_iter_ == origin.n_iter_
+    np.testing.assert_allclose(far.moving_transformed_ - offset, origin.moving_transformed_, atol=rounding)
+    np.testing.assert_allclose(far.transform_(line + offset), far.moving_transformed_, atol=rounding)
+    assert np.abs(far.transform_.linear).max() < 2 * np.abs(origin.transform_.linear).max()
+    line3 = np.outer(along, rng.normal(size=3)) + offset
+    with pytest.warns(UserWarning, match="spans 1 of 3 dimensions"):
+        RigidCPD().fit(line3, line3[::-1].copy())
+
+
+def test_a_callback_stops_the_fit_with_numpy_s_true_too():
+    """``return np.linalg.norm(...) < tol`` gives numpy.True_, which the check ``is True``
+    ignored: the fit ran on without a word."""
+    rng = np.random.default_rng(0)
+    fixed = rng.random((30, 2))
+    for estimator in (RigidCPD, ICP):
+        calls = []
+
+        def stop_at_three(info, calls=calls):
+            calls.append(info.iteration)
+            return np.bool_(len(calls) >= 3)
+
+        estimator(callback=stop_at_three).fit(fixed @ np.array([[0.0, -1.0], [1.0, 0.0]]) * 0.5, fixed)
+        assert len(calls) == 3
+
+
+@pytest.mark.parametrize(
+    ("moving", "fixed", "match"),
+    [
+        (np.arange(12.0)[:, None], np.arange(12.0)[:, None] + 1, r"searches rotations in 2D and 3D; got 1D sets"),
+        (np.eye(2), np.eye(2)[::-1], r"needs at least 3 points in each set; got 2 moving and 2 fixed"),
+        (
+            np.ones((5, 2)),
+            3 * np.eye(5, 2),
+            r"needs at least two distinct points in each set; got RMS radii 0 \(moving\) and 1.7 \(fixed\)",
+        ),
+    ],
+)
+def test_what_the_global_search_needs_is_named_with_it(moving, fixed, match):
+    """A plain fit takes these sets; the search's own refusals named only `moving` (and gave
+    radii in the normalised frame)."""
+    with pytest.raises(ValueError, match=r"`RigidCPD.init`='global' " + match), warnings.catch_warnings():
+        warnings.filterwarnings("ignore", "`moving` spans 0 of 2", UserWarning)  # (one point: rightly)
+        RigidCPD(init="global", random_state=0).fit(moving, fixed)

@@ -427,6 +427,11 @@ def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
     shape = "a sequence of integer (moving_index, fixed_index) pairs, shape (L, 2)"
     if isinstance(landmarks, (str, bytes)):
         raise TypeError(f"`landmarks` must be {shape}; got text {landmarks!r}.")
+    if np.ma.is_masked(landmarks):  # (tolist() below made its masked entries None)
+        raise TypeError(f"`landmarks` must be {shape}; got a masked array with masked entries.")
+    if isinstance(landmarks, (dict, set, frozenset)) or not hasattr(landmarks, "__len__"):
+        # (numpy wraps these in a 0-d object array: the message spoke of shape ())
+        raise TypeError(f"`landmarks` must be {shape}; got a value of type {type(landmarks).__name__}.")
     try:
         # nested lists as objects: a bool beside ints is seen as a bool, not cast to the int 1
         arr = landmarks if isinstance(landmarks, np.ndarray) else np.asarray(landmarks, dtype=object)
@@ -705,6 +710,22 @@ class _CPD(BaseEstimator):
         if isinstance(init, str):  # "global"
             from ._pose import global_pose_search
 
+            # what the search needs and a plain fit does not, named with the option (radii in
+            # the caller's units, not the normalised frame's)
+            name = f"`{type(self).__name__}.init`='global'"
+            if dim not in (2, 3):
+                raise InputError(f"{name} searches rotations in 2D and 3D; got {dim}D sets.")
+            if min(moving_n.shape[0], fixed_n.shape[0]) < 3:
+                raise InputError(
+                    f"{name} needs at least 3 points in each set; got {moving_n.shape[0]} moving and "
+                    f"{fixed_n.shape[0]} fixed."
+                )
+            radii = rms_radius(moving_n) * frame.scale, rms_radius(fixed_n) * frame.scale
+            if min(radii) <= 0:
+                raise InputError(
+                    f"{name} needs at least two distinct points in each set; got RMS radii {radii[0]:.3g} "
+                    f"(moving) and {radii[1]:.3g} (fixed)."
+                )
             scale = bool(getattr(self, "scale", True))
             w = _AUTO_W_START if isinstance(self.w, str) else float(self.w)
             return global_pose_search(moving_n, fixed_n, scale=scale, w=w, random_state=self.random_state)
@@ -716,6 +737,10 @@ class _CPD(BaseEstimator):
 
     def _run(self, moving, moving_n, fixed, frame, true_n, start, landmarks, prior):
         n_fixed, n_dims = fixed.shape
+        # the largest coordinate whose rounding the moving points carry, in the frame's units:
+        # far from the origin the caller's coordinates round by more than the centred
+        # points show, and the M-steps must not take that rounding for spread
+        self._peak = float(np.max(np.abs(moving))) / frame.scale
         spread = max(_initial_sigma2(fixed, fixed), _initial_sigma2(moving_n, moving_n))
         spread = 1.0 if spread <= 0 else max(spread, 1e-280)  # keeps 1 / (2 floor) finite
         floor = _SIGMA2_FLOOR * spread
@@ -791,7 +816,7 @@ class _CPD(BaseEstimator):
                         objective + n_fixed * n_dims * log_s,
                         None if error is None else error * frame.scale,
                     )
-                    if self.callback(info) is True:
+                    if _stops(self.callback(info)):
                         break
                 # (after a jump the change is not an EM step's: it does not say EM has stalled)
                 if (
@@ -1137,7 +1162,8 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         scheduled GPD prior (the EM map then changes between steps); off by default so
         that iteration counts are CPD's own.
     callback : callable, optional
-        Called with an :class:`IterationInfo` after each E-step; return ``True`` to stop.
+        Called with an :class:`IterationInfo` after each E-step; return ``True`` (or
+        ``numpy.True_``, as a comparison gives) to stop.
     progress : bool, default=False
         Show a progress bar on stderr.
     random_state : int, Generator or None, default=None
@@ -1167,6 +1193,12 @@ _COMMON_ATTRIBUTES = """transform_ : transform
         The E-step statistics of the final state (``px`` and the likelihood in the caller's units)."""
 
 
+def _stops(answer) -> bool:
+    """Whether a callback's answer asks the fit to stop: ``True`` or ``numpy.True_`` (what a
+    comparison returns); None, False and anything else go on."""
+    return isinstance(answer, (bool, np.bool_)) and bool(answer)
+
+
 def _count(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
@@ -1185,10 +1217,19 @@ def one_point_fixed(moving: np.ndarray, fixed: np.ndarray) -> str | None:
 
 
 def _span(points: np.ndarray) -> int:
-    """How many dimensions the points span about their mean (the rank of the centred set)."""
+    """How many dimensions the points span about their mean (the rank of the centred set).
+
+    A direction counts when the centred set's singular value along it exceeds what the
+    rounding of the coordinates themselves can give (a few ulps of the largest, times the
+    square root of the point count): a line 100 units from the origin is a line, not a thin
+    plane of rounding errors."""
     unit = points / power_of_two_scale(points)  # (the mean of coordinates near 1e308 overflowed)
     centred = unit - unit.mean(axis=0)
-    return int(np.linalg.matrix_rank(centred / max(float(np.abs(centred).max()), np.finfo(float).tiny)))
+    values = np.linalg.svd(centred, compute_uv=False)
+    eps = np.finfo(np.float64).eps
+    rounding = 16.0 * eps * float(np.abs(unit).max()) * math.sqrt(points.shape[0])
+    tol = max(rounding, float(values.max(initial=0.0)) * max(points.shape) * eps, np.finfo(float).tiny)
+    return int(np.count_nonzero(values > tol))
 
 
 class RigidCPD(_CPD):
@@ -1299,7 +1340,7 @@ class RigidCPD(_CPD):
         return moving, fixed, true_moving
 
     def _m_step(self, post, moving, fixed, state, sigma2):
-        transform, sigma2 = rigid_m_step(post, moving, fixed, scale=bool(self.scale))
+        transform, sigma2 = rigid_m_step(post, moving, fixed, scale=bool(self.scale), peak=self._peak)
         return transform, transform._apply(moving), sigma2
 
     def _vector(self, state):
@@ -1367,7 +1408,7 @@ class AffineCPD(_CPD):
         return AffineTransform(linear, start.translation)
 
     def _m_step(self, post, moving, fixed, state, sigma2):
-        transform, sigma2 = affine_m_step(post, moving, fixed)
+        transform, sigma2 = affine_m_step(post, moving, fixed, peak=self._peak)
         return transform, transform(moving), sigma2
 
     def _vector(self, state):

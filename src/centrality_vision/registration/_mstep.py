@@ -78,16 +78,21 @@ def _moments(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
     return post.n_p, mu_x, mu_y, a, x_px, y_py
 
 
-def _spread_floor(moving: np.ndarray, n_p: float) -> float:
+def _spread_floor(moving: np.ndarray, n_p: float, peak: float | None = None) -> float:
     """The weighted spread ``Yh^T d(P1) Yh`` that rounding alone gives a set of one repeated
-    point: its deviations from the weighted mean are a few ulps of its coordinates. A spread
-    at or below it is none (a one-point moving set away from the origin, as the k-NN
-    frame leaves it, made the similarity's scale 8e15 and the affine map 1.6e7)."""
-    return n_p * (8.0 * np.finfo(np.float64).eps * float(np.max(np.abs(moving), initial=0.0))) ** 2
+    point: its deviations from the weighted mean are a few ulps of its coordinates, or of
+    ``peak``, the largest coordinate whose rounding they carry (the caller's, before the
+    normalised frame centred them). A spread at or below it is none (a one-point moving set
+    away from the origin, as the k-NN frame leaves it, made the similarity's scale 8e15 and
+    the affine map 1.6e7; a line 1e8 from the origin, seen as a thin plane, an affine map of
+    5e7)."""
+    largest = max(float(np.max(np.abs(moving), initial=0.0)), 0.0 if peak is None else float(peak))
+    return n_p * (8.0 * np.finfo(np.float64).eps * largest) ** 2
 
 
-def rigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, scale: bool = True):
-    """Rigid (``scale=False``) or similarity M-step: ``(transform, sigma2)``.
+def rigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, scale: bool = True, peak=None):
+    """Rigid (``scale=False``) or similarity M-step: ``(transform, sigma2)``; ``peak``: see
+    :func:`_spread_floor`.
 
     The rotation is the proper one closest to ``A`` (SVD with the last singular vector's sign
     fixed so that det R = +1); ``s = tr(A^T R) / tr(Yh^T d(P1) Yh)``.
@@ -96,22 +101,24 @@ def rigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, sca
     n_dims = moving.shape[1]
     rotation, tr_ar = proper_rotation(a)
     y_py = float(np.trace(y_py))
-    s = tr_ar / y_py if scale and y_py > n_dims * _spread_floor(moving, n_p) and tr_ar > 0 else 1.0
+    s = tr_ar / y_py if scale and y_py > n_dims * _spread_floor(moving, n_p, peak) and tr_ar > 0 else 1.0
     sigma2 = (x_px - 2 * s * tr_ar + s * s * y_py) / (n_p * n_dims)
     translation = mu_x - s * rotation @ mu_y
     kind = SimilarityTransform if scale else RigidTransform
     return kind._trusted(rotation, translation, s if scale else 1.0), float(sigma2)
 
 
-def affine_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray):
+def affine_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, *, peak=None):
     """Affine M-step: ``B = A (Yh^T d(P1) Yh)^-1``; returns ``(transform, sigma2)``.
 
-    A singular ``Yh^T d(P1) Yh`` (collinear moving points) takes the minimum-norm solution.
+    A singular ``Yh^T d(P1) Yh`` (collinear moving points) takes the minimum-norm solution;
+    directions whose spread is within rounding (see :func:`_spread_floor` for ``peak``) count
+    as singular.
     """
     n_p, mu_x, mu_y, a, x_px, y_py = _moments(post, moving, fixed)
     n_dims = moving.shape[1]
     top = float(np.linalg.norm(y_py, 2))
-    floor = _spread_floor(moving, n_p)
+    floor = _spread_floor(moving, n_p, peak)
     if top <= floor:  # no spread beyond rounding in any direction: the least-norm map is 0
         linear = np.zeros((n_dims, n_dims))
     else:  # (directions of rounding-level spread cut like exactly singular ones)
