@@ -110,7 +110,8 @@ def as_points(
         bad = int(np.count_nonzero(~np.isfinite(arr).all(axis=1)))
         raise InputError(f"`{name}` must be finite; got {bad} row(s) with NaN or inf.")
     if arr.shape[0] < min_points:
-        raise InputError(f"`{name}` must have at least {min_points} points; got {arr.shape[0]}.")
+        noun = "point" if min_points == 1 else "points"
+        raise InputError(f"`{name}` must have at least {min_points} {noun}; got {arr.shape[0]}.")
     if not allow_duplicates and arr.shape[0] > 1:
         uniq, first, counts = np.unique(arr, axis=0, return_index=True, return_counts=True)
         if uniq.shape[0] != arr.shape[0]:

@@ -308,7 +308,7 @@ def test_bad_point_sets(fish):
         RigidCPD().fit(fish, np.zeros((5, 3)))
     with pytest.raises(ValueError, match="true_moving"):
         RigidCPD().fit(fish, fish, true_moving=fish[:5])
-    with pytest.raises(ValueError, match="at least 1 points"):
+    with pytest.raises(ValueError, match="at least 1 point;"):
         RigidCPD().fit(np.zeros((0, 2)), fish)
     with pytest.raises(ValueError, match="not fitted"):
         RigidCPD().transform(fish)

@@ -75,6 +75,11 @@ def test_weak_landmarks_give_way_to_the_data(fish, rot2):
         ([(True, False)], TypeError, "integer indices; got True"),
         (np.array([["3", "4"]], dtype=object), TypeError, "integer indices; got '3'"),
         ([(0, 1), (2,)], ValueError, "pairs, shape"),
+        # fuzz round 12: a masked entry read as None, and containers described as "shape ()"
+        (np.ma.masked_array([[0, 1]], mask=[[False, True]]), TypeError, "a masked array with masked entries"),
+        ({0: 1}, TypeError, "got a value of type dict"),
+        ({(0, 1)}, TypeError, "got a value of type set"),
+        (((i, i) for i in range(2)), TypeError, "got a value of type generator"),
     ],
 )
 def test_bad_landmarks_are_named(fish, landmarks, error, match):

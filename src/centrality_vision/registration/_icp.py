@@ -21,7 +21,7 @@ from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_f
 from .._warnings import warn
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
 from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity, power_of_two_scale
-from ._cpd import IterationInfo, _Frame, _start_within_reach, one_point_fixed
+from ._cpd import IterationInfo, _Frame, _start_within_reach, _stops, one_point_fixed
 
 __all__ = ["ICP", "estimate_normals"]
 
@@ -173,7 +173,7 @@ class ICP(BaseEstimator):
         Starting pose (identity by default).
     callback : callable, optional
         Called with an :class:`IterationInfo` (``objective`` = mean squared residual,
-        ``sigma2`` = NaN) after each matching; return ``True`` to stop.
+        ``sigma2`` = NaN) after each matching; return ``True`` (or ``numpy.True_``) to stop.
     k_normals : deprecated
         The former name of ``normal_neighbors``; it still works, with a FutureWarning, and
         will be removed.
@@ -378,7 +378,7 @@ class ICP(BaseEstimator):
                     objective * scale2,
                     error,
                 )
-                if self.callback(info) is True:
+                if _stops(self.callback(info)):
                     break
             if objective <= coincide or (
                 previous is not None and abs(previous - objective) <= self.tol * max(previous, 1e-300)
