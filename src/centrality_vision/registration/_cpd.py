@@ -1382,7 +1382,8 @@ class AffineCPD(_CPD):
     True
 
     Moving points that do not span every dimension (fewer than D + 1, or all on one line
-    in 2D or one plane in 3D) do not determine the linear map: the fit still aligns them,
+    in 2D or one plane in 3D, within the rounding of their coordinates: a line 1e8 from the
+    origin is a line) do not determine the linear map: the fit still aligns them,
     but ``transform_`` is then right on them only (its linear part is the least-norm one,
     collapsed across the missing directions), and a :class:`UserWarning` says so.
     """
