@@ -118,3 +118,71 @@ def test_seed_is_deprecated_for_random_state():
     np.testing.assert_array_equal(new.offsets_, old.offsets_)
     forest = CentralityComparisonForest(n_estimators=3, n_comparisons=10, random_state=1)
     assert "random_state" in forest.get_params() and clone(forest).random_state == 1
+
+
+def test_a_cache_folder_that_refuses_new_files_serves_what_it_holds(tmp_path, monkeypatch):
+    """A shared cache filled beforehand and mounted read-only: every image not yet in it failed
+    the whole call with a bare PermissionError on its .lock file."""
+    import builtins
+    import os
+    import warnings
+
+    from centrality_vision.shapes import _cache
+
+    folder = tmp_path / "shared"
+    CentralityCache(directory=folder).get(_disk(3), "closeness")
+    stored = sorted(p.name for p in folder.iterdir())
+    real_os_open, real_open = os.open, builtins.open
+
+    def refused(path, *args, **kwargs):
+        if str(path).startswith(str(folder)) and (args[0] if args else kwargs.get("mode", "r")) not in ("r", "rb"):
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, *args, **kwargs)
+
+    def refused_os(path, flags, *args):
+        if str(path).startswith(str(folder)) and flags & os.O_CREAT:
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_os_open(path, flags, *args)
+
+    monkeypatch.setattr(os, "open", refused_os)
+    monkeypatch.setattr(_cache, "open", refused, raising=False)
+    cache = CentralityCache(directory=folder)
+    assert cache.get(_disk(3), "closeness") is not None and (cache.hits, cache.misses) == (1, 0)
+    with pytest.warns(UserWarning, match=r"could not take .* \(Permission denied\): centralities computed now"):
+        values, _ = cache.get(_disk(4), "closeness")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # said once per cache
+        cache.get(_disk(5), "degree")
+    monkeypatch.undo()
+    np.testing.assert_array_equal(values, CentralityCache().get(_disk(4), "closeness")[0])
+    assert sorted(p.name for p in folder.iterdir()) == stored
+
+
+def test_a_folder_where_a_cache_file_goes_is_said_not_raised(tmp_path):
+    cache = CentralityCache(directory=tmp_path)
+    path = cache._path(_cache_key(_disk(3)), "degree")
+    path.mkdir(parents=True)
+    with pytest.warns(UserWarning, match=r"could not take .*-degree.npz"):
+        values, _ = cache.get(_disk(3), "degree")
+    np.testing.assert_array_equal(values, CentralityCache().get(_disk(3), "degree")[0])
+
+
+def _cache_key(mask):
+    from centrality_vision.shapes._cache import _as_mask, _key
+
+    return _key(_as_mask(mask), 8, False)
+
+
+def test_the_forest_runs_on_the_cache_and_jobs_set_after_fit(tmp_path):
+    """cache, n_jobs and progress may change after fit; the forest's inner comparisons kept
+    the fit-time ones, so a disk cache set for prediction was never used."""
+    forest = CentralityComparisonForest(n_estimators=5, n_comparisons=20, cache=CentralityCache())
+    forest.fit([_disk(4), _disk(6), _disk(5)[:, 2:], _disk(3)], [0, 1, 0, 1])
+    expected = forest.predict([_disk(5), _disk(4)[::-1]])
+    later = CentralityCache(directory=tmp_path / "later")
+    forest.set_params(cache=later, n_jobs=2)
+    np.testing.assert_array_equal(forest.predict([_disk(5), _disk(4)[::-1]]), expected)
+    assert len(later) == 2 and any((tmp_path / "later").iterdir())  # (workers compute, the cache keeps)
+    assert forest.comparisons_.n_jobs == forest.forest_.n_jobs == 2
+    with pytest.raises(TypeError, match="`max_features` must be an int"):
+        CentralityComparisonForest(max_features=True).fit([_disk(4), _disk(6)], [0, 1])

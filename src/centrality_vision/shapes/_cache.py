@@ -168,7 +168,9 @@ class CentralityCache:
         process (a joblib or Dask worker, or a later run) with a cache on the same
         directory reads them instead of recomputing; while one process computes an
         image it holds a ``.lock`` file there, and the others compute other images
-        first and then wait for it.
+        first and then wait for it. A folder that refuses new files (mounted read-only,
+        say, after it was filled) still serves the files it holds; what is computed then
+        stays in memory, and a :class:`UserWarning` says so once.
 
     Notes
     -----
@@ -223,6 +225,7 @@ class CentralityCache:
                 )
         self._store: OrderedDict[tuple, dict] = OrderedDict()
         self._lock = threading.Lock()
+        self._unwritable_said = False
         self.hits = 0
         self.misses = 0
 
@@ -271,15 +274,37 @@ class CentralityCache:
             return None
         return values
 
+    def _unwritable(self, path: Path, error: OSError) -> None:
+        """Say once per cache that ``directory`` refuses a file: the values computed from
+        then on are kept in memory only (a read-only cache filled beforehand still serves
+        what it holds)."""
+        with self._lock:
+            if self._unwritable_said:
+                return
+            self._unwritable_said = True
+        from .._warnings import warn
+
+        reason = error.strerror or type(error).__name__
+        warn(
+            f"the cache folder {str(self.directory)!r} could not take {path.name} ({reason}): centralities "
+            "computed now are kept in memory only.",
+            UserWarning,
+        )
+
     def _save(self, key: tuple, name: str, values: np.ndarray) -> None:
         if self.directory is None:
             return
-        self.directory.mkdir(parents=True, exist_ok=True)
         path = self._path(key, name)
         tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
-        with open(tmp, "wb") as handle:
-            np.savez(handle, values=values, check=self._checksum(path, values))
-        os.replace(tmp, path)
+        try:
+            self.directory.mkdir(parents=True, exist_ok=True)
+            with open(tmp, "wb") as handle:
+                np.savez(handle, values=values, check=self._checksum(path, values))
+            os.replace(tmp, path)
+        except OSError as error:  # a read-only folder, a folder in the file's place, a full disk
+            if tmp.is_file():
+                tmp.unlink(missing_ok=True)
+            self._unwritable(path, error)
 
     @contextmanager
     def _claim(self, key: tuple, name: str):
@@ -287,9 +312,9 @@ class CentralityCache:
         if self.directory is None:
             yield True
             return
-        self.directory.mkdir(parents=True, exist_ok=True)
         lock = self._path(key, name).with_suffix(".lock")
         try:
+            self.directory.mkdir(parents=True, exist_ok=True)
             fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
         except FileExistsError:
             if not self._stale(lock):
@@ -301,6 +326,10 @@ class CentralityCache:
             except FileExistsError:
                 yield False
                 return
+        except OSError as error:  # a folder that refuses new files: compute here, unlocked
+            self._unwritable(lock, error)
+            yield True
+            return
         try:
             os.write(fd, str(os.getpid()).encode())
             os.close(fd)
@@ -660,10 +689,14 @@ def shape_centralities(
     """
     masks = as_shape_images(images, foreground=foreground, threshold=threshold)
     names = [centrality] if isinstance(centrality, str) else centrality  # one name, not its letters
+    if isinstance(names, (bytes, bytearray)):  # (iterated, its letters read as ints: "got 100")
+        raise TypeError(f"`centrality` must be a centrality name (str) or a sequence of names; got {names!r}.")
     try:
         names = list(names)
     except TypeError:
         raise TypeError(f"`centrality` must be a centrality name or a sequence of names; got {names!r}.") from None
+    if not names:  # (each image's record had no "nodes" either)
+        raise InputError("`centrality` must name at least one centrality; got an empty list.")
     names = [check_choice(n, CENTRALITIES, name="centrality") for n in names]
     if not is_connectivity(connectivity):
         raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
