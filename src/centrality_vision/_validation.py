@@ -369,7 +369,7 @@ def as_binary_image(
         low, high = float(values.min()), float(values.max())
         if threshold is None and low == high:
             raise InputError(f"`{name}` is uniform (every pixel is {low:g}): there is no shape in it.")
-        cut = (low + high) / 2 if threshold is None else float(threshold)
+        cut = low / 2 + high / 2 if threshold is None else float(threshold)  # ((low + high) / 2 overflowed at 1e308)
         light = values > cut
         side = foreground
         if side == "auto":

@@ -314,3 +314,22 @@ def test_an_off_shape_pixel_goes_to_the_first_of_its_tied_nearest_pixels():
         squared = ((pixels[:, None, :] - foreground[None]) ** 2).sum(axis=2)
         first = foreground[np.argmax(squared == squared.min(axis=1, keepdims=True), axis=1)]
         np.testing.assert_array_equal(np.c_[rows, cols], first)
+
+
+def test_fuzz_round_13_labels_names_and_levels():
+    """Bytes and text labels of one spelling were one class; a bytes centrality name was read
+    letter by letter ("got 100"); an empty list of centralities gave records without nodes;
+    grey levels near float64's limit put the default threshold at inf (no foreground)."""
+    from centrality_vision.shapes import CentralityHistogram, as_shape_images, retrieval_counts, shape_centralities
+
+    square = np.zeros((6, 6), dtype=bool)
+    square[1:5, 1:5] = True
+    distances = np.random.default_rng(0).random((4, 4))
+    with pytest.raises(TypeError, match=r"`labels` must be all strings or all numbers; got a mix \(e.g. b'x' beside"):
+        retrieval_counts(distances + distances.T, [b"x", "x", b"y", "y"], top=2)
+    for call in (lambda: shape_centralities([square], b"degree"), lambda: CentralityHistogram(b"degree").fit([square])):
+        with pytest.raises(TypeError, match=r"`centrality` must be a centrality name \(str\).*got b'degree'"):
+            call()
+    with pytest.raises(ValueError, match="`centrality` must name at least one centrality"):
+        shape_centralities([square], [])
+    np.testing.assert_array_equal(as_shape_images([np.where(square, 1.5e308, 1e308)])[0], square)

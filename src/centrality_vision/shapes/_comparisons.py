@@ -484,7 +484,11 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
         # (scikit-learn checks the rest, but passes ints beyond C's range to an OverflowError)
         if self.max_depth is not None:
             check_int(self.max_depth, name="max_depth", low=1)
-        if isinstance(self.max_features, numbers.Integral) and not isinstance(self.max_features, bool):
+        if isinstance(self.max_features, (bool, np.bool_)):  # (scikit-learn reads True as 1 feature)
+            raise TypeError(
+                f"`max_features` must be an int, a float, 'sqrt', 'log2' or None; got {self.max_features!r}."
+            )
+        if isinstance(self.max_features, numbers.Integral):
             check_int(self.max_features, name="max_features", low=1)
         comparison_seed, forest_seed = self._seeds()
         self.comparisons_ = CentralityComparisons(
@@ -529,6 +533,9 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
 
         check_is_fitted(self, "forest_")
         self._check_unchanged()  # the forest was grown on the features of the fitted parameters
+        # how the work runs may change after fit (documented): the parts take the values now set
+        self.comparisons_.set_params(cache=self.cache, n_jobs=self.n_jobs, progress=self.progress)
+        self.forest_.set_params(n_jobs=self.n_jobs)
         return self.forest_.predict_proba(self.comparisons_.transform(self._masks(X)))
 
     def predict(self, X) -> np.ndarray:

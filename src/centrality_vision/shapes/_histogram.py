@@ -93,6 +93,8 @@ def resolve_centralities(centrality, *, name: str = "centrality") -> tuple[str, 
         if centrality == "all":
             return SHAPE_CENTRALITIES
         return (check_choice(centrality, CENTRALITIES + ("all",), name=name),)
+    if isinstance(centrality, (bytes, bytearray)):  # (iterated, its letters read as ints: "got 100")
+        raise TypeError(f"`{name}` must be a centrality name (str), 'all' or a list of names; got {centrality!r}.")
     try:
         names = tuple(centrality)
     except TypeError:

@@ -505,10 +505,13 @@ def _check_labels(labels, n: int) -> np.ndarray:
         raise InputError(f"`labels` must hold one label per shape ({n}); got shape {labels.shape}.")
     if labels.dtype.kind in "US" and not isinstance(raw, np.ndarray):
         # numpy turns [1, "1"] into two equal strings: one class out of two
-        mixed = [item for item in raw if not isinstance(item, (str, bytes))]
+        # (and [b"x", "x"] into two equal strings: bytes and text are different labels)
+        kind = str if labels.dtype.kind == "U" and any(isinstance(item, str) for item in raw) else bytes
+        mixed = [item for item in raw if not isinstance(item, kind)]
         if mixed:
             raise TypeError(
-                f"`labels` must be all strings or all numbers; got a mix (e.g. {mixed[0]!r} beside strings)."
+                f"`labels` must be all strings or all numbers; got a mix (e.g. {mixed[0]!r} beside "
+                f"{'text' if kind is str else 'bytes'})."
             )
     if labels.dtype.kind == "O":
         try:
