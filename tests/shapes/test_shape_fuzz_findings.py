@@ -333,3 +333,22 @@ def test_fuzz_round_13_labels_names_and_levels():
     with pytest.raises(ValueError, match="`centrality` must name at least one centrality"):
         shape_centralities([square], [])
     np.testing.assert_array_equal(as_shape_images([np.where(square, 1.5e308, 1e308)])[0], square)
+
+
+def test_parts_tied_for_the_largest_area_are_all_kept_whatever_the_pose():
+    """Between two parts of equal area the first in raster order was kept, so a rotated or
+    mirrored image kept the other part (its profile distance to its own mirror was about 16)."""
+    from centrality_vision.shapes import normalize_shape
+
+    mask = np.zeros((20, 30), dtype=bool)
+    mask[2:6, 2:8] = True  # 24 pixels
+    mask[10:18, 15:18] = True  # 24 pixels
+    mask[0, 29] = True  # a smaller part, dropped
+    kept = normalize_shape(mask, resolution=10)
+    for turned in (np.rot90(mask), mask[::-1], mask[:, ::-1]):
+        assert normalize_shape(turned, resolution=10).sum() == kept.sum()
+    from centrality_vision.shapes._retrieval import _largest_component
+
+    expected = mask.copy()
+    expected[0, 29] = False
+    np.testing.assert_array_equal(_largest_component(mask), expected)

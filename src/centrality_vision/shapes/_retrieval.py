@@ -70,14 +70,19 @@ MAX_POINTS = 2**12  # outline points: profiles take n_points**2 memory (128 MiB 
 
 
 def _largest_component(mask: np.ndarray) -> np.ndarray:
+    """The largest 8-connected part of ``mask``; parts tied for the largest area are all kept
+    (the first in raster order was, so a rotated or mirrored image kept another part)."""
     labels, n = ndimage.label(mask, structure=np.ones((3, 3)))
     if n <= 1:
         return mask
-    return labels == np.argmax(np.bincount(labels.ravel())[1:]) + 1
+    areas = np.bincount(labels.ravel())
+    areas[0] = 0  # the background
+    return areas[labels] == areas.max()
 
 
 def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
-    """The largest 8-connected part of a mask, cropped and resized to about ``resolution**2`` pixels.
+    """The largest 8-connected part of a mask (all the parts tied for it), cropped and resized to
+    about ``resolution**2`` pixels.
 
     The scale factor makes the square root of the area equal ``resolution``; large
     images are first averaged over blocks (so thin parts are not aliased away), then
