@@ -566,7 +566,7 @@ def takes(n_dims: int, n_neighbours: int, n_pixels: int) -> bool:
 #: The bound on the relative rounding error of the inverse-distance prefix tables beyond which
 #: inverse distances are divided pixel by pixel (see :meth:`OctileGrid.inverse_tables`). The
 #: bound is pessimistic: measured errors are about 0.04 eps x (spacing ratio), 1e-13 or less
-#: here, so the tables (and their speed: 3.4x on a 300 x 300 disk) are kept up to spacing
+#: here, so the tables (and their speed: about 3x on a 300 x 300 disk) are kept up to spacing
 #: ratios of about 5,000 at that size.
 _TABLE_LOSS = 1e-11
 
