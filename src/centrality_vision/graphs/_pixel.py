@@ -134,10 +134,9 @@ def _csr_is_grid(indptr, indices, data, raster, node_of, offs, lengths):
     return indptr[n] == k and indices.shape[0] == k and data.shape[0] == k
 
 
-def _volume_mask(image, threshold, foreground: str = "auto") -> np.ndarray:
-    """Boolean mask of a 3D image: a boolean or 0/1 array, or ``image > threshold``; the
-    other side with ``foreground="dark"``."""
-    arr = as_real_array(image, name="image", shape="a 3D array")  # masked entries: a named error
+def _volume_mask(arr: np.ndarray, threshold, foreground: str = "auto") -> np.ndarray:
+    """Boolean mask of a 3D image ``arr`` (a real array, as :func:`pixel_graph` checked it): a
+    boolean or 0/1 array, or ``arr > threshold``; the other side with ``foreground="dark"``."""
     if arr.size == 0:
         raise InputError(f"`image` must not be empty; got shape {arr.shape}.")
     if arr.dtype != bool and not np.all(np.isfinite(arr)):
