@@ -267,3 +267,28 @@ def test_fit_similarity_takes_moving_and_fixed_and_its_former_names_with_a_warni
         fit_similarity(moving, fixed[:5])
     with pytest.raises(TypeError, match="`scale` must be"):
         least_squares_similarity(moving, fixed, scale="no")  # a truthy string fitted a scale
+
+
+def test_fit_similarity_refuses_an_undetermined_fit():
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.transforms import fit_similarity, least_squares_similarity
+
+    points = np.random.default_rng(0).random((6, 2))
+    same = np.tile([[2.0, 3.0]], (6, 1))
+    # all rows equal: every rotation fits as well as any other (it returned the identity)
+    for moving, fixed, name in ((same, points, "moving"), (points, same, "fixed")):
+        for scale in (True, False):
+            with pytest.raises(InputError, match=f"`{name}` must hold at least two distinct points"):
+                fit_similarity(moving, fixed, scale=scale)
+    # a square and its mirror image: the best proper similarity has scale 0 (it returned scale 1,
+    # whose residual, 8, is that of no fit at all); the rigid fit is still a minimiser
+    square = np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]])
+    mirror = square * [1.0, -1.0]
+    with pytest.raises(InputError, match="least-squares scale between `moving` and `fixed` is 0"):
+        fit_similarity(square, mirror)
+    rigid = fit_similarity(square, mirror, scale=False)
+    assert np.sum((rigid(square) - mirror) ** 2) == pytest.approx(8.0)
+    # the lower-level helper keeps its documented fallback for iterative callers (ICP)
+    assert least_squares_similarity(square, mirror, scale=True)[2] == 1.0
+    # a nearly degenerate set is fitted, not refused
+    assert fit_similarity(points, same + np.r_[[[1e-9, 0.0]], np.zeros((5, 2))]).scale > 0

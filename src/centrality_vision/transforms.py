@@ -530,6 +530,14 @@ def fit_similarity(moving, fixed, *, scale: bool = True) -> SimilarityTransform:
     -------
     SimilarityTransform or RigidTransform
 
+    Raises
+    ------
+    InputError
+        When the fit is undetermined: all rows of ``moving`` (or of ``fixed``) equal, so that
+        any rotation fits as well as any other; or, with ``scale=True``, when no positive
+        scale beats scale 0 (``fixed`` uncorrelated with every rotation of ``moving``, as
+        for a symmetric set and its mirror image).
+
     Notes
     -----
     .. versionchanged:: 0.1.0
@@ -556,7 +564,18 @@ def fit_similarity(moving, fixed, *, scale: bool = True) -> SimilarityTransform:
     fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],), min_points=2)
     if moving.shape != fixed.shape:
         raise InputError(f"`moving` and `fixed` must have the same shape; got {moving.shape} and {fixed.shape}.")
-    rotation, translation, s = least_squares_similarity(moving, fixed, scale=scale)
+    for name, points in (("moving", moving), ("fixed", fixed)):
+        if np.all(points == points[0]):
+            raise InputError(
+                f"`{name}` must hold at least two distinct points (the rotation is undetermined "
+                f"otherwise); got {points.shape[0]} equal rows."
+            )
+    rotation, translation, s, fitted = _least_squares_similarity(moving, fixed, scale=scale)
+    if scale and not fitted:
+        raise InputError(
+            "The least-squares scale between `moving` and `fixed` is 0: no rotation of `moving` "
+            "correlates with `fixed` (a symmetric set and its mirror image?). Fit with scale=False."
+        )
     return SimilarityTransform(rotation, translation, s) if scale else RigidTransform(rotation, translation)
 
 
@@ -747,6 +766,12 @@ def least_squares_similarity(
     (True, True, 2.0)
     """
     check_bool(scale, name="scale")
+    return _least_squares_similarity(moving, fixed, scale=scale)[:3]
+
+
+def _least_squares_similarity(moving, fixed, *, scale: bool) -> tuple[np.ndarray, np.ndarray, float, bool]:
+    """:func:`least_squares_similarity` and whether its scale was fitted (False where it fell
+    back to 1: no scale asked for, a ``moving`` without spread, or a best trace not positive)."""
     moving, fixed = _finite_array(moving, "moving"), _finite_array(fixed, "fixed")
     if moving.shape != fixed.shape or moving.shape[0] == 0:
         raise InputError(
@@ -758,10 +783,11 @@ def least_squares_similarity(
     xs, xt = xs / a, xt / b
     rotation, trace = proper_rotation(xt.T @ xs)
     var = float(np.sum(xs * xs))
-    s = (trace / var) * (b / a) if scale and var > 0 and trace > 0 else 1.0
+    fitted = scale and var > 0 and trace > 0
+    s = (trace / var) * (b / a) if fitted else 1.0
     if not np.isfinite(s) or s <= 0:
         raise InputError(f"The least-squares scale between `moving` and `fixed` is not representable (got {s!r}).")
     translation = mu_t - s * rotation @ mu_s
     if not np.all(np.isfinite(translation)):
         raise InputError("The least-squares translation between `moving` and `fixed` overflows float64.")
-    return rotation, translation, s
+    return rotation, translation, s, fitted
