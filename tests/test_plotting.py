@@ -330,6 +330,8 @@ def test_plotting_numbers_are_checked_by_name():
         plot_registration_snapshots(x, {"A": {0: x, 1: x}}, iterations=["a"])
     with pytest.raises(TypeError, match=r"`errors\['a'\]`"):
         plot_alignment_errors({"a": 3.0})
+    with pytest.raises(ValueError, match=r"`errors\['a'\]` must have shape \(2,\), one value per iteration; got"):
+        plot_alignment_errors({"a": [[1.0, 2.0], [3.0, 4.0]]})  # (it said "one value per row of errors['a']")
     with pytest.raises(ValueError, match=r"`errors\['a'\]` must be >= 0"):
         plot_alignment_errors({"a": [-1.0, -2.0]})
     with pytest.raises(ValueError, match="`n_points`"):

@@ -151,9 +151,9 @@ def _equal_3d(ax, points: np.ndarray) -> None:
 _MAX_VALUE = 1e307
 
 
-def _as_values(values, *, n: int, other: str, name: str = "values") -> np.ndarray:
-    """``values`` as a finite float64 array of shape (n,); ``other`` names what fixes n,
-    ``name`` the argument an error names."""
+def _as_values(values, *, n: int, other: str | None, name: str = "values") -> np.ndarray:
+    """``values`` as a finite float64 array of shape (n,); ``other`` names what fixes n (None:
+    a series of its own length, one value per iteration), ``name`` the argument an error names."""
     if sparse.issparse(values):
         raise TypeError(f"`{name}` must be a dense array of shape (n,); got {_describe(values)}.")
     try:
@@ -165,7 +165,8 @@ def _as_values(values, *, n: int, other: str, name: str = "values") -> np.ndarra
     if not is_real_dtype(arr.dtype):
         raise TypeError(f"`{name}` must hold real numbers; got {_describe(arr)}.")
     if arr.shape != (n,):
-        raise InputError(f"`{name}` must have shape ({n},), one value per row of `{other}`; got shape {arr.shape}.")
+        per = "one value per iteration" if other is None else f"one value per row of `{other}`"
+        raise InputError(f"`{name}` must have shape ({n},), {per}; got shape {arr.shape}.")
     arr = arr.astype(np.float64)  # always a copy
     if not np.all(np.isfinite(arr)):
         bad = int(np.count_nonzero(~np.isfinite(arr)))
@@ -958,7 +959,7 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
             raise InputError(f"`errors[{label!r}]` is None: fit with `true_moving=` to record alignment errors.")
         if not hasattr(values, "__len__") or sparse.issparse(values):  # (a sparse array's len() raised)
             raise TypeError(f"`errors[{label!r}]` must be a sequence of errors per iteration; got {_describe(values)}.")
-        v = _as_values(values, n=len(values), other=f"errors[{label!r}]", name=f"errors[{label!r}]") * scale
+        v = _as_values(values, n=len(values), other=None, name=f"errors[{label!r}]") * scale
         if np.any(v < 0):
             raise InputError(f"`errors[{label!r}]` must be >= 0 (errors); got a minimum of {float(v.min()):.3g}.")
         positive = v[v > 0]
