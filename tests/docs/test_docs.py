@@ -37,6 +37,26 @@ def test_gallery_example_runs(index):
     exec(compile(code, f"{GALLERY.name}[{index}]", "exec"), {"__name__": "__gallery__"})
 
 
+README = ROOT / "README.md"
+
+
+def _readme_blocks() -> list[str]:
+    return re.findall(r"```python\n(.*?)```", README.read_text(encoding="utf-8"), flags=re.S)
+
+
+def test_the_readme_python_examples_run_in_order_without_a_warning():
+    from centrality_vision.datasets import load_fish
+
+    blocks = _readme_blocks()
+    assert len(blocks) >= 2
+    # the one name the README leaves to the reader: "a million points" stands for any large pair
+    big_moving, big_fixed = load_fish()
+    namespace = {"__name__": "__readme__", "big_moving": big_moving, "big_fixed": big_fixed}
+    for index, block in enumerate(blocks):
+        exec(compile(block, f"{README.name}[{index}]", "exec"), namespace)  # warnings are errors here
+    assert namespace["reg"].converged_ and namespace["gpd"].converged_
+
+
 def test_code_cites_no_outside_spec():
     offenders = [
         f"{path.relative_to(ROOT)}:{number}"
