@@ -254,11 +254,11 @@ def test_read_shape_of_extreme_grey_values_warns_nothing(tmp_path):
     assert read_shape(tmp_path / "extreme.tif").sum() == 4
 
 
-def test_a_tiff_of_too_many_dimensions_is_described_as_decoded(tmp_path):
-    """The message gave the shape after the first page was taken, (2, 12, 10), not the file's."""
+def test_a_tiff_page_of_too_many_samples_is_described_as_decoded(tmp_path):
     tifffile = pytest.importorskip("tifffile")
     from centrality_vision.io import read_image
 
-    tifffile.imwrite(tmp_path / "stack.tif", np.zeros((2, 2, 12, 10), dtype=np.uint8))
-    with pytest.raises(InputError, match=r"got an array of shape \(2, 2, 12, 10\) \(its first page: \(2, 12, 10\)\)"):
-        read_image(tmp_path / "stack.tif")
+    tifffile.imwrite(tmp_path / "five.tif", np.zeros((12, 10, 5), dtype=np.uint8), photometric="rgb")
+    expected = r"five\.tif: must be a 2D grey or colour image; got an array of shape \(12, 10, 5\)\."
+    with pytest.raises(InputError, match=expected):
+        read_image(tmp_path / "five.tif")

@@ -33,11 +33,46 @@ def test_single_and_multi_frame_gif_and_colour(tmp_path):
 @pytest.mark.parametrize("colour", [False, True])
 def test_multi_page_tiff_gives_its_first_page(tmp_path, colour):
     # tifffile reads the pages as one (pages, rows, cols) series: it was refused as 3D
+    tifffile = pytest.importorskip("tifffile")
     pages = np.stack([DARK_ON_WHITE, 255 - DARK_ON_WHITE, DARK_ON_WHITE])
     if colour:
         pages = np.repeat(pages[..., None], 3, axis=3)
-    iio.imwrite(tmp_path / "pages.tif", pages)
+    tifffile.imwrite(tmp_path / "pages.tif", pages, photometric="rgb" if colour else "minisblack")
+    with tifffile.TiffFile(tmp_path / "pages.tif") as tif:
+        assert len(tif.pages) == 3
     assert np.array_equal(read_shape(tmp_path / "pages.tif"), SHAPE)
+
+
+def test_a_planar_colour_tiff_is_one_colour_image(tmp_path):
+    # its samples come first, (3, rows, cols): the first "page" of that array is its red plane
+    tifffile = pytest.importorskip("tifffile")
+    rgb = np.stack([DARK_ON_WHITE, np.full_like(DARK_ON_WHITE, 30), 255 - DARK_ON_WHITE])
+    tifffile.imwrite(tmp_path / "planar.tif", rgb, photometric="rgb", planarconfig="separate")
+    np.testing.assert_allclose(read_image(tmp_path / "planar.tif"), rgb.astype(float).mean(axis=0))
+
+
+def test_a_volume_tiff_page_is_refused_not_read_as_colour(tmp_path):
+    tifffile = pytest.importorskip("tifffile")
+    volume = np.zeros((3, 16, 16), dtype=np.uint8)
+    tifffile.imwrite(tmp_path / "volume.tif", volume, photometric="minisblack", volumetric=True, tile=(16, 16))
+    expected = r"volume\.tif: must be a 2D grey or colour image; got a TIFF page of axes ZYX"
+    with pytest.raises(InputError, match=expected):
+        read_image(tmp_path / "volume.tif")
+
+
+@pytest.mark.parametrize("width", [2, 3, 4])
+def test_a_multi_page_tiff_of_narrow_pages_gives_its_first_page(tmp_path, width):
+    # the pages were read as one (pages, rows) image whose "channels" were each page's
+    # columns, averaged: a (3, 10) picture for three 10 x 3 pages
+    tifffile = pytest.importorskip("tifffile")
+    pages = np.arange(3 * 10 * width, dtype=np.uint8).reshape(3, 10, width)
+    tifffile.imwrite(tmp_path / "narrow.tif", pages, photometric="minisblack")
+    with tifffile.TiffFile(tmp_path / "narrow.tif") as tif:
+        assert len(tif.pages) == 3
+    np.testing.assert_array_equal(read_image(tmp_path / "narrow.tif"), pages[0])
+    # a stack of stacks: its first page too
+    tifffile.imwrite(tmp_path / "deep.tif", np.arange(2 * 2 * 6 * 5, dtype=np.uint8).reshape(2, 2, 6, 5))
+    np.testing.assert_array_equal(read_image(tmp_path / "deep.tif"), np.arange(30).reshape(6, 5))
 
 
 def test_a_silhouette_stored_as_transparency(tmp_path):

@@ -20,11 +20,11 @@ IMAGE_SUFFIXES = (".png", ".bmp", ".gif", ".tif", ".tiff", ".jpg", ".jpeg", ".pg
 def read_image(path, /) -> np.ndarray:
     """Read an image file as a 2D float64 grey image (colour averaged, alpha handled).
 
-    The pixels are decoded by :func:`imageio.v3.imread`, the first frame of an animated
-    GIF or a multi-page TIFF. Colour images become the mean of their red, green and blue
-    channels. An alpha channel is ignored unless the colour is the same everywhere and
-    only the alpha varies (a silhouette stored as transparency): then the alpha is the
-    image.
+    The pixels are decoded by :func:`imageio.v3.imread` (TIFF files by :mod:`tifffile`):
+    the first frame of an animated GIF, the first page of a multi-page TIFF. Colour images
+    become the mean of their red, green and blue channels. An alpha channel is ignored
+    unless the colour is the same everywhere and only the alpha varies (a silhouette stored
+    as transparency): then the alpha is the image.
 
     Parameters
     ----------
@@ -60,12 +60,16 @@ def read_image(path, /) -> np.ndarray:
     data = path.read_bytes()
     if not data:
         raise InputError(f"{path}: the file is empty.")
-    try:  # decode from memory: a decoder failing on a damaged file then leaves no file open
-        pixels = np.asarray(iio.imread(io.BytesIO(data), index=0, extension=path.suffix.lower()))
-    except Exception as exc:  # imageio and its plugins raise OSError, ValueError, SyntaxError, ...
-        kind = path.suffix.lower().lstrip(".").upper()
-        raise InputError(f"{path}: not a readable {kind} image ({type(exc).__name__}: {_first_line(exc)}).") from None
     kind = path.suffix.lower().lstrip(".").upper()
+    try:  # decode from memory: a decoder failing on a damaged file then leaves no file open
+        if kind in ("TIF", "TIFF"):
+            pixels = _first_tiff_page(data, path)
+        else:
+            pixels = np.asarray(iio.imread(io.BytesIO(data), index=0, extension=path.suffix.lower()))
+    except InputError:
+        raise
+    except Exception as exc:  # imageio and its plugins raise OSError, ValueError, SyntaxError, ...
+        raise InputError(f"{path}: not a readable {kind} image ({type(exc).__name__}: {_first_line(exc)}).") from None
     if np.iscomplexobj(pixels):  # a grey value has no imaginary part to drop silently
         raise InputError(f"{path}: the image has complex pixels ({pixels.dtype}); expected real grey or colour values.")
     if not is_real_dtype(pixels.dtype):
@@ -73,10 +77,6 @@ def read_image(path, /) -> np.ndarray:
     if pixels.size == 0:
         raise InputError(f"{path}: not a readable {kind} image (it decodes to no pixels, shape {pixels.shape}).")
     decoded = pixels.shape
-    stacked = pixels.ndim == 4 or (pixels.ndim == 3 and pixels.shape[2] not in (1, 2, 3, 4))
-    if kind in ("TIF", "TIFF") and stacked:
-        # tifffile reads a multi-page TIFF as one series of pages: its first page
-        pixels = pixels[0]
     if pixels.ndim == 3 and pixels.shape[2] in (2, 4):
         colour, alpha = pixels[..., :-1], pixels[..., -1]
         flat = colour.reshape(-1, colour.shape[2])
@@ -89,18 +89,31 @@ def read_image(path, /) -> np.ndarray:
         else:
             pixels = pixels.mean(axis=2)
     if pixels.ndim != 2:
-        raise InputError(
-            f"{path}: must be a 2D grey or colour image; got an array of shape {decoded}"
-            + (
-                f" (its first page: {pixels.shape})"
-                if decoded != pixels.shape and pixels.ndim == len(decoded) - 1
-                else ""
-            )
-            + "."
-        )
+        raise InputError(f"{path}: must be a 2D grey or colour image; got an array of shape {decoded}.")
     pixels = pixels.astype(np.float64)
     if not np.all(np.isfinite(pixels)):
         raise InputError(f"{path}: the image holds NaN or inf values.")
+    return pixels
+
+
+def _first_tiff_page(data: bytes, path) -> np.ndarray:
+    """The first page of a TIFF file, as (rows, cols) or (rows, cols, samples).
+
+    Read by page and laid out by the page's own axes: a whole series (what imageio's
+    ``index=0`` gives) stacks every page, and pages 1 to 4 pixels wide then looked like the
+    colour channels of one picture; a planar colour page stores its samples first.
+    """
+    import tifffile
+
+    with tifffile.TiffFile(io.BytesIO(data)) as tif:
+        page = tif.pages[0]
+        pixels, axes = np.asarray(page.asarray()), str(page.axes)
+    if set(axes) - {"Y", "X", "S"} or len(axes) != pixels.ndim:
+        raise InputError(
+            f"{path}: must be a 2D grey or colour image; got a TIFF page of axes {axes} and shape {pixels.shape}."
+        )
+    if "S" in axes:
+        pixels = np.moveaxis(pixels, axes.index("S"), -1)
     return pixels
 
 
