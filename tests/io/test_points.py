@@ -646,3 +646,60 @@ def test_a_ply_comment_that_mentions_end_header_does_not_end_the_header(tmp_path
         b"property float x\nproperty float y\nend_header\n0 0\n1 0\n0 1\n"
     )
     np.testing.assert_array_equal(read_points(tmp_path / "c.ply"), [[0, 0], [1, 0], [0, 1]])
+
+
+@pytest.mark.parametrize(
+    "line",
+    [b"element normal 2.0", b"element vertex -1", b"element normal", b"element normal 2 3", b"element n \xc2\xb2"],
+)
+def test_a_damaged_ply_element_line_is_refused(tmp_path, line):
+    # "element normal 2.0" was dropped and its property given to the vertices: the binary
+    # body was then read with 16-byte records, [[1, 2, 3], [5, 6, 7]] instead of [[1, 2, 3], [4, 5, 6]]
+    path = tmp_path / "bad.ply"
+    path.write_bytes(
+        b"ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+        b"property float z\n" + line + b"\nproperty float nx\nend_header\n" + struct.pack("<8f", *range(1, 9))
+    )
+    with pytest.raises(InputError, match=r"bad\.ply: not a readable PLY file \(a damaged element line"):
+        read_points(path)
+
+
+def test_a_ply_with_a_property_before_any_element_or_two_vertex_elements_is_refused(tmp_path):
+    head = b"ply\nformat ascii 1.0\n"
+    vertex = b"element vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+    (tmp_path / "early.ply").write_bytes(head + b"property float w\n" + vertex + b"end_header\n1 2 3\n")
+    with pytest.raises(InputError, match=r"early\.ply: not a readable PLY file \(a property line before any element"):
+        read_points(tmp_path / "early.ply")
+    (tmp_path / "two.ply").write_bytes(head + vertex + vertex + b"end_header\n1 2 3\n4 5 6\n")
+    with pytest.raises(InputError, match=r"two\.ply: the PLY file must have one vertex element; got 2"):
+        read_points(tmp_path / "two.ply")
+
+
+def test_an_npy_with_a_negative_shape_or_long_doubles_past_float64_names_the_file(tmp_path):
+    data = tmp_path / "neg.npy"
+    np.save(data, np.zeros((3, 2)))
+    data.write_bytes(data.read_bytes().replace(b"(3, 2)", b"(-3,-2)".ljust(6)[:6]))  # (numpy's bare ValueError)
+    with pytest.raises(InputError, match=r"neg\.npy: not a readable \.npy array"):
+        read_points(data)
+    if np.finfo(np.longdouble).max > np.finfo(np.float64).max:  # (long double is float64 on some platforms)
+        big = np.ones((2, 2), dtype=np.longdouble)
+        big[0, 0] = np.longdouble(10) ** 400
+        np.save(tmp_path / "big.npy", big)
+        with pytest.raises(InputError, match=r"big\.npy: holds float\d+ values beyond the float64 range"):
+            read_points(tmp_path / "big.npy")  # (it blamed NaN or inf, with numpy's overflow warning)
+
+
+def test_paths_the_system_refuses_are_named_errors(tmp_path):
+    with pytest.raises(InputError, match="`path` must name a file; got an empty path"):
+        read_points("")
+    with pytest.raises(InputError, match="cannot be read"):
+        read_points(tmp_path / ("a" * 300 + ".csv"))  # (a bare OSError: File name too long)
+    (tmp_path / "folder.csv").mkdir()
+    with pytest.raises(InputError, match=r"folder\.csv: is a folder; `path` must name the file to write"):
+        write_points(tmp_path / "folder.csv", [[0.0, 1.0]])
+    (tmp_path / "file.txt").write_text("")
+    under_a_file = r"file\.txt/x\.csv: cannot be written \(.*file\.txt is a file, not a folder\)"
+    with pytest.raises(InputError, match=under_a_file):
+        write_points(tmp_path / "file.txt" / "x.csv", [[0.0, 1.0]])
+    with pytest.raises(InputError, match="cannot be written"):
+        write_points(tmp_path / ("a" * 300 + ".csv"), [[0.0, 1.0]])

@@ -411,3 +411,14 @@ def test_shape_context_tangents_do_not_depend_on_the_order_of_equidistant_neighb
         p = np.random.default_rng(seed).permutation(len(grid))
         turned = np.mod(_tangent_angles(grid[p]) - _tangent_angles(grid)[p] + np.pi, 2 * np.pi) - np.pi
         np.testing.assert_allclose(turned, 0.0, atol=1e-9)
+
+
+def test_points_that_coincide_once_centred_are_named_with_their_relative_spacing():
+    good = np.random.default_rng(0).random((10, 2))
+    near = np.vstack([good * 1e-3, [[1e14, 1e14]]])  # 1e-3 apart at 1e14: 1e-17 of the size
+    with pytest.raises(InputError, match=r"`moving`: rows \d+ and \d+ .* \(a relative spacing of \d\.\de-1[78]\)"):
+        match(near, good)
+    # at 1e-200 apart and 1e200 in size the quotient underflows: it printed "0.0e+00"
+    far = np.vstack([good * 1e-200, [[1e200, 1e200]]])
+    with pytest.raises(InputError, match=r"\(a relative spacing of below 1e-308\)"):
+        match(far, good)

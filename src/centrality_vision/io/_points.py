@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 import re
 import struct
 import zlib
@@ -50,8 +51,14 @@ class _Table:
 def _existing_file(path) -> Path:
     if not isinstance(path, (str, Path)) and not hasattr(path, "__fspath__"):
         raise TypeError(f"`path` must be a str or os.PathLike; got {_describe(path)}.")
+    if os.fspath(path) == "":
+        raise InputError("`path` must name a file; got an empty path.")
     path = Path(path)
-    if not path.exists():
+    try:
+        exists = path.exists()
+    except OSError as exc:  # a name longer than the file system allows, ...
+        raise InputError(f"{_clip(str(path), 200)}: cannot be read ({exc.strerror or exc}).") from None
+    if not exists:
         raise InputError(f"{path}: no such file.")
     if path.is_dir():
         raise InputError(f"{path}: is a folder, not a file.")
@@ -411,6 +418,8 @@ def _read_npy(path: Path) -> _Table:
         raise InputError(f"{path}: must hold a numeric array; got dtype {dtype}.")
     if len(shape) != 2:
         raise InputError(f"{path}: must hold a 2D array (one point per row); got shape {shape}.")
+    if min(shape) < 0:
+        raise InputError(f"{path}: not a readable .npy array (its header gives the negative shape {shape}).")
     needed = math.prod(shape) * dtype.itemsize
     available = path.stat().st_size - offset
     if needed != available:
@@ -419,7 +428,11 @@ def _read_npy(path: Path) -> _Table:
             f"but the file holds {available} bytes of data."
         )
     array = np.load(path, allow_pickle=False, mmap_mode="r")
-    return _Table(np.array(array, dtype=np.float64))
+    with np.errstate(over="ignore"):  # long doubles beyond float64: named below
+        values = np.array(array, dtype=np.float64)
+    if dtype.kind == "f" and dtype.itemsize > 8 and np.any(np.isinf(values) & np.isfinite(array)):
+        raise InputError(f"{path}: holds {dtype} values beyond the float64 range (|x| > 1.8e308).")
+    return _Table(values)
 
 
 # ------------------------------------------------------------------------------- .mat
@@ -665,10 +678,21 @@ def _ply_header(path: Path, data: bytes):
         words = line.split()
         if words[:1] == ["format"] and len(words) > 1:
             fmt = words[1]
-        elif words[:1] == ["element"] and len(words) == 3 and words[2].isdigit():
+        elif words[:1] == ["element"]:
+            # a damaged count would drop the element and give its properties to the one
+            # before: a binary body then read with the wrong record size
+            if len(words) != 3 or not (words[2].isascii() and words[2].isdigit()):
+                raise InputError(
+                    f"{path}: not a readable PLY file (a damaged element line: {_clip(line)!r}; "
+                    "expected 'element NAME COUNT' with COUNT a whole number)."
+                )
             elements.append([words[1], int(words[2]), []])
             sizes.append(0)
-        elif words[:1] == ["property"] and elements:
+        elif words[:1] == ["property"]:
+            if not elements:
+                raise InputError(
+                    f"{path}: not a readable PLY file (a property line before any element: {_clip(line)!r})."
+                )
             # a list property takes at least its count's bytes, a scalar its size
             is_list = words[1:2] == ["list"]
             types = words[2:4] if is_list else words[1:2]
@@ -683,8 +707,8 @@ def _ply_header(path: Path, data: bytes):
     if fmt not in ("ascii", "binary_little_endian", "binary_big_endian"):
         raise InputError(f"{path}: not a readable PLY file (unknown format {fmt!r}).")
     vertex = [element for element in elements if element[0] == "vertex"]
-    if not vertex:
-        raise InputError(f"{path}: the PLY file has no vertex element.")
+    if len(vertex) != 1:
+        raise InputError(f"{path}: the PLY file must have one vertex element; got {len(vertex)}.")
     at_least = (
         sum(element[1] * size for element, size in zip(elements, sizes)) if fmt.startswith("binary") else vertex[0][1]
     )
@@ -978,6 +1002,13 @@ def write_points(path, points, /) -> Path:
     -------
     path : pathlib.Path
 
+    Raises
+    ------
+    InputError
+        Points the format cannot hold, a suffix that is not one of :data:`WRITE_SUFFIXES`,
+        or a path the system refuses (a folder, a file where a folder goes, no permission,
+        a name too long); the message names the path.
+
     Examples
     --------
     >>> import tempfile, pathlib
@@ -1018,8 +1049,23 @@ def write_points(path, points, /) -> Path:
                 f"`points` must not have NaN rows for {path} ({suffix} files cannot mark missing points); "
                 "write .csv, .txt, .npy or .mat."
             )
-    if path.parent != Path("."):
-        path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        if path.is_dir():
+            raise InputError(f"{path}: is a folder; `path` must name the file to write.")
+        for parent in path.parents:  # (mkdir's own error there is "File exists")
+            if parent.exists():
+                if not parent.is_dir():
+                    raise InputError(f"{path}: cannot be written ({parent} is a file, not a folder).")
+                break
+        if path.parent != Path("."):
+            path.parent.mkdir(parents=True, exist_ok=True)
+        _write_points(path, arr, suffix)
+    except OSError as exc:  # a file where a folder goes, no permission, a name too long, ...
+        raise InputError(f"{_clip(str(path), 200)}: cannot be written ({exc.strerror or exc}).") from None
+    return path
+
+
+def _write_points(path: Path, arr: np.ndarray, suffix: str) -> None:
     names = ["x", "y", "z"][: arr.shape[1]] if arr.shape[1] <= 3 else [f"x{k}" for k in range(arr.shape[1])]
     # numpy and scipy append a lower-case suffix to a name that lacks it (points.NPY became
     # points.NPY.npy): write through an open file, under exactly the name given
@@ -1045,7 +1091,6 @@ def write_points(path, points, /) -> Path:
         path.write_text(",".join(names) + "\n" + _rows(arr, ","), encoding="utf-8")
     else:
         path.write_text(_rows(arr, " "), encoding="utf-8")
-    return path
 
 
 def _fmt(value: float) -> str:

@@ -110,9 +110,11 @@ def check_resolution(points: np.ndarray, name: str, *, original: np.ndarray) -> 
         step = np.abs(original[i] - original[j])
         gap = float(step.max() * np.linalg.norm(step / step.max()))  # no underflow of tiny squares
         magnitude = float(np.abs(original).max())
+        ratio = gap / magnitude
+        relative = f"{ratio:.1e}" if ratio > 0 else "below 1e-308"  # (the quotient can underflow)
         raise InputError(
             f"`{name}`: rows {i} and {j} are {gap:.3g} apart, at coordinates up to {magnitude:.3g} in size "
-            f"(a relative spacing of {gap / magnitude:.1e}); once the set is centred, float64 (resolution about "
+            f"(a relative spacing of {relative}); once the set is centred, float64 (resolution about "
             "2e-16 of that size) cannot tell them apart. Drop one of them, or, if the whole set lies far from "
             "the origin, subtract a point near it from all coordinates first."
         )
