@@ -43,6 +43,23 @@ def test_multi_page_tiff_gives_its_first_page(tmp_path, colour):
     assert np.array_equal(read_shape(tmp_path / "pages.tif"), SHAPE)
 
 
+@pytest.mark.parametrize("compression", ["tiff_lzw", "jpeg", "packbits"])
+def test_a_compressed_tiff_is_read_with_or_without_imagecodecs(tmp_path, compression):
+    # tifffile needs the optional imagecodecs for LZW (the commonest TIFF compression) and
+    # JPEG: such files were "not a readable TIF image"
+    from PIL import Image
+
+    pixels = np.where(SHAPE, 0, 255).astype(np.uint8)
+    pages = [Image.fromarray(pixels), Image.fromarray(255 - pixels)]
+    pages[0].save(tmp_path / "c.tif", compression=compression, save_all=True, append_images=pages[1:])
+    read = read_image(tmp_path / "c.tif")
+    assert read.shape == SHAPE.shape
+    if compression == "jpeg":  # lossy
+        assert np.array_equal(read_shape(tmp_path / "c.tif"), SHAPE)
+    else:
+        np.testing.assert_array_equal(read, pixels)
+
+
 def test_a_planar_colour_tiff_is_one_colour_image(tmp_path):
     # its samples come first, (3, rows, cols): the first "page" of that array is its red plane
     tifffile = pytest.importorskip("tifffile")

@@ -105,9 +105,19 @@ def _first_tiff_page(data: bytes, path) -> np.ndarray:
     """
     import tifffile
 
-    with tifffile.TiffFile(io.BytesIO(data)) as tif:
-        page = tif.pages[0]
-        pixels, axes = np.asarray(page.asarray()), str(page.axes)
+    try:
+        with tifffile.TiffFile(io.BytesIO(data)) as tif:
+            page = tif.pages[0]
+            pixels, axes = np.asarray(page.asarray()), str(page.axes)
+    except Exception as exc:
+        # tifffile decodes LZW and JPEG only with the optional imagecodecs; Pillow decodes
+        # them itself (its first frame is the first page). The file's own error otherwise.
+        import imageio.v3 as iio
+
+        try:
+            return np.asarray(iio.imread(io.BytesIO(data), index=0, plugin="pillow"))
+        except Exception:
+            raise exc from None
     if set(axes) - {"Y", "X", "S"} or len(axes) != pixels.ndim:
         raise InputError(
             f"{path}: must be a 2D grey or colour image; got a TIFF page of axes {axes} and shape {pixels.shape}."
