@@ -449,6 +449,28 @@ def test_classify_refuses_features_that_never_vary(tmp_path, capsys):
     assert "every image has the same degree histogram" in message and "copies" in message
 
 
+@pytest.mark.parametrize("name", ["disk1.png", "new.PNG"])
+def test_classify_refuses_a_plot_among_its_input_images(tmp_path, capsys, name):
+    # found by fuzz round 15: --plot IMAGES_DIR/disk1.png replaced that silhouette with the
+    # confusion figure (exit 0), and a new name added an image of its own class to the next run
+    folder = _shapes_folder(tmp_path / "shapes")
+    before = {path.name: path.read_bytes() for path in folder.iterdir()}
+    argv = ["classify", str(folder), "--out", str(tmp_path / "c.json"), "--plot", str(folder / name)]
+    assert main(argv) == 2
+    assert "is an image in IMAGES_DIR, whose images are the input" in _one_line_error(capsys, only=True)
+    assert before == {path.name: path.read_bytes() for path in folder.iterdir()}
+
+
+def test_classify_notes_label_rows_that_name_no_image(tmp_path, capsys):
+    folder = _shapes_folder(tmp_path / "shapes")
+    rows = [f"{path.name},{path.stem.rstrip('0123456789')}" for path in sorted(folder.iterdir())]
+    (tmp_path / "labels.csv").write_text("file,label\n" + "\n".join(rows + ["dsik1.png,disk"]) + "\n")
+    argv = ["classify", str(folder), "--labels", str(tmp_path / "labels.csv"), "--out", str(tmp_path / "c.json")]
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert "note: 1 row(s) of" in err and "name no image of" in err and "'dsik1.png'" in err
+
+
 def test_classify_needs_two_images_per_class(tmp_path, capsys):
     folder = _shapes_folder(tmp_path / "shapes", extra=["star1.png"])
     assert main(["classify", str(folder), "--out", str(tmp_path / "c.json")]) == 2

@@ -209,6 +209,13 @@ def check_output_places(args) -> None:
             inputs[Path(value).resolve()] = _INPUT_FILES[name]
             inputs[_file_identity(Path(value))] = _INPUT_FILES[name]
 
+    # an input folder of images (classify's): an image written into it would be read as a
+    # shape by the next run, or replace one
+    from ..io import IMAGE_SUFFIXES
+
+    folder = getattr(args, "images_dir", None)
+    folder = Path(folder).resolve() if isinstance(folder, str) and folder and Path(folder).is_dir() else None
+
     places = []
     if getattr(args, "_out_is_file", False) and getattr(args, "out", None):
         out = Path(args.out)
@@ -224,6 +231,11 @@ def check_output_places(args) -> None:
         if same:
             raise InputError(
                 f"{option}: {path} is also {same}, an input that writing it would destroy; choose another output file."
+            )
+        if folder is not None and path.suffix.lower() in IMAGE_SUFFIXES and path.resolve().parent == folder:
+            raise InputError(
+                f"{option}: {path} is an image in IMAGES_DIR, whose images are the input (writing it would "
+                f"{'replace one' if path.exists() else 'add one to the next run'}); choose a place outside it."
             )
         ancestor = nearest_existing(path.parent)
         if not ancestor.is_dir():

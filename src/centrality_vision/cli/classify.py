@@ -162,6 +162,9 @@ def run(args: argparse.Namespace) -> int:
         if missing:
             raise InputError(f"{args.labels}: no label for {len(missing)} image(s), e.g. {missing[0]!r}.")
         labels = np.array([given[path.name] for path in files])
+        unused = sorted(set(given) - {path.name for path in files})
+        if unused:  # (a misspelt name would otherwise go unnoticed)
+            say(f"note: {len(unused)} row(s) of {args.labels} name no image of {folder}, e.g. {unused[0]!r}")
     else:
         labels = np.array([label_of(path) for path in files])
     images = [read_shape(path, foreground=args.foreground) for path in files]
