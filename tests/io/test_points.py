@@ -703,3 +703,22 @@ def test_paths_the_system_refuses_are_named_errors(tmp_path):
         write_points(tmp_path / "file.txt" / "x.csv", [[0.0, 1.0]])
     with pytest.raises(InputError, match="cannot be written"):
         write_points(tmp_path / ("a" * 300 + ".csv"), [[0.0, 1.0]])
+
+
+@pytest.mark.parametrize(
+    "text, message",
+    [
+        ("x,y\n1,2\n3\n4,5\n", "line 3 has 1 value, the header 2"),  # (it blamed line 2: '1,2' is not a number)
+        ("1;2\n3;4\n5\n6;7\n", "line 3 has 1 value, the rows before it 2"),
+        ("1,2,\n3,4,\n", r"line 1, column 3: an empty cell \(a ',' too many\?\)"),  # (it said "a header line")
+    ],
+)
+def test_a_ragged_delimited_file_names_its_short_line(tmp_path, text, message):
+    (tmp_path / "ragged.csv").write_text(text)
+    with pytest.raises(InputError, match=message):
+        read_points(tmp_path / "ragged.csv")
+
+
+def test_mixed_tabs_and_spaces_still_split_as_whitespace(tmp_path):
+    (tmp_path / "mixed.txt").write_text("1\t2\n3 4\n5\t6\n")
+    np.testing.assert_array_equal(read_points(tmp_path / "mixed.txt"), [[1, 2], [3, 4], [5, 6]])

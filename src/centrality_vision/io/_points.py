@@ -308,10 +308,12 @@ def _read_text(path: Path) -> _Table:
             raise InputError(f"{path}: holds no points (only the header line {first_number}).")
     elif not all(numeric):
         bad = cells[numeric.index(False)]
-        raise InputError(
-            f"{path}: line {first_number}, column {numeric.index(False) + 1}: {_clip(bad.strip())!r} is not a number "
-            "(a header line must name every column)."
+        why = (
+            f"an empty cell (a '{delimiter}' too many?)"
+            if not bad.strip() and delimiter
+            else f"{_clip(bad.strip())!r} is not a number (a header line must name every column)"
         )
+        raise InputError(f"{path}: line {first_number}, column {numeric.index(False) + 1}: {why}.")
     width = len(names) if names is not None else len(cells)
     lines = np.array([number for number, _ in rows])
     if not decimal_comma:  # the fast path; on any doubt the loop below finds and names the bad cell
@@ -328,7 +330,8 @@ def _read_text(path: Path) -> _Table:
         cells = split(line)
         if len(cells) != width:
             before = "the header" if names is not None else "the rows before it"
-            raise InputError(f"{path}: line {number} has {len(cells)} values, {before} {width}.")
+            values_word = "value" if len(cells) == 1 else "values"
+            raise InputError(f"{path}: line {number} has {len(cells)} {values_word}, {before} {width}.")
         for j, cell in enumerate(cells):
             try:
                 values[k, j] = _to_float(cell, decimal_comma)
@@ -347,6 +350,10 @@ def _sniff(sample: list[str], path: Path):
     lines, such as a header and a row with an empty cell, it picks a wrong delimiter.)
     """
     delimiter = next((d for d in (";", "\t", ",") if all(d in line for line in sample)), " ")
+    if delimiter == " ":
+        # a semicolon or comma on most lines but not all: a ragged file, whose short line the
+        # row check names (split by whitespace, a good line was blamed: '1,2' is not a number)
+        delimiter = next((d for d in (";", ",") if 2 * sum(d in line for line in sample) > len(sample) > 2), " ")
     if delimiter == " ":
         return (lambda line: line.split()), False, None
     decimal_comma = delimiter == ";" and any("," in line for line in sample)
