@@ -160,3 +160,16 @@ def test_a_components_centralities_do_not_depend_on_the_lengths_of_another():
     np.testing.assert_array_equal(cen.betweenness(beside, weights=True)[:4], cen.betweenness(alone, weights=True))
     closeness = nx.closeness_centrality(graph, distance="weight")
     np.testing.assert_allclose(cen.closeness(alone, weights=True), [closeness[i] for i in range(4)], rtol=1e-15, atol=0)
+
+
+def test_hop_counts_do_not_read_lengths_beyond_float64s_range_of_one_another():
+    # found by fuzz round 16: a path with lengths 1e300 and 1e-300 was refused by every hop
+    # count centrality, whose values never depend on the lengths
+    wide = sparse.csr_array(np.array([[0, 1e300, 0], [1e300, 0, 1e-300], [0, 1e-300, 0]]))
+    unit = _path(3)
+    for name in ("betweenness", "closeness", "harmonic", "eccentricity"):
+        np.testing.assert_array_equal(getattr(cen, name)(wide), getattr(cen, name)(unit), err_msg=name)
+    np.testing.assert_array_equal(cen.edge_betweenness(wide).toarray(), cen.edge_betweenness(unit).toarray())
+    np.testing.assert_array_equal(cen.closeness(wide, epsilon=0.5, seed=0), cen.closeness(unit, epsilon=0.5, seed=0))
+    with pytest.raises(InputError, match="within float64's range of one another"):
+        cen.closeness(wide, weights=True)  # the lengths are read: still refused

@@ -73,7 +73,7 @@ CENTRALITIES = (
 class _Prepared:
     """A validated graph as the compiled kernels take it (CSR parts, optionally renumbered)."""
 
-    def __init__(self, graph_input: GraphInput, *, reorder: bool):
+    def __init__(self, graph_input: GraphInput, *, reorder: bool, lengths: bool = True):
         adjacency = graph_input.adjacency
         self.labels = graph_input.labels
         self.directed = graph_input.directed
@@ -91,7 +91,10 @@ class _Prepared:
         self.adjacency = adjacency
         self.indptr = adjacency.indptr.astype(np.int64, copy=False)
         self.indices = adjacency.indices.astype(np.int32, copy=False)
-        self.data, self.length_scale = _searchable_lengths(adjacency.data.astype(np.float64, copy=False))
+        if lengths:
+            self.data, self.length_scale = _searchable_lengths(adjacency.data.astype(np.float64, copy=False))
+        else:  # hop counts: unit lengths (the stored ones may span more than float64's range)
+            self.data, self.length_scale = np.ones(adjacency.data.size), 1.0
         self._classes = False
 
     def transposed(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -164,8 +167,11 @@ def _octile_grid(graph) -> bool:
     return _on_pixel_grid(graph) and takes(graph.mask.ndim, int(graph.connectivity), graph.shape[0])
 
 
-def _prepare(graph, *, reorder: bool = True, allow_directed: bool = True) -> _Prepared:
-    return _Prepared(as_any_graph(graph, name="graph", allow_directed=allow_directed), reorder=reorder)
+def _prepare(graph, *, reorder: bool = True, allow_directed: bool = True, lengths: bool = True) -> _Prepared:
+    """``graph`` checked and laid out for the kernels; ``lengths=False`` (hop counts) gives
+    unit edge lengths and leaves the stored ones unread."""
+    graph_input = as_any_graph(graph, name="graph", allow_directed=allow_directed)
+    return _Prepared(graph_input, reorder=reorder, lengths=lengths)
 
 
 def _finish(values: np.ndarray, labels, as_dict: bool):
@@ -441,8 +447,8 @@ def betweenness(
     array([0., 1., 0.])
     """
     on_grid = _on_pixel_grid(graph)
-    prep = _prepare(graph, reorder=not on_grid)  # the grid path walks the mask, not these lists
     weights = check_bool(weights, name="weights")
+    prep = _prepare(graph, reorder=not on_grid, lengths=weights)  # the grid path walks the mask, not these lists
     normalized = check_bool(normalized, name="normalized")
     progress = check_bool(progress, name="progress")
     n = prep.n
@@ -543,8 +549,8 @@ def edge_betweenness(
            [2., 0., 2.],
            [0., 2., 0.]])
     """
-    prep = _prepare(graph)
     weights = check_bool(weights, name="weights")
+    prep = _prepare(graph, lengths=weights)
     normalized = check_bool(normalized, name="normalized")
     progress = check_bool(progress, name="progress")
     n = prep.n
@@ -687,7 +693,7 @@ def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc, need_inve
     node (the inverse sums may be zeros unless ``need_inverse``; distances in ``unit``)."""
     weights = check_bool(weights, name="weights")
     on_grid = weights and epsilon is None and _on_pixel_grid(graph)
-    prep = _prepare(graph, reorder=not on_grid)  # the grid search walks the mask, not these lists
+    prep = _prepare(graph, reorder=not on_grid, lengths=weights)  # the grid search walks the mask, not these lists
     progress = check_bool(progress, name="progress")
     if epsilon is not None:
         if weights or prep.directed:
@@ -841,8 +847,8 @@ def eccentricity(
     """
     normalized = check_bool(normalized, name="normalized")
     check_choice(method, ("auto", "bounds", "all"), name="method")
-    prep = _prepare(graph)
     weights = check_bool(weights, name="weights")
+    prep = _prepare(graph, lengths=weights)
     progress = check_bool(progress, name="progress")
     largest = None
     searches = 0
