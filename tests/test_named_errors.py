@@ -262,3 +262,31 @@ def test_a_tiff_page_of_too_many_samples_is_described_as_decoded(tmp_path):
     expected = r"five\.tif: must be a 2D grey or colour image; got an array of shape \(12, 10, 5\)\."
     with pytest.raises(InputError, match=expected):
         read_image(tmp_path / "five.tif")
+
+
+def test_as_dict_refuses_repeated_or_unhashable_igraph_names():
+    # found by fuzz round 16: names ['a', 'b', 'a', 'c'] gave 3 entries for 4 nodes (one value
+    # overwritten), and list names a bare "unhashable type: 'list'"
+    from centrality_vision import centrality as cen
+
+    graph = _IgraphLike([(0, 1), (1, 2), (2, 3)], [1.0, 1.0, 1.0])
+    graph.vs["name"] = ["a", "b", "a", "c"]
+    np.testing.assert_array_equal(cen.betweenness(graph), [0.0, 2.0, 2.0, 0.0])  # the array is fine
+    with pytest.raises(InputError, match=r"`as_dict` \(True\) needs distinct node labels; the graph names 'a'"):
+        cen.betweenness(graph, as_dict=True)
+    graph.vs["name"] = [[1], [2], [3], [4]]
+    with pytest.raises(TypeError, match=r"`as_dict` \(True\) needs hashable node labels; got the label \[1\]"):
+        cen.degree(graph, as_dict=True)
+    graph.vs["name"] = ["a", "b", "c", "d"]
+    assert cen.degree(graph, as_dict=True) == {"a": 1.0, "b": 2.0, "c": 2.0, "d": 1.0}
+
+
+@pytest.mark.parametrize("dtype", ["<U3", "S3", "timedelta64[s]", "datetime64[s]"])
+def test_a_dense_graph_of_text_or_times_is_refused(dtype):
+    # found by fuzz round 16: '2.5' text converted to lengths (closeness [0.4, 0.4]); point
+    # sets of these dtypes were already refused
+    from centrality_vision import centrality as cen
+
+    adjacency = np.array([[0, 2], [2, 0]]).astype(dtype)
+    with pytest.raises(TypeError, match=r"`graph` must hold real edge lengths; got array of shape \(2, 2\)"):
+        cen.closeness(adjacency, weights=True)

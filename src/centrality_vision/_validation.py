@@ -223,9 +223,11 @@ def as_any_graph(graph, *, name: str = "graph", allow_directed: bool = False) ->
             dense = np.asarray(graph)
             if np.iscomplexobj(dense):
                 raise TypeError(f"`{name}` must hold real edge lengths; got complex dtype {dense.dtype}.")
+            if dense.dtype.kind in "USmMV":  # text, times and records convert, and mean no length
+                raise TypeError(f"`{name}` must hold real edge lengths; got {_describe(dense)}.")
             dense = dense.astype(np.float64)
         except (TypeError, ValueError) as exc:
-            if "complex" in str(exc):
+            if str(exc).startswith(f"`{name}` must hold real edge lengths"):  # (raised just above)
                 raise
             raise TypeError(
                 f"`{name}` must be a scipy.sparse matrix, a square array of edge lengths, or a networkx "

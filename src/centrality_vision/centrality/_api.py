@@ -27,6 +27,7 @@ Conventions shared by every function here:
 from __future__ import annotations
 
 import math
+from collections.abc import Hashable
 
 import numpy as np
 from scipy import sparse
@@ -177,8 +178,25 @@ def _prepare(graph, *, reorder: bool = True, allow_directed: bool = True, length
 def _finish(values: np.ndarray, labels, as_dict: bool):
     if not check_bool(as_dict, name="as_dict"):
         return values
-    keys = range(values.shape[0]) if labels is None else labels
-    return {key: float(v) for key, v in zip(keys, values)}
+    if labels is None:
+        return {key: float(v) for key, v in enumerate(values)}
+    try:
+        result = {key: float(v) for key, v in zip(labels, values)}
+    except TypeError:  # igraph vertex names can be any object
+        bad = next(label for label in labels if not isinstance(label, Hashable))
+        raise TypeError(f"`as_dict` (True) needs hashable node labels; got the label {bad!r}.") from None
+    if len(result) != len(labels):  # (a repeated name kept one of its nodes' values)
+        seen, repeated = set(), None
+        for label in labels:
+            if label in seen:
+                repeated = label
+                break
+            seen.add(label)
+        raise InputError(
+            f"`as_dict` (True) needs distinct node labels; the graph names {repeated!r} more than once "
+            "(return the array, which follows the node order, instead)."
+        )
+    return result
 
 
 def _strengths_option(strengths, weights, function: str) -> bool:
