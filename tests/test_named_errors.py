@@ -290,3 +290,36 @@ def test_a_dense_graph_of_text_or_times_is_refused(dtype):
     adjacency = np.array([[0, 2], [2, 0]]).astype(dtype)
     with pytest.raises(TypeError, match=r"`graph` must hold real edge lengths; got array of shape \(2, 2\)"):
         cen.closeness(adjacency, weights=True)
+
+
+def test_sampling_options_are_checked_when_the_values_are_exact():
+    # found by fuzz round 16: delta=nan and seed='a' passed unnoticed without epsilon
+    from centrality_vision import centrality as cen
+
+    triangle = np.ones((3, 3)) - np.eye(3)
+    for function in (cen.betweenness, cen.closeness, cen.harmonic):
+        with pytest.raises(InputError, match=r"`delta` must be a finite number in \[0, 1\]; got nan"):
+            function(triangle, delta=float("nan"))
+        with pytest.raises(TypeError, match="`seed` must be None, a non-negative int"):
+            function(triangle, seed="a")
+    generator = np.random.default_rng(0)
+    cen.betweenness(triangle, seed=generator)
+    assert generator.random() == np.random.default_rng(0).random()  # nothing drawn from it
+
+
+def test_a_spacing_with_a_boolean_among_numbers_is_refused():
+    with pytest.raises(TypeError, match=r"`spacing` must be 2 positive finite numbers; got booleans \(True, 1\)"):
+        pixel_graph(np.ones((3, 3), dtype=bool), spacing=(True, 1))  # (it was read as (1, 1))
+
+
+def test_a_precomputed_mwme_matrix_names_what_is_wrong_and_where():
+    distances = np.array([[0.0, 1.0, 2.0], [1.0, 0.0, 3.0], [2.0, 4.0, 0.0]])
+    with pytest.raises(InputError, match=r"entries \(1, 2\) and \(2, 1\) differ: 3 and 4"):
+        mwme_graph(distances, metric="precomputed")
+    distances[2, 1] = 3.0
+    distances[0, 0] = 0.5
+    with pytest.raises(InputError, match=r"diagonal entry \(0, 0\) is 0.5"):
+        mwme_graph(distances, metric="precomputed")
+    distances[0, 0], distances[0, 2], distances[2, 0] = 0.0, 0.0, 0.0
+    with pytest.raises(InputError, match=r"off-diagonal entry \(0, 2\) is 0 \(distinct points"):
+        mwme_graph(distances, metric="precomputed")

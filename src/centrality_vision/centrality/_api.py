@@ -284,6 +284,15 @@ def _distance_stats(
     return [*(prep.unpermute(v) for v in stats), prep.length_scale if weights else 1.0]
 
 
+def _check_sampling_options(delta, seed) -> None:
+    """``delta`` and ``seed`` checked also where ``epsilon`` is None (exact values, which do
+    not use them): nonsense there passed unnoticed."""
+    from .._seeding import as_generator
+
+    _check_epsilon(1.0, delta)
+    as_generator(seed)  # (a Generator is returned as it is, nothing drawn)
+
+
 def _check_epsilon(epsilon, delta):
     epsilon = check_float(epsilon, name="epsilon", low=0.0, high=1.0)
     if epsilon == 0.0:
@@ -471,6 +480,7 @@ def betweenness(
     progress = check_bool(progress, name="progress")
     n = prep.n
     pairs = (n - 1) * (n - 2) / (1 if prep.directed else 2)
+    _check_sampling_options(delta, seed)
     if epsilon is not None:
         if weights:
             raise InputError("`epsilon` (approximation) is available for hop counts only; got weights=True.")
@@ -713,6 +723,7 @@ def _inward_sums(graph, weights, epsilon, delta, seed, progress, desc, need_inve
     on_grid = weights and epsilon is None and _on_pixel_grid(graph)
     prep = _prepare(graph, reorder=not on_grid, lengths=weights)  # the grid search walks the mask, not these lists
     progress = check_bool(progress, name="progress")
+    _check_sampling_options(delta, seed)
     if epsilon is not None:
         if weights or prep.directed:
             raise InputError("`epsilon` (approximation) is available for hop counts on undirected graphs only.")

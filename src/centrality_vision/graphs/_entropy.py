@@ -243,15 +243,23 @@ def _precomputed(distances) -> _Distances:
             f"`points` (metric='precomputed') must be a square matrix of at least 3 rows; got shape {arr.shape}."
         )
     off = ~np.eye(arr.shape[0], dtype=bool)
-    if (
-        not np.all(np.isfinite(arr))
-        or np.any(np.diag(arr) != 0)
-        or np.any(arr[off] <= 0)
-        or not np.allclose(arr, arr.T, rtol=1e-12, atol=0)
-    ):
+    problem = None
+    if not np.all(np.isfinite(arr)):
+        row, col = np.argwhere(~np.isfinite(arr))[0]
+        problem = f"entry ({row}, {col}) is {arr[row, col]}"
+    elif np.any(np.diag(arr) != 0):
+        row = int(np.flatnonzero(np.diag(arr) != 0)[0])
+        problem = f"diagonal entry ({row}, {row}) is {arr[row, row]:.6g}"
+    elif np.any(arr[off] <= 0):
+        row, col = np.argwhere(off & (arr <= 0))[0]
+        problem = f"off-diagonal entry ({row}, {col}) is {arr[row, col]:.6g} (distinct points have positive distances)"
+    elif not np.allclose(arr, arr.T, rtol=1e-12, atol=0):
+        row, col = np.argwhere(~np.isclose(arr, arr.T, rtol=1e-12, atol=0))[0]
+        problem = f"entries ({row}, {col}) and ({col}, {row}) differ: {arr[row, col]:.17g} and {arr[col, row]:.17g}"
+    if problem is not None:
         raise InputError(
             "`points` (metric='precomputed') must be a finite symmetric matrix with a zero diagonal "
-            "and positive distances off it."
+            f"and positive distances off it; {problem}."
         )
     exponent = int(np.frexp(arr.max())[1])
     scaled = np.ldexp(arr, -exponent)

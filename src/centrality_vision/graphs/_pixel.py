@@ -264,7 +264,8 @@ def pixel_graph(
             spacing = raw.astype(np.float64)
         except (TypeError, ValueError):
             raise TypeError(f"`spacing` must be {mask.ndim} positive finite numbers; got {given!r}.") from None
-        if raw.dtype == bool:
+        items = given if isinstance(given, (list, tuple)) else ()
+        if raw.dtype == bool or any(isinstance(x, (bool, np.bool_)) for x in items):  # ((True, 1): ints to numpy)
             raise TypeError(f"`spacing` must be {mask.ndim} positive finite numbers; got booleans {given!r}.")
         if spacing.shape != (mask.ndim,) or not np.all(np.isfinite(spacing)) or np.any(spacing <= 0):
             raise InputError(f"`spacing` must be {mask.ndim} positive finite numbers; got {spacing.tolist()!r}.")
