@@ -248,8 +248,13 @@ def main() -> None:
     parser.add_argument("--from-json", default=None, help="rewrite the table and figure from a saved run")
     args = parser.parse_args()
     if args.from_json:
-        result = json.loads(Path(args.from_json).read_text())
-        args.quick = result["quick"]
+        try:
+            result = json.loads(Path(args.from_json).read_text())
+            args.quick = result["quick"]
+        except (OSError, UnicodeDecodeError, ValueError, TypeError, KeyError) as exc:
+            parser.error(
+                f"--from-json {args.from_json}: not a saved run of this benchmark ({type(exc).__name__}: {exc})"
+            )
     else:
         started = time.perf_counter()
         result = run(args.quick, args.seed)

@@ -228,7 +228,17 @@ def test_gpd_duplicates_are_named_by_file_and_row(tmp_path, capsys, fish):
 def test_library_settings_read_as_options(tmp_path, capsys, fish):
     # "max_iter=1 ... tol=1e-06" in the library is "--max-iter 1 ... --tol 1e-06" here
     _register(tmp_path, fish, fish[::-1] + 0.1, "--method", "icp", "--max-iter", "1")
-    assert "warning: ICP stopped at --max-iter 1 before meeting --tol 1e-06." in capsys.readouterr().err
+    # and the library's class is the command's method and transform (it said "ICP", and
+    # "RigidCPD" for --transform similarity)
+    assert "warning: ICP (similarity) stopped at --max-iter 1 before meeting --tol 1e-06." in capsys.readouterr().err
+    _register(tmp_path, fish, fish[::-1] + 0.1, "--transform", "similarity", "--max-iter", "1")
+    assert "warning: CPD (similarity) stopped at --max-iter 1 before" in capsys.readouterr().err
+
+
+def test_a_register_warning_names_no_library_attribute(tmp_path, capsys, fish):
+    _register(tmp_path, fish[:1], fish)
+    err = capsys.readouterr().err
+    assert "the fitted transform is right on MOVING" in err and "transform_" not in err
 
 
 @pytest.mark.parametrize(("method", "estimator"), [("icp", "ICP"), ("cpd", "RigidCPD")])

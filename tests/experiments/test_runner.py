@@ -106,12 +106,22 @@ def test_other_parameters_in_the_same_file_are_recomputed_never_reused(tmp_path,
     )
     assert first == {"u": {"x": 2, "square": 4}} and second == {"u": {"x": 3, "square": 9}}
     assert _calls(tmp_path) == 2
-    assert "1 stored result(s) were computed with other parameters" in capsys.readouterr().err
+    assert "1 stored result(s) are not units of this run" in capsys.readouterr().err
     # both stay in the file; asking for the first again reads it, computing nothing
     again = run_units(
         [Unit("u", _square, {"x": 2, "marker_dir": str(tmp_path)})], path, scheduler="serial", progress=False
     )
     assert again == first and _calls(tmp_path) == 2
+    # a run that needs fewer of the stored units (fewer seeds) says so without blaming parameters
+    capsys.readouterr()
+    both = [
+        Unit("a", _square, {"x": 4, "marker_dir": str(tmp_path)}),
+        Unit("b", _square, {"x": 5, "marker_dir": str(tmp_path)}),
+    ]
+    run_units(both, tmp_path / "s.jsonl", scheduler="serial", progress=False)
+    run_units(both[:1], tmp_path / "s.jsonl", scheduler="serial", progress=False)
+    err = capsys.readouterr().err
+    assert "1 stored result(s) are not units of this run" in err and "Computing 0 of 1" in err
 
 
 def test_damaged_or_edited_lines_are_recomputed_never_read(tmp_path):

@@ -366,6 +366,13 @@ def run(args: argparse.Namespace) -> int:
     label = f"{args.method.upper()} ({args.transform})"
     if args.method == "gpd":
         label = f"GPD ({args.transform}, {args.centrality}, {args.graph})"
+    # the library's words for what the command calls otherwise: its classes (RigidCPD is
+    # also --transform similarity) and its fitted attribute
+    args._cli_phrases = {
+        "`transform_`": "the fitted transform",
+        **{f"{name} stopped": f"{label} stopped" for name in ("RigidCPD", "AffineCPD", "NonRigidCPD", "ICP")},
+        **{f"{name}: ": f"{label}: " for name in ("RigidCPD", "AffineCPD", "NonRigidCPD", "ICP")},
+    }
     say(
         f"{label}: moving {args.moving} ({moving.shape[0]} points), fixed {args.fixed} ({fixed.shape[0]} points), "
         f"{moving.shape[1]}D"

@@ -169,13 +169,20 @@ def prepare_out(args) -> Path:
 
 def make_out_folder(path) -> Path:
     """``path`` as a folder, created if missing; a file or an unwritable place is a named error."""
+    from .._validation import nearest_existing
     from ..exceptions import InputError
 
     out = Path(path)
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise InputError(f"`--out` must be a folder that can be created; got {str(out)!r} ({exc.strerror}).") from None
+        ancestor = nearest_existing(out)
+        why = (
+            f"{str(ancestor)!r} is a file, not a folder"
+            if ancestor.exists() and not ancestor.is_dir()
+            else exc.strerror
+        )
+        raise InputError(f"`--out` must be a folder that can be created; got {str(out)!r} ({why}).") from None
     return out
 
 

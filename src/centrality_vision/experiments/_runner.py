@@ -373,8 +373,8 @@ def run_units(
     other = len(set(stored) - set(ids.values()))
     if other:
         print(
-            f"{path}: {other} stored result(s) were computed with other parameters (another seed, size, method, "
-            f"package version or code); they are kept in the file and not used. "
+            f"{path}: {other} stored result(s) are not units of this run (other seeds, sizes or methods, or "
+            f"another package version or code); they are kept in the file and not used. "
             f"Computing {len(todo)} of {len(units)} unit(s).",
             file=sys.stderr,
         )
