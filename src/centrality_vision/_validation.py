@@ -223,7 +223,7 @@ def as_any_graph(graph, *, name: str = "graph", allow_directed: bool = False) ->
             dense = np.asarray(graph)
             if np.iscomplexobj(dense):
                 raise TypeError(f"`{name}` must hold real edge lengths; got complex dtype {dense.dtype}.")
-            if dense.dtype.kind in "USmMV":  # text, times and records convert, and mean no length
+            if dense.ndim and dense.dtype.kind in "USmMV":  # text, times and records convert, and mean no length
                 raise TypeError(f"`{name}` must hold real edge lengths; got {_describe(dense)}.")
             dense = dense.astype(np.float64)
         except (TypeError, ValueError) as exc:
