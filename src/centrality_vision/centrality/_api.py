@@ -27,6 +27,7 @@ Conventions shared by every function here:
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Hashable
 
 import numpy as np
@@ -186,12 +187,7 @@ def _finish(values: np.ndarray, labels, as_dict: bool):
         bad = next(label for label in labels if not isinstance(label, Hashable))
         raise TypeError(f"`as_dict` (True) needs hashable node labels; got the label {bad!r}.") from None
     if len(result) != len(labels):  # (a repeated name kept one of its nodes' values)
-        seen, repeated = set(), None
-        for label in labels:
-            if label in seen:
-                repeated = label
-                break
-            seen.add(label)
+        repeated = next(label for label, count in Counter(labels).items() if count > 1)
         raise InputError(
             f"`as_dict` (True) needs distinct node labels; the graph names {repeated!r} more than once "
             "(return the array, which follows the node order, instead)."
