@@ -25,3 +25,19 @@ exclude_patterns = ["_build"]
 html_theme = "alabaster"
 html_static_path = []
 nitpicky = False
+
+
+def _no_type_docstrings(app, what, name, obj, options, lines):
+    """A constant re-exported from a private module has no doc comment where autodoc looks
+    (its text is in api.rst); the docstring of its type (tuple, str, CentralityCache) is not
+    about it and is dropped."""
+    import inspect
+
+    doc = type(obj).__doc__
+    first = inspect.cleandoc(doc).strip().splitlines()[0] if isinstance(doc, str) and doc.strip() else None
+    if what == "data" and first and any(line.strip() == first for line in lines):
+        lines.clear()
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _no_type_docstrings, priority=400)  # before numpydoc

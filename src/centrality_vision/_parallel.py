@@ -73,7 +73,7 @@ def get_num_threads() -> int:
     return _state["threads"] or _default_threads()
 
 
-def set_num_threads(n: int) -> None:
+def set_num_threads(n: int | None) -> None:
     """Set how many threads the compiled centralities use (``None`` restores the default).
 
     Parameters
