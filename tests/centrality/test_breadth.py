@@ -157,11 +157,11 @@ def test_complex_adjacency_is_a_type_error():
 
 def test_weights_alias_of_degree_and_eigenvector_is_deprecated():
     graph = sparse.csr_array(np.array([[0, 2.0, 0], [2.0, 0, 1.0], [0, 1.0, 0]]))
-    with pytest.warns(DeprecationWarning, match=r"use degree\(strengths=True\)"):
+    with pytest.warns(FutureWarning, match=r"use degree\(strengths=True\)"):  # (as every rename)
         old = cen.degree(graph, weights=True)
     np.testing.assert_allclose(old, cen.degree(graph, strengths=True))
     np.testing.assert_allclose(old, [2, 3, 1])
-    with pytest.warns(DeprecationWarning, match="strengths"):
+    with pytest.warns(FutureWarning, match="strengths"):
         old = cen.eigenvector(graph, weights=True)
     np.testing.assert_allclose(old, cen.eigenvector(graph, strengths=True))
     with warnings.catch_warnings():

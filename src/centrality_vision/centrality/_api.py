@@ -11,7 +11,7 @@ Conventions shared by every function here:
   the stored lengths, ``weights=False`` (the default, as in the thesis) counts hops. It
   exists on the path centralities only. Degree, eigenvector, PageRank and Katz use the
   stored values as connection *strengths* with ``strengths=True`` (their old
-  ``weights=True`` still works, with a :class:`DeprecationWarning`).
+  ``weights=True`` still works, with a :class:`FutureWarning`).
 - Directed graphs (an asymmetric matrix, a ``networkx.DiGraph``, a directed igraph
   graph) are accepted by the path centralities, PageRank and Katz, with networkx's
   conventions: closeness and harmonic use distances *to* the node, eccentricity distances
@@ -203,7 +203,7 @@ def _strengths_option(strengths, weights, function: str) -> bool:
             warn(
                 f"{function}(weights=True) is deprecated: `weights` means edge lengths as distances in "
                 f"this package; use {function}(strengths=True) for the stored values as strengths.",
-                DeprecationWarning,
+                FutureWarning,  # (as every renamed option: DeprecationWarning is hidden outside __main__)
             )
             return True
     return check_bool(strengths, name="strengths")

@@ -26,6 +26,12 @@ from ._cache import (
 from ._comparisons import CentralityComparisonForest, CentralityComparisons, centrality_map
 from ._histogram import CentralityHistogram
 from ._retrieval import (
+    ANGLE_QUANTILES,
+    ANGLE_REACH,
+    DISTANCE_QUANTILES,
+    FEATURE_SCALES,
+    REACH_RADII,
+    VISIBILITY_QUANTILES,
     bullseye_score,
     diffusion_rerank,
     nearest_neighbour_accuracy,
@@ -37,6 +43,12 @@ from ._retrieval import (
 )
 
 __all__ = [
+    "ANGLE_QUANTILES",
+    "ANGLE_REACH",
+    "DISTANCE_QUANTILES",
+    "FEATURE_SCALES",
+    "REACH_RADII",
+    "VISIBILITY_QUANTILES",
     "PATH_CENTRALITIES",
     "SHAPE_CENTRALITIES",
     "CentralityCache",
