@@ -557,7 +557,7 @@ def test_usage_errors_are_one_line_with_status_2(capsys, argv):
     assert len(err.strip().splitlines()) == 1 and f"centrality-vision {argv[0]}: error:" in err and "--help" in err
 
 
-@pytest.mark.parametrize("command", ["graph", "centrality", "register", "match", "classify"])
+@pytest.mark.parametrize("command", ["graph", "centrality", "register", "match", "classify", "demo", "reproduce"])
 def test_each_subcommand_has_help_with_an_example(capsys, command):
     with pytest.raises(SystemExit) as info:
         main([command, "--help"])

@@ -722,3 +722,14 @@ def test_a_ragged_delimited_file_names_its_short_line(tmp_path, text, message):
 def test_mixed_tabs_and_spaces_still_split_as_whitespace(tmp_path):
     (tmp_path / "mixed.txt").write_text("1\t2\n3 4\n5\t6\n")
     np.testing.assert_array_equal(read_points(tmp_path / "mixed.txt"), [[1, 2], [3, 4], [5, 6]])
+
+
+def test_too_few_columns_get_no_advice_to_choose_columns(tmp_path):
+    # (it said "pick the coordinates with `columns`" for a file of 2 columns read as 3D)
+    (tmp_path / "p.csv").write_text("x,y\n0,1\n2,3\n")
+    with pytest.raises(InputError, match=r"must have 3 coordinates; got 2 columns") as info:
+        read_points(tmp_path / "p.csv", n_dims=(3,))
+    assert "`columns`" not in str(info.value)
+    (tmp_path / "q.csv").write_text("a,b,c,d\n0,1,2,3\n")
+    with pytest.raises(InputError, match="pick the coordinates with `columns`"):
+        read_points(tmp_path / "q.csv", n_dims=(3,))

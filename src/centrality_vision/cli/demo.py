@@ -22,6 +22,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "fig. 5.1); draw the closeness of a Kimia-99 silhouette's pixel graph (fig. 4.2); register the fish "
         "under a similarity transform with CPD and with GPD (closeness), drawn before and after, and the "
         "per-point alignment error of CPD and of GPD with four centralities (fig. 5.3).",
+        epilog="example:\n  centrality-vision demo --out demo-output --shape dog1",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument("--out", default="demo-output", type=out_folder, help="output folder (default: %(default)s)")
     parser.add_argument(

@@ -18,6 +18,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
         help="Re-run one of the thesis' experiments and print our numbers beside the thesis'.",
         description="Re-run a thesis experiment; tables and figures are written under --out/<experiment>/. "
         "'all' runs every experiment and writes --out/report.md with every table and figure.",
+        epilog="example:\n  centrality-vision reproduce fig-5.3 --quick --seeds 5 --out results",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     parser.add_argument(
         "experiment", choices=[*EXPERIMENTS, "all"], help="which table or figure, or all of them with a report"

@@ -4,8 +4,9 @@
   ``.tsv``, ``.xyz``; header, delimiter and decimal comma found by themselves), NumPy
   (``.npy``), MATLAB (``.mat``), PLY, PCD (ASCII or binary) and OBJ files, picking the
   coordinate columns by name or index.
-- :func:`write_points` writes a point set in any of those formats (PLY, PCD and OBJ for
-  3D points only); :func:`read_points` reads every file it writes back exactly.
+- :func:`write_points` writes a point set in any of those formats but ``.tsv``
+  (:data:`WRITE_SUFFIXES`; PLY, PCD and OBJ for 3D points only); :func:`read_points`
+  reads every file it writes back exactly.
 - :func:`read_shape` reads a binary shape (a silhouette) from any image file imageio
   decodes (PNG, BMP, GIF, TIFF, JPEG, ...); :func:`read_image` gives the grey image.
 

@@ -268,7 +268,8 @@ def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
                 picked = picked[1:]
     wanted = " or ".join(str(d) for d in n_dims)
     if len(picked) not in n_dims:
-        hint = "" if columns is not None else _COLUMNS_HINT
+        # (choosing columns helps only where the file has more of them than wanted)
+        hint = "" if columns is not None or len(picked) < min(n_dims) else _COLUMNS_HINT
         raise InputError(f"{path}: points must have {wanted} coordinates; got {len(picked)} columns{shown}{hint}.")
     return picked
 
@@ -993,9 +994,9 @@ def write_points(path, points, /) -> Path:
     with default arguments). ``.txt`` and ``.xyz``: space-separated rows, no header.
     ``.npy``: :func:`numpy.save`. ``.mat``: the variable ``points``
     (:func:`scipy.io.savemat`). ``.ply`` (binary, via meshio), ``.pcd`` (``DATA ascii``)
-    and ``.obj`` (``v`` lines) hold 3D points only. Numbers are written with 17
-    significant digits, so text formats round-trip float64 exactly; missing parent
-    folders are created.
+    and ``.obj`` (``v`` lines) hold 3D points only. Numbers are written as the shortest
+    decimal that reads back as the same float64 (at most 17 significant digits), so text
+    formats round-trip exactly; missing parent folders are created.
 
     Parameters
     ----------

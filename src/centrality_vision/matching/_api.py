@@ -62,7 +62,7 @@ def _warn_if_scaled(info: dict) -> None:
     if similar > _SCALED_CONSENSUS * rigid and max(ratio, 1 / ratio) > _SCALED_RATIO:
         warn(
             f"The sets seem to differ in scale: a similarity transform of scale {ratio:.3g} brings "
-            f"{similar:.1f} points into agreement where the rigid fit brings {rigid:.1f}. A rigid "
+            f"{similar:g} points into agreement where the rigid fit brings {rigid:g}. A rigid "
             "transform cannot align them and its correspondences are not reliable; use `scale=True`.",
             MatchingWarning,
         )
@@ -241,8 +241,8 @@ def match(
     if method == "robust" and refine == "cpd" and not info["cpd_kept"]:
         warn(
             f"`refine='cpd'` with `w={w:g}` ended in a pose that brings "
-            f"{info['cpd_consensus']:.1f} points into agreement where the consensus pose it started from "
-            f"brings {info['refined_consensus']:.1f}: CPD's result was dropped and the consensus pose kept. "
+            f"{info['cpd_consensus']:g} points into agreement where the consensus pose it started from "
+            f"brings {info['refined_consensus']:g}: CPD's result was dropped and the consensus pose kept. "
             "A lower `w` lets CPD refine it.",
             MatchingWarning,
         )

@@ -1092,7 +1092,7 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         Run EM on both sets centred and divided by their common RMS radius (see the module
         notes; the moving set's radius alone under ``n_neighbors``); results are
         equivariant under translating or scaling both inputs. False runs in the caller's
-        units, where ``beta``, ``sigma2`` and ``w`` have units, on both sets shifted by the
+        units, where ``sigma2`` (and a non-rigid ``beta``) are in those units, on both sets shifted by the
         fixed set's mean (the pose is kept; results are equivariant under translation).
     init : None, transform or 'global', default=None
         The starting pose: None (centroids aligned under ``normalize``, else the identity),
