@@ -422,3 +422,13 @@ def test_points_that_coincide_once_centred_are_named_with_their_relative_spacing
     far = np.vstack([good * 1e-200, [[1e200, 1e200]]])
     with pytest.raises(InputError, match=r"\(a relative spacing of below 1e-308\)"):
         match(far, good)
+
+
+@pytest.mark.parametrize("method", ["robust", "shape-context"])
+def test_a_3d_set_given_to_a_2d_method_is_pointed_to_mwme(method):
+    points = np.random.default_rng(0).random((10, 3))
+    with pytest.raises(InputError, match=r"got shape \(10, 3\)\. method='[a-z-]+' matches 2D sets; method='mwme'"):
+        match(points, points, method=method)
+    with pytest.raises(InputError) as info:  # a wrong shape that is not 3D gets no such hint
+        match(points[:, :1], points[:, :1], method=method)
+    assert "mwme" not in str(info.value)

@@ -57,6 +57,15 @@ def _warn_unless_pairs_agree(moving, partners, rot, t, s) -> None:
         )
 
 
+def _three_d(points) -> bool:
+    """Whether ``points`` has the shape of a 3D point set (for a hint in an error)."""
+    try:
+        shape = np.shape(points)
+    except ValueError:  # ragged
+        return False
+    return len(shape) == 2 and shape[1] == 3
+
+
 def _warn_if_scaled(info: dict) -> None:
     ratio, rigid, similar = info["similarity_scale"], info["refined_consensus"], info["similarity_consensus"]
     if similar > _SCALED_CONSENSUS * rigid and max(ratio, 1 / ratio) > _SCALED_RATIO:
@@ -193,8 +202,13 @@ def match(
         correspondence, transform = mwme_match(moving_arr, fixed, solver=mwme_solver, scale=bool(scale))
         transform = _rigid_if_unscaled(transform, scale)
         return MatchResult(correspondence, transform, method, int(moving_arr.shape[0]), {"mwme_solver": mwme_solver})
-    moving = as_points(moving, name="moving", n_dims=(2,), min_points=4, allow_duplicates=False)
-    fixed = as_points(fixed, name="fixed", n_dims=(2,), min_points=4, allow_duplicates=False)
+    try:
+        moving = as_points(moving, name="moving", n_dims=(2,), min_points=4, allow_duplicates=False)
+        fixed = as_points(fixed, name="fixed", n_dims=(2,), min_points=4, allow_duplicates=False)
+    except InputError as exc:
+        if any(_three_d(points) for points in (moving, fixed)):
+            raise InputError(f"{exc} method={method!r} matches 2D sets; method='mwme' matches 3D ones.") from None
+        raise
     norm_m, norm_f = normalise(moving), normalise(fixed)
     for name, norm in (("moving", norm_m), ("fixed", norm_f)):
         check_resolution(norm.points, name, original=moving if name == "moving" else fixed)
