@@ -17,7 +17,8 @@ __all__ = ["MatchResult", "Normalised", "normalise", "similarity_to_units", "ass
 class MatchResult:
     """Correspondences from ``moving`` to ``fixed`` and the similarity transform they give.
 
-    Unpacks as ``correspondence, transform = match(moving, fixed)``. Two results compare
+    Unpacks as ``correspondence, transform = match(moving, fixed)``, and indexes as that
+    pair (``result[0]`` is ``correspondence``, as from :func:`mwme_match`). Two results compare
     (``==``) and hash by identity; compare their arrays to compare what they hold.
 
     Attributes
@@ -46,6 +47,8 @@ class MatchResult:
     >>> result.method, result.n_matched, round(result.transform.scale, 6)
     ('mwme', 10, 2.0)
     >>> correspondence, transform = result  # unpacks as a pair
+    >>> result[1] is transform
+    True
     >>> bool(np.array_equal(correspondence, perm))
     True
     >>> bool(np.allclose(transform(moving), fixed[correspondence]))
@@ -61,6 +64,12 @@ class MatchResult:
     def __iter__(self):
         yield self.correspondence
         yield self.transform
+
+    def __len__(self) -> int:
+        return 2
+
+    def __getitem__(self, index):
+        return (self.correspondence, self.transform)[index]
 
 
 @dataclass(frozen=True)
