@@ -32,12 +32,6 @@ from ..exceptions import InputError
 from ._cache import as_shape_images
 
 __all__ = [
-    "ANGLE_QUANTILES",
-    "ANGLE_REACH",
-    "DISTANCE_QUANTILES",
-    "FEATURE_SCALES",
-    "REACH_RADII",
-    "VISIBILITY_QUANTILES",
     "normalize_shape",
     "outline_profiles",
     "pairwise_shape_distances",
