@@ -474,7 +474,8 @@ def test_classify_notes_label_rows_that_name_no_image(tmp_path, capsys):
 def test_classify_needs_two_images_per_class(tmp_path, capsys):
     folder = _shapes_folder(tmp_path / "shapes", extra=["star1.png"])
     assert main(["classify", str(folder), "--out", str(tmp_path / "c.json")]) == 2
-    assert "'star'" in _one_line_error(capsys)
+    message = _one_line_error(capsys)
+    assert "'star'" in message and "--labels FILE.csv names them" in message  # (Kimia names: 'bonefishes')
 
 
 @pytest.mark.parametrize(

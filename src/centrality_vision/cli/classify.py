@@ -177,9 +177,12 @@ def run(args: argparse.Namespace) -> int:
     smallest = int(counts.min())
     if smallest < 2:
         lonely = [str(name) for name in classes[counts == 1]]
+        hint = (
+            "" if args.labels else " (classes come from the file names less their digits; --labels FILE.csv names them)"
+        )
         raise InputError(
             f"{folder}: every class needs at least 2 images for cross-validation; "
-            f"{len(lonely)} class(es) have 1, e.g. {lonely[0]!r}."
+            f"{len(lonely)} class(es) have 1, e.g. {lonely[0]!r}{hint}."
         )
     n_splits = min(args.folds, smallest)
     note = None
