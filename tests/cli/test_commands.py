@@ -1053,3 +1053,21 @@ def test_a_single_experiment_says_the_report_beside_it_does_not_show_it(tmp_path
     (out / "report.md").write_text("# an earlier report\n")
     assert main(["reproduce", "table-2.1", "--quick", "--out", str(out)]) == 0
     assert "report.md is from an earlier 'reproduce all' and does not show this run" in capsys.readouterr().err
+
+
+def test_records_list_only_the_options_that_applied(tmp_path):
+    # round 17: an image's record listed the point-set graph's k and lam, and a Delaunay
+    # graph's record the k of k-NN and the lam of MSTME
+    np.savetxt(tmp_path / "p.csv", _points(12), delimiter=",")
+    image = _png(tmp_path / "rect.png", np.pad(np.full((6, 8), 255), 4))
+    assert main(["graph", str(tmp_path / "p.csv"), "--kind", "delaunay", "--out", str(tmp_path / "g.json")]) == 0
+    assert main(["graph", str(tmp_path / "p.csv"), "--kind", "knn", "--k", "3", "--out", str(tmp_path / "k.json")]) == 0
+    assert main(["centrality", str(image), "--centrality", "degree", "--out", str(tmp_path / "i.json")]) == 0
+    assert (
+        main(["centrality", str(tmp_path / "p.csv"), "--centrality", "degree", "--out", str(tmp_path / "c.json")]) == 0
+    )
+    record = {name: json.loads((tmp_path / f"{name}.json").read_text())["parameters"] for name in "gkic"}
+    assert "k" not in record["g"] and "lam" not in record["g"] and record["g"]["kind"] == "delaunay"
+    assert record["k"]["k"] == 3 and "lam" not in record["k"]
+    assert not {"graph", "k", "lam", "columns"} & set(record["i"]) and record["i"]["connectivity"] == 8
+    assert not {"connectivity", "foreground", "threshold", "k", "lam"} & set(record["c"]) and record["c"]["graph"]

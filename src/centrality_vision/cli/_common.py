@@ -340,10 +340,20 @@ def say(message: str) -> None:
     print(message, file=sys.stderr)
 
 
-def options(args: argparse.Namespace) -> dict:
-    """Every option of the run, for the "parameters" block of the outputs."""
+def options(args: argparse.Namespace, *, applies: dict | None = None, unused=()) -> dict:
+    """Every option of the run that applied to it, for the "parameters" block of the outputs.
+
+    ``applies`` (as for :func:`refuse_unused`) and ``unused`` (dests) leave out the options
+    this run did not use (``--k`` of a Delaunay graph, ``--lam`` of an image): a record
+    lists what made its result."""
+    applies = applies or {}
+    skipped = set(unused) | {
+        dest for dest, (setting, values) in applies.items() if getattr(args, setting, None) not in values
+    }
     return {
-        key: value for key, value in vars(args).items() if key not in ("run", "progress") and not key.startswith("_")
+        key: value
+        for key, value in vars(args).items()
+        if key not in ("run", "progress") and not key.startswith("_") and key not in skipped
     }
 
 

@@ -188,7 +188,8 @@ def run(args: argparse.Namespace) -> int:
         values[name] = np.asarray(cen.compute(graph, name, **extra_options), dtype=np.float64)
         say(f"{name}: {n_nodes} nodes in {time.perf_counter() - tic:.2f} s")
     node = np.arange(n_nodes, dtype=np.int64)
-    record = {"command": NAME, "parameters": parameters_block(options(args)), **info}
+    unused = _POINT_OPTIONS if is_image else _IMAGE_OPTIONS
+    record = {"command": NAME, "parameters": parameters_block(options(args, applies=applies, unused=unused)), **info}
     if suffix(args.out) == ".json":
         record.update(node=node, coordinates=coordinates, centrality=values)
     columns = {"node": node, **coordinates, **values}

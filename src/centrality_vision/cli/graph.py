@@ -58,13 +58,14 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     started = time.perf_counter()
-    refuse_unused(args, {dest: ("kind", kinds) for dest, kinds in GRAPH_OPTION_KINDS.items()}, vars(args))
+    applies = {dest: ("kind", kinds) for dest, kinds in GRAPH_OPTION_KINDS.items()}
+    refuse_unused(args, applies, vars(args))
     points = read_point_file(args.points, args)
     say(f"read {points.shape[0]} points in {points.shape[1]}D from {args.points}")
     graph, extra = data_graph(points, args.kind, k=args.k, lam=args.lam, source=args.points, progress=progress_on(args))
     i, j, length = edge_list(points, graph)
     say(f"{args.kind} graph: {points.shape[0]} nodes, {i.size} edges")
-    parameters = parameters_block(options(args))
+    parameters = parameters_block(options(args, applies=applies))
     summary = {"n_nodes": points.shape[0], "n_edges": int(i.size), "total_length": float(length.sum()), **extra}
     record = {"command": NAME, "parameters": parameters, **summary}
     if suffix(args.out) == ".json":
