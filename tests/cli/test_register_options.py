@@ -279,3 +279,11 @@ def test_a_fit_ended_by_a_collapse_is_not_said_to_reach_max_iter(tmp_path, capsy
     assert "stopped at --max-iter" not in err
     _register(tmp_path, fish, fish[::-1] + 0.1, "--method", "cpd", "--max-iter", "2", name="limited.json")
     assert "stopped at --max-iter without converging after 2 iterations" in capsys.readouterr().err
+
+
+def test_the_record_lists_only_the_options_that_applied(tmp_path, fish):
+    record = _register(tmp_path, fish, fish[::-1] + 0.1, "--method", "icp")
+    assert not {"w", "init", "centrality", "graph", "k", "kappa", "beta", "lam"} & set(record["parameters"])
+    assert record["parameters"]["method"] == "icp" and "trim" in record["parameters"]
+    record = _register(tmp_path, fish, fish[::-1] + 0.1, "--transform", "nonrigid", name="n.json")
+    assert record["parameters"]["beta"] > 0 and "trim" not in record["parameters"]

@@ -405,7 +405,7 @@ def run(args: argparse.Namespace) -> int:
     transform = transform_record(estimator.transform_)
     record = {
         "command": NAME,
-        "parameters": parameters_block(options(args), seed=args.seed),
+        "parameters": parameters_block(options(args, applies=_APPLIES), seed=args.seed),
         "estimator": " ".join(repr(estimator).split()),
         "transform": transform,
         "n_iter": int(estimator.n_iter_),
