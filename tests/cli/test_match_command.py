@@ -152,3 +152,29 @@ def test_no_match_leaves_the_rms_out_of_npz_rather_than_nan(tmp_path, capsys, mo
     assert all(np.all(np.isfinite(stored[key])) for key in stored.files if stored[key].dtype.kind == "f")
     err = capsys.readouterr().err
     assert "paired 0 point" in err and "no RMS residual (no point matched)" in err
+
+
+def test_robust_options_reach_the_library_and_the_record(partial_pair, tmp_path, capsys):
+    # round 17: the command exposed none of n_neighbors, n_candidates and w
+    from centrality_vision.matching import match
+
+    folder, _, fixed = partial_pair  # (CPD suits whole sets: the partial one's outliers collapse it)
+    moving = 2.0 * fixed[::-1] @ _rotation(0.7).T + [3.0, -1.0]
+    np.savetxt(tmp_path / "whole.txt", moving)
+    base = ["match", str(tmp_path / "whole.txt"), str(folder / "f.txt")]
+    argv = [*base, "--n-neighbors", "5", "--n-candidates", "3", "--refine", "cpd", "--w", "0.1"]
+    assert main([*argv, "--out", str(tmp_path / "m.json")]) == 0
+    record = json.loads((tmp_path / "m.json").read_text())
+    parameters = record["parameters"]
+    assert (parameters["n_neighbors"], parameters["n_candidates"], parameters["w"]) == (5, 3, 0.1)
+    library = match(moving, fixed, n_neighbors=5, n_candidates=3, refine="cpd", w=0.1)
+    assert record["correspondence"] == library.correspondence.tolist()
+    # options of another method or refinement are refused, and left out of the record
+    capsys.readouterr()
+    assert main([*base, "--w", "0.1", "--out", str(tmp_path / "x.json")]) == 2
+    assert "--w is an option of --refine cpd; got --refine icp" in capsys.readouterr().err
+    assert main([*base, "--method", "shape-context", "--n-neighbors", "5", "--out", str(tmp_path / "x.json")]) == 2
+    assert "--n-neighbors is an option of --method robust" in capsys.readouterr().err
+    assert main([*base, "--out", str(tmp_path / "d.json")]) == 0
+    default = json.loads((tmp_path / "d.json").read_text())["parameters"]
+    assert default["n_neighbors"] == 8 and "w" not in default

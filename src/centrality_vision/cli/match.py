@@ -12,6 +12,7 @@ from ._common import (
     add_plot,
     add_point_options,
     in_path,
+    number,
     options,
     pyplot,
     read_point_file,
@@ -72,6 +73,25 @@ def add_parser(sub) -> argparse.ArgumentParser:
         default="icp",
         help="refinement of --method robust; cpd suits whole sets only (default: %(default)s)",
     )
+    parser.add_argument(
+        "--n-neighbors",
+        type=number(int, low=3, high=19),
+        default=8,
+        help="--method robust: neighbours in each local MWME signature; the cost doubles with each "
+        "(default: %(default)s)",
+    )
+    parser.add_argument(
+        "--n-candidates",
+        type=number(int, low=1, high=1000),
+        default=6,
+        help="--method robust: likely partners (hence pose hypotheses) per moving point (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--w",
+        type=number(float, low=0.0, high=1.0, high_open=True),
+        default=0.3,
+        help="--refine cpd: CPD's outlier weight, in [0, 1) (default: %(default)s)",
+    )
     add_out(parser, ".json", ".npz")
     add_plot(parser, "the matching (2D sets)")
     # the library's advice in this command's options
@@ -91,7 +111,14 @@ def run(args: argparse.Namespace) -> int:
     from ..exceptions import InputError
     from ..matching import match
 
-    refuse_unused(args, {"refine": ("method", ("robust",)), "mwme_solver": ("method", ("mwme",))}, vars(args))
+    applies = {
+        "refine": ("method", ("robust",)),
+        "n_neighbors": ("method", ("robust",)),
+        "n_candidates": ("method", ("robust",)),
+        "mwme_solver": ("method", ("mwme",)),
+        "w": ("refine", ("cpd",)),
+    }
+    refuse_unused(args, applies, vars(args))
     started = time.perf_counter()
     moving = read_point_file(args.moving, args)
     fixed = read_point_file(args.fixed, args)
@@ -120,6 +147,9 @@ def run(args: argparse.Namespace) -> int:
         method=args.method,
         scale=args.transform == "similarity",
         refine=args.refine,
+        n_neighbors=args.n_neighbors,
+        n_candidates=args.n_candidates,
+        w=args.w,
         mwme_solver=args.mwme_solver,
     )
     correspondence = np.asarray(result.correspondence, dtype=np.int64)
@@ -139,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
     transform_parts = transform_record(transform)
     record = {
         "command": NAME,
-        "parameters": parameters_block(options(args)),
+        "parameters": parameters_block(options(args, applies=applies)),
         "method": args.method,
         "correspondence": correspondence,
         "correspondence_meaning": "moving[i] matches fixed[correspondence[i]]; -1: no fixed point within two "
