@@ -219,20 +219,26 @@ def as_any_graph(graph, *, name: str = "graph", allow_directed: bool = False) ->
                 f"or igraph graph; got "
                 + ("None." if graph is None else "a masked array with masked entries (the mask would be ignored).")
             )
-        try:
-            dense = np.asarray(graph)
-            if np.iscomplexobj(dense):
-                raise TypeError(f"`{name}` must hold real edge lengths; got complex dtype {dense.dtype}.")
-            if dense.ndim and dense.dtype.kind in "USmMV":  # text, times and records convert, and mean no length
-                raise TypeError(f"`{name}` must hold real edge lengths; got {_describe(dense)}.")
-            dense = dense.astype(np.float64)
-        except (TypeError, ValueError) as exc:
-            if str(exc).startswith(f"`{name}` must hold real edge lengths"):  # (raised just above)
-                raise
-            raise TypeError(
+
+        def not_a_graph() -> TypeError:
+            return TypeError(
                 f"`{name}` must be a scipy.sparse matrix, a square array of edge lengths, or a networkx "
                 f"or igraph graph; got {_describe(graph)}."
-            ) from None
+            )
+
+        try:
+            dense = np.asarray(graph)
+        except (TypeError, ValueError):  # ragged nested lists
+            raise not_a_graph() from None
+        if np.iscomplexobj(dense):
+            raise TypeError(f"`{name}` must hold real edge lengths; got complex dtype {dense.dtype}.")
+        # text, times and records convert to numbers and mean no length (objects may hold numbers)
+        if dense.ndim and dense.dtype != object and not is_real_dtype(dense.dtype):
+            raise TypeError(f"`{name}` must hold real edge lengths; got {_describe(dense)}.")
+        try:
+            dense = dense.astype(np.float64)
+        except (TypeError, ValueError):
+            raise not_a_graph() from None
         if dense.ndim != 2:
             raise InputError(f"`{name}` must be a square 2D adjacency; got shape {dense.shape}.")
         mat = sparse.csr_array(dense)
