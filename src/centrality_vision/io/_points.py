@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import _describe, check_bool, is_real_dtype
+from .._validation import _describe, check_bool, is_real_dtype, nearest_existing
 from ..exceptions import InputError
 
 __all__ = ["POINT_SUFFIXES", "WRITE_SUFFIXES", "read_points", "write_points"]
@@ -1060,11 +1060,9 @@ def write_points(path, points, /) -> Path:
     try:
         if path.is_dir():
             raise InputError(f"{path}: is a folder; `path` must name the file to write.")
-        for parent in path.parents:  # (mkdir's own error there is "File exists")
-            if parent.exists():
-                if not parent.is_dir():
-                    raise InputError(f"{path}: cannot be written ({parent} is a file, not a folder).")
-                break
+        ancestor = nearest_existing(path.parent)  # (mkdir's own error under a file is "File exists")
+        if not ancestor.is_dir():
+            raise InputError(f"{path}: cannot be written ({ancestor} is a file, not a folder).")
         if path.parent != Path("."):
             path.parent.mkdir(parents=True, exist_ok=True)
         _write_points(path, arr, suffix)
