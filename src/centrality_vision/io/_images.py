@@ -76,7 +76,6 @@ def read_image(path, /) -> np.ndarray:
         raise InputError(f"{path}: not a readable {kind} image (pixel type {pixels.dtype}).")
     if pixels.size == 0:
         raise InputError(f"{path}: not a readable {kind} image (it decodes to no pixels, shape {pixels.shape}).")
-    decoded = pixels.shape
     if pixels.ndim == 3 and pixels.shape[2] in (2, 4):
         colour, alpha = pixels[..., :-1], pixels[..., -1]
         flat = colour.reshape(-1, colour.shape[2])
@@ -89,7 +88,7 @@ def read_image(path, /) -> np.ndarray:
         else:
             pixels = pixels.mean(axis=2)
     if pixels.ndim != 2:
-        raise InputError(f"{path}: must be a 2D grey or colour image; got an array of shape {decoded}.")
+        raise InputError(f"{path}: must be a 2D grey or colour image; got an array of shape {pixels.shape}.")
     pixels = pixels.astype(np.float64)
     if not np.all(np.isfinite(pixels)):
         raise InputError(f"{path}: the image holds NaN or inf values.")
