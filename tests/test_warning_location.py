@@ -23,7 +23,7 @@ _POINT = np.zeros((5, 3))  # one fixed point, repeated: a CollapseWarning
         lambda: estimate_normals(_CLOUD, k=5),  # the FutureWarning of the decorator itself
         lambda: ICP(k_normals=5, metric="point_to_plane").fit(_CLOUD, _CLOUD + 0.01),
         lambda: RigidCPD().fit(_CLOUD, _POINT),
-        lambda: GPD(RigidCPD(), graph="knn").fit(_CLOUD, _POINT[:4] + np.eye(4, 3) * 1e-3),
+        lambda: GPD(RigidCPD(max_iter=2), graph="knn").fit(_CLOUD, _CLOUD[::-1] + 0.1),  # stops at max_iter
         lambda: MultiscaleCPD(RigidCPD(), sizes=(20, 40)).fit(_CLOUD, _POINT),
     ],
     ids=["mwme_match", "match", "estimate_normals", "renamed", "ICP", "RigidCPD", "GPD", "MultiscaleCPD"],

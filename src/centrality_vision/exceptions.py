@@ -68,8 +68,10 @@ class ConvergenceWarning(UserWarning):
 
 
 class CollapseWarning(ConvergenceWarning):
-    """A registration ended degenerate: the moving set shrank to a blob, or sigma2 reached
-    zero while too few points were matched. The estimator's ``converged_`` is then False.
+    """A registration ended degenerate: the moving set shrank to a blob, the fitted Gaussians
+    ended much wider than the transformed moving set (one blob explains the fixed set), or
+    sigma2 reached zero while too few points were matched. The estimator's ``converged_`` is
+    then False.
 
     Examples
     --------

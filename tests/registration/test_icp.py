@@ -21,6 +21,16 @@ def test_icp_with_scale(face, rot3):
     assert icp.transform_.scale == pytest.approx(1.05, abs=1e-8)
 
 
+@pytest.mark.parametrize(("degrees", "shift"), [(0, 0.5), (10, 0.3), (0, 1.0)])
+def test_icp_with_scale_does_not_shrink_a_shifted_copy(fish, rot2, degrees, shift):
+    """The least-squares scale on the first, wrong pairs shrank an exact copy and said
+    converged: scale 0.87 at a shift of half the radius, 0.49 at one radius."""
+    x = fish @ rot2(degrees).T + shift
+    reg = ICP(scale=True).fit(fish, x)
+    assert reg.converged_ and reg.transform_.scale == pytest.approx(1.0, abs=1e-9)
+    np.testing.assert_allclose(reg.moving_transformed_, x, atol=1e-9)
+
+
 def test_icp_objective_never_increases(fish_pair):
     icp = ICP(max_iter=50, tol=0).fit(fish_pair.moving, fish_pair.fixed)
     obj = icp.history_["objective"]

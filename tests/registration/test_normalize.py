@@ -7,6 +7,7 @@ import pytest
 
 from centrality_vision.exceptions import CollapseWarning, ConvergenceWarning
 from centrality_vision.registration import GPD, AffineCPD, MultiscaleCPD, NonRigidCPD, RigidCPD, RigidTransform
+from centrality_vision.transforms import SimilarityTransform
 
 
 def _on_grid(points):
@@ -140,6 +141,84 @@ def test_collapse_of_the_moving_set_is_reported(fish):
     with pytest.warns(CollapseWarning, match=r"collapsed.*Try a smaller `w`, or a starting pose \(`init`\)\.$"):
         reg = RigidCPD(w=0.1, tol=1e-8).fit(fish, x)
     assert not reg.converged_ and reg.transform_.scale < 1e-6
+
+
+def _outline(n):
+    u = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    r = 1.0 + 0.3 * np.cos(3.0 * u)
+    return np.column_stack([np.cos(u) * r, np.sin(u) * r])
+
+
+def _turn(degrees):
+    a = np.radians(degrees)
+    return np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+
+
+@pytest.mark.parametrize("model", ["similarity", "affine"])
+def test_a_moving_set_shrunk_onto_the_fixed_set_s_centre_is_reported(model):
+    """A moving set with far outliers of its own and a part the fixed set lacks: started at
+    the exact pose, the similarity fit shrank to a scale of 0.03 (true: 0.5) with sigma2 at
+    the fixed set's own variance, and said converged without a word."""
+    fixed = _outline(60)
+    far = np.random.default_rng(1).uniform(4.0, 6.0, (10, 2))
+    turn, offset = _turn(40.0), np.array([3.0, -1.0])
+    moving = 2.0 * np.vstack([fixed[:40], far]) @ turn.T + offset
+    true = SimilarityTransform(turn.T, -0.5 * turn.T @ offset, scale=0.5)
+    np.testing.assert_allclose(true(moving[:40]), fixed[:40], atol=1e-12)
+    reg = AffineCPD(w=0.3, init=true) if model == "affine" else RigidCPD(scale=True, w=0.3, init=true)
+    with pytest.warns(CollapseWarning, match=r"Gaussians [\d.]+ times as wide as the transformed moving set.*`init`"):
+        reg.fit(moving, fixed)
+    assert not reg.converged_
+    assert np.sqrt(2.0 * reg.sigma2_) > 2.5 * _size(reg.moving_transformed_)
+
+
+def test_data_far_noisier_than_the_shape_is_still_a_registration(fish):
+    """The spread check leaves a sound fit alone: Gaussian noise of the shape's own RMS radius
+    per axis (ten noisy copies of the fish) still gives the rotation within a few degrees."""
+    rng = np.random.default_rng(0)
+    turn = _turn(30.0)
+    moving = np.vstack([fish] * 10)
+    fixed = moving @ turn.T + rng.normal(scale=_size(fish), size=moving.shape)
+    reg = RigidCPD(scale=True).fit(moving, fixed)  # warnings are errors in the tests
+    assert reg.converged_
+    error = np.degrees(np.arccos(np.clip(np.trace(reg.transform_.rotation.T @ turn) / 2.0, -1.0, 1.0)))
+    assert error < 10.0
+    assert np.sqrt(2.0 * reg.sigma2_) > 1.0 * _size(reg.moving_transformed_)  # the Gaussians are wide
+
+
+@pytest.mark.parametrize("factor", [1e-10, 1e-6, 1e-2, 1e2, 1e6, 1e10])
+@pytest.mark.parametrize("model", ["similarity", "affine"])
+def test_sets_in_different_units_register(fish, model, factor):
+    """A moving set in other units than the fixed set (metres against centimetres): the fit
+    started at scale 1 and the smaller set became a dot inside the larger one's Gaussians
+    (0.01: CollapseWarning, error 0.62 of the extent); a fixed set 1e6 times smaller stopped
+    at sigma2's floor, a tenth of its radius off."""
+    turn = _turn(25.0)
+    fixed = fish @ turn.T + [0.3, -0.2]
+    reg = (RigidCPD(tol=1e-10) if model == "similarity" else AffineCPD(tol=1e-10)).fit(factor * fish, fixed)
+    assert reg.converged_
+    np.testing.assert_allclose(reg.moving_transformed_, fixed, atol=1e-9 * _size(fixed))
+    if model == "similarity":
+        assert reg.transform_.scale == pytest.approx(1.0 / factor, rel=1e-9)
+
+
+def test_a_rigid_fit_onto_a_far_smaller_fixed_set_is_reported(fish):
+    """The fixed set in other units (0.01 of the moving set) under a rigid model: every fixed
+    point sat on one moving point, 70 extents off, and the fit said converged."""
+    with pytest.warns(CollapseWarning, match=r"explained by about 1(\.\d+)? of the 91 moving points.*other units"):
+        reg = RigidCPD(scale=False).fit(fish, 0.01 * fish)
+    assert not reg.converged_
+    similarity = RigidCPD(scale=True).fit(fish, 0.01 * fish)  # what the advice offers
+    np.testing.assert_allclose(similarity.moving_transformed_, 0.01 * fish, atol=1e-12)
+
+
+def test_collapse_advice_offers_only_what_the_settings_allow(fish):
+    rng = np.random.default_rng(1)
+    x = np.vstack([rng.normal(0.0, 1e-3, (80, 2)), [[50.0, 0.0], [-50.0, 0.0], [0.0, 50.0], [0.0, -50.0]]])
+    with pytest.warns(CollapseWarning, match=r"Try a fixed `w`, or a starting pose \(`init`\)\.$"):
+        RigidCPD(w="auto", tol=1e-8).fit(fish, x)
+    with pytest.warns(CollapseWarning, match=r"Try normalize=True, a smaller `w`, or a starting pose"):
+        RigidCPD(w=0.1, tol=1e-8, normalize=False).fit(fish, x)
 
 
 def test_identical_moving_points_onto_a_shifted_copy():

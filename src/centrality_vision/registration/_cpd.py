@@ -15,7 +15,10 @@ Conventions every variant shares:
   frame, which makes their defaults unit-free; every fitted transform, point set, variance
   and history entry is mapped back to the caller's units. Because the sets start with their
   means on top of each other, the initial pose is "centroids aligned" rather than the
-  identity (pass ``init=`` to start elsewhere). The k-nearest-neighbour E-step
+  identity (pass ``init=`` to start elsewhere); a similarity or affine fit also starts at
+  the ratio of the sets' RMS radii as its scale, as CPD's separate normalisation of each
+  set does, so sets in different units (metres and centimetres) register. The
+  k-nearest-neighbour E-step
   (``n_neighbors``) trusts the caller's pose instead: both sets are centred on the fixed
   set's mean and divided by the moving set's RMS radius alone, so that clutter in the
   fixed set does not widen ``beta`` (on the fish with as many uniform outliers as points,
@@ -80,6 +83,19 @@ _COLLAPSE_RADIUS = 0.05
 _COLLAPSE_MATCHED = 0.25
 # ... or below this fraction of D matched points (D fix a pose in D dimensions).
 _COLLAPSE_MATCHED_DIMS = 0.75
+# ... or, under w="auto" (whose estimate follows the matched mass, so expects what it gets),
+# below this fraction of min(M, N): exact similarity copies in a wrong basin ended with 3 to 5
+# of 20 to 60 points matched exactly and w_ at 0.85 to 0.9, "converged"; sound fits with twice
+# as many outliers as points match 0.9 to 1 of the moving set.
+_COLLAPSE_MATCHED_AUTO = 0.15
+# ... or, in a fit that converged, when the Gaussians' RMS radius sqrt(D sigma2) ends this many
+# times the transformed moving set's: each Gaussian spans the whole set, which explains the
+# fixed set as one blob. Measured on 52 failed similarity and affine fits (2D outlines and the
+# bunny; moving sets with a missing part and far outliers of their own): 20 end above 2.5
+# times, up to 55. Sound fits end below 1.5 times (1.4 with Gaussian noise of the shape's own
+# RMS radius per axis), and fits with noise 1.5 times that radius, whose rotation is still
+# within 10 degrees, at up to 2.25 times.
+_COLLAPSE_SPREAD = 2.5
 # accelerate: an extrapolated sigma2 stays within this factor of the plain step's.
 _SIGMA_JUMP = 0.25
 # A given sigma2 may be at most this many times the sets' own spread (beyond, every posterior
@@ -741,9 +757,12 @@ class _CPD(BaseEstimator):
         # far from the origin the caller's coordinates round by more than the centred
         # points show, and the M-steps must not take that rounding for spread
         self._peak = float(np.max(np.abs(moving))) / frame.scale
-        spread = max(_initial_sigma2(fixed, fixed), _initial_sigma2(moving_n, moving_n))
+        spread_fixed = _initial_sigma2(fixed, fixed)
+        spread = max(spread_fixed, _initial_sigma2(moving_n, moving_n))
         spread = 1.0 if spread <= 0 else max(spread, 1e-280)  # keeps 1 / (2 floor) finite
-        floor = _SIGMA2_FLOOR * spread
+        # sigma2 measures residuals among the fixed points: its floor follows their spread (a
+        # fixed set 1e6 times smaller than the moving set stopped at a tenth of its radius)
+        floor = _SIGMA2_FLOOR * (max(spread_fixed, 1e-280) if spread_fixed > 0 else spread)
         state = self._init_state(moving_n, fixed, start)
         moving_t = self._apply(state, self._work)
         sigma2 = _initial_sigma2(moving_t, fixed) if self.sigma2 is None else float(self.sigma2)
@@ -895,7 +914,7 @@ class _CPD(BaseEstimator):
                 f"objective fell below `tol={self.tol}`.",
                 ConvergenceWarning,
             )
-        collapse = self._collapse(moving_n, fixed, moving_t, w_fraction, post)
+        collapse = self._collapse(moving_n, fixed, moving_t, w_fraction, post, sigma2 if converged else None)
         if collapse is not None:
             warn(f"{name}: {collapse}", CollapseWarning)
             converged = False
@@ -983,15 +1002,20 @@ class _CPD(BaseEstimator):
         k = int(self.n_neighbors)
         return lambda moving_t, sigma2, w, prior: knn_posterior(moving_t, fixed, sigma2, w, prior, k=k, tree=tree)
 
-    def _collapse(self, moving_n, fixed, moving_t, w, post) -> str | None:
+    def _collapse(self, moving_n, fixed, moving_t, w, post, sigma2=None) -> str | None:
+        """Why the result is not a registration, or None. ``sigma2``: the final variance of a
+        fit that converged (a fit stopped early is already warned of)."""
         one_point = one_point_fixed(moving_n, fixed)
         if one_point is not None:
             return one_point
         radius_y, radius_x, radius_t = rms_radius(moving_n), rms_radius(fixed), rms_radius(moving_t)
         # (normalize=True is suggested only where it is off: the command line always has it on)
-        advice = (
-            "Try " + ("normalize=True, " if not self.normalize else "") + "a smaller `w`, or a starting pose (`init`)."
-        )
+        # (a smaller w only where there is one to lower; w='auto' can be given a value instead)
+        auto = isinstance(self.w, str)
+        tries = ["normalize=True"] if not self.normalize else []
+        tries += ["a fixed `w`"] if auto else ["a smaller `w`"] if w > 0 else []
+        tries.append("a starting pose (`init`)")
+        advice = "Try " + (", ".join(tries[:-1]) + ", or " if len(tries) > 1 else "") + tries[-1] + "."
         if min(radius_y, radius_x) > 0 and radius_t < _COLLAPSE_RADIUS * min(radius_y, radius_x):
             return (
                 f"the transformed moving set collapsed (RMS radius {radius_t / radius_y:.3g} of the moving set's); "
@@ -1000,12 +1024,39 @@ class _CPD(BaseEstimator):
         expected = (1.0 - w) * min(moving_n.shape[0], fixed.shape[0])
         # fewer matched points than dimensions leave the pose undetermined (two points in 3D: any
         # rotation about their axis), whatever w expects (w='auto' can rise to its bound)
-        needed = _COLLAPSE_MATCHED_DIMS * min(fixed.shape[1], moving_n.shape[0], fixed.shape[0])
-        if post.n_p < max(_COLLAPSE_MATCHED * expected, needed):
+        needed = _needed_points(fixed.shape[1], moving_n.shape[0], fixed.shape[0])
+        share = _COLLAPSE_MATCHED_AUTO * min(moving_n.shape[0], fixed.shape[0]) if auto else 0.0
+        if post.n_p < max(_COLLAPSE_MATCHED * expected, needed, share):
+            why = (
+                f"w='auto' estimated {w:.3g}, and a registration matches at least {_COLLAPSE_MATCHED_AUTO:.0%} of "
+                "the smaller set"
+                if post.n_p < share
+                else f"about {expected:.3g} expected with w={w:.3g}, and {fixed.shape[1]} in {fixed.shape[1]}D "
+                "fix a pose"
+            )
             return (
                 f"only {post.n_p:.3g} of {fixed.shape[0]} fixed points were matched at the end (the rest taken as "
-                f"outliers; about {expected:.3g} expected with w={w:.3g}, and {fixed.shape[1]} in {fixed.shape[1]}D "
-                f"fix a pose); the result is not a registration. {advice}"
+                f"outliers; {why}); the result is not a registration. {advice}"
+            )
+        # the fixed set explained by fewer moving points than fix a pose: a fixed set far smaller
+        # than the moving set under a rigid model (other units) sat on 1 of 91, "converged"
+        p1 = np.asarray(post.p1, dtype=float)
+        used = float(np.sum(p1)) ** 2 / float(np.sum(p1 * p1)) if np.sum(p1 * p1) > 0 else 0.0
+        if min(radius_y, radius_x) > 0 and used < _needed_points(fixed.shape[1], moving_n.shape[0], fixed.shape[0]):
+            return (
+                f"the fixed set was explained by about {used:.3g} of the {moving_n.shape[0]} moving points (each "
+                "fixed point's nearest moving points are the same few): the result is not a registration. Is the "
+                "fixed set in other units than the moving set? A transform with a scale (`scale=True`, affine) "
+                "fits that; otherwise try a starting pose (`init`)."
+            )
+        spread = math.sqrt(fixed.shape[1] * sigma2) if sigma2 is not None else 0.0
+        if min(radius_y, radius_x) > 0 and spread > _COLLAPSE_SPREAD * radius_t:
+            return (
+                f"the fit ended with Gaussians {spread / radius_t:.3g} times as wide as the transformed moving "
+                f"set (RMS radius {radius_t / radius_x:.3g} of the fixed set's): it explains the fixed set as "
+                "one blob, and the result is not a registration. Either the moving set shrank onto the fixed "
+                "set's centre (its own outliers, or parts the fixed set lacks, pull it there: remove them, or "
+                "give a starting pose with `init`) or the fixed set is mostly noise."
             )
         return None
 
@@ -1203,6 +1254,24 @@ def _count(n: int, noun: str) -> str:
     return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
 
 
+def _needed_points(n_dims: int, n_moving: int, n_fixed: int) -> float:
+    """The fewest moving points (a participation count of the matched mass) that a fit may
+    explain the fixed set by: three quarters of min(D, M, N)."""
+    return _COLLAPSE_MATCHED_DIMS * min(n_dims, n_moving, n_fixed)
+
+
+def _radius_ratio(estimator, moving_n: np.ndarray, fixed_n: np.ndarray) -> float:
+    """The start scale of a similarity or affine fit without ``init``: the ratio of the sets'
+    RMS radii, as CPD's own normalisation of each set to unit variance gives. (At scale 1, a
+    moving set 100 times larger than the fixed set, as in metres against centimetres,
+    shrank past it and collapsed.) The k-NN model and ``normalize=False`` keep the caller's
+    pose: 1."""
+    if estimator.n_neighbors is not None or not estimator.normalize:
+        return 1.0
+    radius_y, radius_x = rms_radius(moving_n), rms_radius(fixed_n)
+    return radius_x / radius_y if radius_x > 0 and radius_y > 0 else 1.0
+
+
 def one_point_fixed(moving: np.ndarray, fixed: np.ndarray) -> str | None:
     """Why no registration is possible when ``fixed`` is one point (repeated) and ``moving``
     is spread (every model shrinks, or turns at random, onto the point); None otherwise."""
@@ -1239,7 +1308,7 @@ class RigidCPD(_CPD):
     component of weight ``w`` (the module notes give the posterior). Stops when the relative
     change of the objective ``-sum_n log(sum_m exp(-|x_n - T(y_m)|^2 / 2 sigma2) + c) + N D/2 log sigma2``
     between two E-steps is at most ``tol``, after ``max_iter`` M-steps, or when sigma2
-    reaches 1e-14 of the data's spread (the sets coincide).
+    reaches 1e-14 of the fixed set's spread (the sets coincide).
 
     Moving points that do not determine a rotation (one point repeated, or in 3D points on
     one line) are still aligned, but ``transform_`` is then right on them only, and a
@@ -1319,7 +1388,7 @@ class RigidCPD(_CPD):
         dim = moving.shape[1]
         if start is None:
             return (
-                SimilarityTransform(np.eye(dim), np.zeros(dim))
+                SimilarityTransform(np.eye(dim), np.zeros(dim), _radius_ratio(self, moving, fixed))
                 if self.scale
                 else RigidTransform(np.eye(dim), np.zeros(dim))
             )
@@ -1404,7 +1473,7 @@ class AffineCPD(_CPD):
         self._work = moving
         dim = moving.shape[1]
         if start is None:
-            return AffineTransform(np.eye(dim), np.zeros(dim))
+            return AffineTransform(_radius_ratio(self, moving, fixed) * np.eye(dim), np.zeros(dim))
         linear = start.linear if isinstance(start, AffineTransform) else start.scale * start.rotation
         return AffineTransform(linear, start.translation)
 
