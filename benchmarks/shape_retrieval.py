@@ -67,7 +67,7 @@ def main() -> None:
     from centrality_vision.shapes import (
         bullseye_score,
         diffusion_rerank,
-        nearest_neighbour_accuracy,
+        nearest_neighbor_accuracy,
         pairwise_shape_distances,
         retrieval_counts,
     )
@@ -144,7 +144,7 @@ def main() -> None:
         for name in args.methods:
             for tag, matrix in reranked("mpeg7", name):
                 bullseye = 100 * bullseye_score(matrix, mpeg7.labels)
-                accuracy = 100 * nearest_neighbour_accuracy(matrix, mpeg7.labels, n_train=10, n_splits=10, seed=0)
+                accuracy = 100 * nearest_neighbor_accuracy(matrix, mpeg7.labels, n_train=10, n_splits=10, seed=0)
                 timing = f"{seconds['mpeg7'][name]:.0f}" if matrix is distances["mpeg7"][name] else ""
                 rows.append([f"ours: {tag}", f"{bullseye:.2f}", f"{accuracy:.2f}", timing])
         print("\nMPEG-7 bullseye (%) and 1-NN accuracy with 10 training shapes per class (%, mean of 10 splits)")

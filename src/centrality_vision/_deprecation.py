@@ -1,4 +1,4 @@
-"""Former parameter names that still work for a while, with a FutureWarning."""
+"""Former parameter and function names that still work for a while, with a FutureWarning."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import inspect
 
 from ._warnings import warn
 
-__all__ = ["renamed_parameters", "both_names_error", "FORMER", "former_parameter"]
+__all__ = ["renamed_parameters", "renamed_function", "both_names_error", "FORMER", "former_parameter"]
 
 #: The default of an estimator's former parameter name: "not given".
 FORMER = "deprecated"
@@ -103,3 +103,30 @@ def renamed_parameters(**new_names: str):
         return wrapper
 
     return decorate
+
+
+def renamed_function(function, old: str):
+    """``function`` under its former name ``old``: the same call, with a :class:`FutureWarning`.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> def shift(moving, by=1):
+    ...     return moving + by
+    >>> old_shift = renamed_function(shift, "move")
+    >>> with warnings.catch_warnings(record=True) as caught:
+    ...     warnings.simplefilter("always")
+    ...     old_shift(1, by=2)
+    3
+    >>> print(caught[0].message)
+    `move()` is renamed `shift()`; the old name will be removed.
+    """
+
+    @functools.wraps(function)
+    def wrapper(*args, **kwargs):
+        warn(f"`{old}()` is renamed `{function.__name__}()`; the old name will be removed.", FutureWarning)
+        return function(*args, **kwargs)
+
+    wrapper.__name__ = wrapper.__qualname__ = old
+    wrapper.__doc__ = f"Former name of :func:`{function.__name__}` (renamed; the old name will be removed)."
+    return wrapper

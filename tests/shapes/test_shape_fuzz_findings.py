@@ -5,7 +5,12 @@ import numpy as np
 import pytest
 
 from centrality_vision.datasets import contour_points
-from centrality_vision.shapes import CentralityCache, CentralityHistogram
+from centrality_vision.shapes import (
+    CentralityCache,
+    CentralityComparisonForest,
+    CentralityComparisons,
+    CentralityHistogram,
+)
 
 
 def test_contour_points_follow_the_outer_contour_not_a_longer_hole():
@@ -335,20 +340,101 @@ def test_fuzz_round_13_labels_names_and_levels():
     np.testing.assert_array_equal(as_shape_images([np.where(square, 1.5e308, 1e308)])[0], square)
 
 
-def test_parts_tied_for_the_largest_area_are_all_kept_whatever_the_pose():
+def test_of_parts_tied_for_the_largest_area_the_same_is_kept_whatever_the_pose():
     """Between two parts of equal area the first in raster order was kept, so a rotated or
-    mirrored image kept the other part (its profile distance to its own mirror was about 16)."""
+    mirrored image kept the other part (its profile distance to its own mirror was about 16).
+    Keeping both instead disconnected the graph; the part of larger second moment is kept."""
     from centrality_vision.shapes import normalize_shape
 
     mask = np.zeros((20, 30), dtype=bool)
     mask[2:6, 2:8] = True  # 24 pixels
-    mask[10:18, 15:18] = True  # 24 pixels
+    mask[10:18, 15:18] = True  # 24 pixels, more elongated: kept
     mask[0, 29] = True  # a smaller part, dropped
     kept = normalize_shape(mask, resolution=10)
     for turned in (np.rot90(mask), mask[::-1], mask[:, ::-1]):
-        assert normalize_shape(turned, resolution=10).sum() == kept.sum()
+        np.testing.assert_array_equal(normalize_shape(turned, resolution=10).sum(), kept.sum())
+        assert normalize_shape(turned, resolution=10).shape in (kept.shape, kept.shape[::-1])
     from centrality_vision.shapes._retrieval import _largest_component
 
-    expected = mask.copy()
-    expected[0, 29] = False
+    expected = np.zeros_like(mask)
+    expected[10:18, 15:18] = True
     np.testing.assert_array_equal(_largest_component(mask), expected)
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda: CentralityHistogram(weights=1), "`weights` must be True or False"),
+        (lambda: CentralityHistogram(n_jobs=0), "`n_jobs` must be None"),
+        (lambda: CentralityHistogram(cache=5), "`cache` must be None"),
+        (lambda: CentralityHistogram(progress="yes"), "`progress` must be True or False"),
+        (lambda: CentralityComparisons(connectivity=5), "`connectivity`.*CentralityComparisons must be 4 or 8"),
+        (lambda: CentralityComparisons(weights="no"), "`weights` must be True or False"),
+        (lambda: CentralityComparisons(n_jobs=0), "`n_jobs` must be None"),
+    ],
+)
+def test_shape_estimators_check_every_parameter_at_fit(make, message):
+    """These passed fit and failed only in transform."""
+    square = np.zeros((8, 8), dtype=bool)
+    square[2:6, 2:6] = True
+    with pytest.raises((ValueError, TypeError), match=message):
+        make().fit([square])
+
+
+@pytest.mark.parametrize(
+    ("y", "error", "message"),
+    [
+        ([0, "bar"], TypeError, r"`y` must be all strings or all numbers"),
+        ([np.nan, 1.0], ValueError, r"`y` must not hold NaN or None"),
+        ([0.5, 1.5], ValueError, r"`y` must hold class labels: Unknown label type"),
+        ([0, 1, 2], ValueError, r"`y` must hold one label per image \(2\)"),
+    ],
+)
+def test_forest_labels_are_checked_as_the_retrieval_scores_check_them(y, error, message):
+    """[0, 'bar'] became the strings '0' and 'bar' (predict gave '0', never the caller's 0);
+    continuous labels got scikit-learn's words without a name. (One class is fine, as in
+    scikit-learn: every image is predicted as it.)"""
+    disk = np.add.outer((np.arange(30) - 15) ** 2, (np.arange(30) - 15) ** 2) < 64
+    bar = np.zeros((30, 30), dtype=bool)
+    bar[12:18, 3:27] = True
+    with pytest.raises(error, match=message):
+        CentralityComparisonForest(n_estimators=5, n_comparisons=20).fit([disk, bar], y)
+
+
+def test_counts_beyond_any_use_are_refused_by_name():
+    """10^11 comparisons raised a MemoryError (2.9 TiB); 10^15 diffusion steps or splits ran on."""
+    from centrality_vision.shapes import diffusion_rerank, nearest_neighbor_accuracy
+
+    square = np.zeros((8, 8), dtype=bool)
+    square[2:6, 2:6] = True
+    with pytest.raises(ValueError, match=r"`n_comparisons` must be an int in \[1, 10000000\]"):
+        CentralityComparisons(n_comparisons=10**11).fit([square])
+    d = abs(np.subtract.outer(np.arange(4.0), np.arange(4.0)))
+    with pytest.raises(ValueError, match=r"`n_iter` must be an int in \[1, 1000000\]"):
+        diffusion_rerank(d, n_iter=10**15)
+    with pytest.raises(ValueError, match=r"`n_splits` must be an int in \[1, 1000000\]"):
+        nearest_neighbor_accuracy(d, [0, 0, 1, 1], n_train=1, n_splits=10**15)
+
+
+def test_comparison_features_have_names_for_pipelines_and_set_output():
+    """CentralityComparisons had no get_feature_names_out: no set_output, and a Pipeline's
+    get_feature_names_out failed."""
+    from sklearn.pipeline import make_pipeline
+    from sklearn.preprocessing import StandardScaler
+
+    square = np.zeros((8, 8), dtype=bool)
+    square[2:6, 2:6] = True
+    comparisons = CentralityComparisons(["degree", "closeness"], n_comparisons=6, random_state=0)
+    pipe = make_pipeline(comparisons, StandardScaler()).fit([square, square.T])
+    names = pipe.get_feature_names_out()
+    assert names.tolist() == [f"{('degree', 'closeness')[c]}_cmp{k}" for k, c in enumerate(comparisons.which_)]
+
+
+@pytest.mark.parametrize(("value", "message"), [(0.0, r"in \(0, 1\]; got 0.0"), (1.5, "got 1.5"), ("bad", "got 'bad'")])
+def test_forest_max_features_is_checked_by_name(value, message):
+    """A float out of (0, 1] or an unknown string reached scikit-learn's error, which names
+    RandomForestClassifier and no parameter of ours."""
+    square = np.zeros((8, 8), dtype=bool)
+    square[2:6, 2:6] = True
+    with pytest.raises(ValueError, match="`max_features` must be .*" + message):
+        CentralityComparisonForest(n_estimators=3, n_comparisons=10, max_features=value).fit([square, square.T], [0, 1])

@@ -8,7 +8,7 @@
 - :func:`pairwise_shape_distances`: shape retrieval from outline profiles of reach and
   inner distances on the pixel graph, or from centrality histograms (chi-square, earth
   mover's), with :func:`diffusion_rerank` and the field's scores
-  (:func:`bullseye_score`, :func:`retrieval_counts`, :func:`nearest_neighbour_accuracy`).
+  (:func:`bullseye_score`, :func:`retrieval_counts`, :func:`nearest_neighbor_accuracy`).
 - :func:`shape_centralities` and :class:`CentralityCache`: centralities per image,
   computed once and cached (in memory, or on disk shared by worker processes), in
   parallel with ``n_jobs``.
@@ -34,7 +34,8 @@ from ._retrieval import (
     VISIBILITY_QUANTILES,
     bullseye_score,
     diffusion_rerank,
-    nearest_neighbour_accuracy,
+    nearest_neighbor_accuracy,
+    nearest_neighbour_accuracy,  # noqa: F401 (the former name, not in __all__)
     normalize_shape,
     outline_profiles,
     pairwise_shape_distances,
@@ -58,7 +59,7 @@ __all__ = [
     "as_shape_images",
     "bullseye_score",
     "diffusion_rerank",
-    "nearest_neighbour_accuracy",
+    "nearest_neighbor_accuracy",
     "normalize_shape",
     "outline_profiles",
     "pairwise_shape_distances",

@@ -160,6 +160,10 @@ def _random_state(estimator) -> np.random.Generator:
     return as_generator(estimator.seed)
 
 
+# The most comparisons (features) a shape estimator draws.
+_MAX_COMPARISONS = 10**7
+
+
 class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
     """Random binary comparisons of centrality values at positions relative to the shape.
 
@@ -177,7 +181,7 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
     centrality : str or list of str, default="closeness"
         Centralities to compare (``"all"``: the four of the thesis); each comparison
         uses one of them, drawn at random.
-    n_comparisons : int, default=2000
+    n_comparisons : int in [1, 10^7], default=2000
     extent : float in (0, 1e6], default=2.0
         Largest offset, in units of the shape's RMS radius.
     reference : {"centroid", "graph-centre"}, default="centroid"
@@ -269,7 +273,9 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
     def _drawn_with(self) -> tuple:
         """The checked parameters that the drawn comparisons depend on."""
         names = resolve_centralities(self.centrality)
-        n = check_int(self.n_comparisons, name="n_comparisons", low=1)
+        # (each comparison is a feature per image: 10^7 are 80 MB per image; 10^11 asked for
+        # 2.9 TiB and raised a MemoryError)
+        n = check_int(self.n_comparisons, name="n_comparisons", low=1, high=_MAX_COMPARISONS)
         # (at most 1e6 radii: beyond, pixel positions leave int64)
         extent = check_float(self.extent, name="extent", low=0.0, low_open=True, high=1e6)
         check_choice(self.reference, ("centroid", "graph-centre"), name="reference")
@@ -311,6 +317,32 @@ class CentralityComparisons(ShapeInputMixin, TransformerMixin, BaseEstimator):
         self.which_ = rng.integers(0, len(names), size=n)
         self._remember_parameters()
         return self
+
+    def get_feature_names_out(self, input_features=None) -> np.ndarray:
+        """Names ``"<centrality>_cmp<k>"`` of the output features, one per drawn comparison.
+
+        Parameters
+        ----------
+        input_features : ignored
+            Present for scikit-learn's API (the inputs are images, not named columns).
+
+        Returns
+        -------
+        ndarray of str objects, shape (``n_comparisons``,)
+            Comparison ``k`` of the fit, named by the centrality it compares (``which_``).
+
+        Examples
+        --------
+        >>> import numpy as np
+        >>> square = np.zeros((6, 6), dtype=bool); square[1:5, 1:5] = True
+        >>> comparisons = CentralityComparisons("degree", n_comparisons=3).fit([square])
+        >>> comparisons.get_feature_names_out().tolist()
+        ['degree_cmp0', 'degree_cmp1', 'degree_cmp2']
+        """
+        from sklearn.utils.validation import check_is_fitted
+
+        check_is_fitted(self, "offsets_")
+        return np.array([f"{self.centralities_[c]}_cmp{k}" for k, c in enumerate(self.which_)], dtype=object)
 
     def transform(self, X) -> np.ndarray:
         """Binary comparison features, shape (n_images, n_comparisons), values 0.0 or 1.0."""
@@ -365,7 +397,7 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
     ----------
     centrality : str or list of str, default="closeness"
     n_estimators : int, default=300
-    n_comparisons : int, default=2000
+    n_comparisons : int in [1, 10^7], default=2000
     max_features : int, float or "sqrt", default="sqrt"
         Comparisons examined per tree node.
     max_depth : int or None, default=None
@@ -475,11 +507,18 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
             raise InputError(
                 "`y` is required: CentralityComparisonForest requires y to be passed, but the target y is None."
             )
-        y = check_array(y, ensure_2d=False, dtype=None, input_name="y")  # NaN/inf: sklearn's message
-        check_classification_targets(y)
+        from ._retrieval import _check_labels
+
+        # the retrieval scores' check: [0, "bar"] became the strings '0' and 'bar', NaN a class
+        y = _check_labels(y, None, name="y", what="image")
+        try:
+            y = check_array(y, ensure_2d=False, dtype=None, input_name="y")
+            check_classification_targets(y)
+        except ValueError as exc:  # (continuous labels: scikit-learn's words, named here)
+            raise InputError(f"`y` must hold class labels: {exc}") from None
         masks = self._masks(X)
-        if y.ndim != 1 or y.shape[0] != len(masks):
-            raise InputError(f"`y` must have one label per image ({len(masks)}); got shape {y.shape}.")
+        if y.shape[0] != len(masks):
+            raise InputError(f"`y` must hold one label per image ({len(masks)}); got shape {y.shape}.")
         check_int(self.n_estimators, name="n_estimators", low=1)
         # (scikit-learn checks the rest, but passes ints beyond C's range to an OverflowError)
         if self.max_depth is not None:
@@ -490,6 +529,10 @@ class CentralityComparisonForest(ShapeInputMixin, ClassifierMixin, BaseEstimator
             )
         if isinstance(self.max_features, numbers.Integral):
             check_int(self.max_features, name="max_features", low=1)
+        elif isinstance(self.max_features, numbers.Real):  # a share of the comparisons
+            check_float(self.max_features, name="max_features", low=0.0, low_open=True, high=1.0)
+        elif self.max_features is not None:
+            check_choice(self.max_features, ("sqrt", "log2"), name="max_features")
         comparison_seed, forest_seed = self._seeds()
         self.comparisons_ = CentralityComparisons(
             centrality=self.centrality,

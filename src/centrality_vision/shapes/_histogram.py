@@ -8,7 +8,14 @@ from sklearn.base import BaseEstimator, TransformerMixin
 from .._validation import check_bool, check_choice, check_int
 from ..centrality import CENTRALITIES
 from ..exceptions import InputError
-from ._cache import SHAPE_CENTRALITIES, as_shape_images, is_connectivity, shape_centralities
+from ._cache import (
+    SHAPE_CENTRALITIES,
+    _effective_jobs,
+    as_shape_images,
+    is_connectivity,
+    resolve_cache,
+    shape_centralities,
+)
 
 __all__ = ["CentralityHistogram", "ShapeInputMixin", "resolve_centralities"]
 
@@ -60,7 +67,21 @@ class ShapeInputMixin:
                 + "; call fit again."
             )
 
+    def _check_shared_parameters(self) -> None:
+        """The parameters every shape estimator shares, checked where ``fit`` runs (before, a
+        bad ``weights`` or ``connectivity`` passed ``fit`` and failed in ``transform``)."""
+        if not is_connectivity(self.connectivity):
+            raise InputError(
+                f"`connectivity`: the 'connectivity' parameter of {type(self).__name__} must be 4 or 8. "
+                f"Got {self.connectivity!r} instead."
+            )
+        check_bool(self.weights, name="weights")
+        check_bool(self.progress, name="progress")
+        resolve_cache(self.cache)
+        _effective_jobs(self.n_jobs)
+
     def _masks(self, X):
+        self._check_shared_parameters()
         fill = getattr(self, "fill_holes", False)
         check_bool(fill, name="fill_holes")
         masks = as_shape_images(X, foreground=self.foreground, threshold=self.threshold)
@@ -249,11 +270,7 @@ class CentralityHistogram(ShapeInputMixin, TransformerMixin, BaseEstimator):
         # constant features divides by their zero variance)
         check_int(self.bins, name="bins", low=2, high=MAX_BINS)
         check_choice(self.scaling, ("minmax", "max"), name="scaling")
-        if not is_connectivity(self.connectivity):
-            raise InputError(
-                "`connectivity`: the 'connectivity' parameter of CentralityHistogram must be 4 or 8. "
-                f"Got {self.connectivity!r} instead."
-            )
+        self._check_shared_parameters()
         return names
 
     def fit(self, X, y=None):
