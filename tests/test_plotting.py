@@ -625,3 +625,32 @@ def test_plot_registration_takes_moving_then_fixed_like_every_fit():
     by_label = {c.get_label(): np.asarray(c.get_offsets()) for c in ax.collections}
     np.testing.assert_array_equal(by_label["moving"], moving)
     np.testing.assert_array_equal(by_label["fixed"], fixed)
+
+
+def test_a_refused_plot_leaves_no_figure_and_draws_nothing_on_the_callers_axes():
+    """The figure was made before the norm or the series were checked: each refused call left
+    one open, and with ``ax`` given the series before the bad one were already drawn."""
+    import matplotlib.pyplot as plt
+
+    from centrality_vision.plotting import plot_alignment_errors, plot_centrality_image
+
+    before = set(plt.get_fignums())
+    mask = np.zeros((5, 5), dtype=bool)
+    mask[1:4, 1:4] = True
+    nodes = np.flatnonzero(mask)
+    for call in (
+        lambda: plot_centrality_image(np.ones(nodes.size), nodes, mask.shape, norm="bogus"),
+        lambda: plot_centrality_image(np.zeros(nodes.size), nodes, mask.shape, norm="log"),
+        lambda: plot_alignment_errors({"a": [1.0, 0.5], "b": None}),
+        lambda: plot_alignment_errors({"a": [-1.0]}),
+    ):
+        with pytest.raises(ValueError):
+            call()
+    assert set(plt.get_fignums()) == before
+    fig, ax = plt.subplots()
+    with pytest.raises(ValueError, match=r"`errors\['b'\]` must be >= 0"):
+        plot_alignment_errors({"a": [1.0, 0.5], "b": [-2.0]}, ax=ax)
+    assert len(ax.lines) == 0
+    with pytest.raises(TypeError, match="`log` must be True or False"):
+        plot_alignment_errors({"a": [1.0, 0.1]}, log="no", ax=ax)
+    plt.close(fig)

@@ -467,14 +467,13 @@ def plot_centrality_image(
 
     import matplotlib.pyplot as plt
 
-    if ax is None:
-        fig = plt.figure(layout="constrained")
-        ax = fig.add_subplot()
-
     image = np.full(size, float(background))
     image[nodes] = values
     image = np.ma.masked_invalid(image.reshape(shape))
-    color_norm = _norm(norm, image.compressed())
+    color_norm = _norm(norm, image.compressed())  # (checked before a figure is made: none left open)
+    if ax is None:
+        fig = plt.figure(layout="constrained")
+        ax = fig.add_subplot()
     shown = ax.imshow(image, cmap=cmap, norm=color_norm, interpolation="nearest")
     if crop:
         rows, cols = np.divmod(nodes, shape[1])
@@ -949,12 +948,14 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
     if n_points is not None:
         n_points = check_int(n_points, name="n_points", low=1, high=2**53)
         scale = 1.0 / np.sqrt(n_points)
-    if ax is None:
-        _, ax = plt.subplots(figsize=(5.5, 3.8), layout="constrained")
-    else:
+    log = check_bool(log, name="log")
+    if ax is not None:
         _check_ax(ax, three_d=False, why="for error curves")
+    # every series is checked before anything is drawn: a bad one left an open figure, or half
+    # the curves on the caller's axes
+    curves = []
     top, low = 0.0, np.inf
-    for k, (label, values) in enumerate(errors.items()):
+    for label, values in errors.items():
         if values is None:
             raise InputError(f"`errors[{label!r}]` is None: fit with `true_moving=` to record alignment errors.")
         if not hasattr(values, "__len__") or sparse.issparse(values):  # (a sparse array's len() raised)
@@ -971,6 +972,10 @@ def plot_alignment_errors(errors, *, ax=None, title=None, log=True, n_points=Non
             )
         top = max(top, float(v.max(initial=0.0)))
         low = min(low, float(positive.min(initial=np.inf)))
+        curves.append((label, v))
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5.5, 3.8), layout="constrained")
+    for k, (label, v) in enumerate(curves):
         every = max(1, v.size // 8)
         ax.plot(
             np.arange(v.size),

@@ -436,6 +436,27 @@ def test_classify_cross_validates_with_fewer_folds_when_classes_are_small(tmp_pa
     assert "using 3 folds" in captured.err and "warning:" not in captured.err and captured.out.startswith("accuracy")
 
 
+def test_classify_passes_the_histogram_options_on(tmp_path):
+    """The command line had no way to set the histogram's connectivity, scaling, weights or
+    hole filling; the record shows the histogram they made."""
+    from centrality_vision.io import read_shape
+    from centrality_vision.shapes import CentralityHistogram
+
+    folder = _shapes_folder(tmp_path / "shapes")
+    out = tmp_path / "c.json"
+    options = ["--connectivity", "4", "--scaling", "minmax", "--weights", "--fill-holes"]
+    assert main(["classify", str(folder), "--centrality", "closeness", "--bins", "8", *options, "--out", str(out)]) == 0
+    histogram = json.loads(out.read_text())["parameters"]["histogram"]
+    assert histogram["connectivity"] == 4 and histogram["scaling"] == "minmax"
+    assert histogram["weights"] is True and histogram["fill_holes"] is True
+    # the features are the estimator's with those settings
+    files = sorted(folder.iterdir())
+    images = [read_shape(path) for path in files]
+    same = CentralityHistogram("closeness", bins=8, connectivity=4, scaling="minmax", weights=True, fill_holes=True)
+    default = CentralityHistogram("closeness", bins=8)
+    assert not np.array_equal(same.fit_transform(images), default.fit_transform(images))
+
+
 def test_classify_refuses_features_that_never_vary(tmp_path, capsys):
     # found by a fuzz run: GaussianNB's divide-by-zero warnings were printed and every
     # image got one prediction

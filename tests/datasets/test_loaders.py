@@ -137,7 +137,7 @@ def test_kimia99_returns_independent_writable_images():
     assert second.images[0] is not first.images[0]
 
 
-@pytest.mark.parametrize("name", ["cow", "Cow1", "cow1.png", "", 3])
+@pytest.mark.parametrize("name", ["cow", "Cow1", "cow1.png", ""])
 def test_kimia99_unknown_name(kimia, name):
     with pytest.raises(InputError, match=r"`name` must be one of the 99 image names .*'bonefishes'.*got"):
         kimia.image(name)
@@ -276,3 +276,20 @@ def test_a_data_set_built_from_lists_finds_its_images_by_name():
     assert isinstance(data.names, np.ndarray) and data.labels.tolist() == ["a"]
     with pytest.raises(TypeError, match="`labels` must hold strings"):
         Kimia99(images=[mask], labels=[1], names=["x"])
+
+
+def test_loaders_name_wrong_types_as_types():
+    """load_mpeg7(classes=b"apple") showed its bytes as [97, 112, 112, 108, 101]; an index to
+    Kimia99.image was an unknown name (ValueError) rather than a wrong type."""
+    import pytest
+
+    from centrality_vision.datasets import load_kimia99, load_mpeg7
+
+    with pytest.raises(TypeError, match=r"`name` must be an image name \(str\), e.g. 'dog1'; got 5"):
+        load_kimia99().image(5)
+    try:
+        load_mpeg7(classes=["apple"])
+    except FileNotFoundError:
+        pytest.skip("MPEG-7 is in ../shared/data (not shipped)")
+    with pytest.raises(TypeError, match=r"got b'apple'"):
+        load_mpeg7(classes=b"apple")

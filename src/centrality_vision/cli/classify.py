@@ -60,6 +60,27 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--bins", type=number(int, low=2, high=MAX_BINS), default=40, help="histogram bins (default: %(default)s)"
     )
     parser.add_argument(
+        "--connectivity", type=int, choices=(8, 4), default=8, help="pixel neighbourhood (default: %(default)s)"
+    )
+    parser.add_argument(
+        "--scaling",
+        choices=("max", "minmax"),
+        default="max",
+        help="values divided by their largest (max, the thesis') or mapped onto [0, 1] (minmax) before "
+        "binning (default: %(default)s)",
+    )
+    parser.add_argument(
+        "--weights",
+        action="store_true",
+        help="shortest paths by Euclidean pixel edge lengths (1 and sqrt 2) instead of hop counts: nearly "
+        "the same features for a turned shape",
+    )
+    parser.add_argument(
+        "--fill-holes",
+        action="store_true",
+        help="fill background regions enclosed by the shape first (salt noise punches such holes)",
+    )
+    parser.add_argument(
         "--classifier",
         choices=CLASSIFIERS,
         default="nb",
@@ -198,7 +219,15 @@ def run(args: argparse.Namespace) -> int:
 
     from ..shapes import CentralityHistogram
 
-    histogram = CentralityHistogram(centrality=args.centrality, bins=args.bins, progress=progress_on(args))
+    histogram = CentralityHistogram(
+        centrality=args.centrality,
+        bins=args.bins,
+        connectivity=args.connectivity,
+        scaling=args.scaling,
+        weights=args.weights,
+        fill_holes=args.fill_holes,
+        progress=progress_on(args),
+    )
     tic = time.perf_counter()
     features = histogram.fit_transform(images)
     say(f"features: {features.shape[1]} per image in {time.perf_counter() - tic:.1f} s")

@@ -274,7 +274,9 @@ class Kimia99:
         >>> mask.dtype, bool(mask.any() and not mask.all())
         (dtype('bool'), True)
         """
-        hits = np.flatnonzero(self.names == name) if isinstance(name, str) else []
+        if not isinstance(name, str):  # (an index or bytes: a wrong type, not an unknown name)
+            raise TypeError(f"`name` must be an image name (str), e.g. 'dog1'; got {name!r}.")
+        hits = np.flatnonzero(self.names == name)
         if len(hits) == 0:
             shown = ", ".join(repr(str(s)) for s in self.names[:5])
             raise InputError(f"`name` must be one of the {len(self)} image names (e.g. {shown}, ...); got {name!r}.")
@@ -436,8 +438,10 @@ def load_mpeg7(path=None, *, classes=None) -> MPEG7:
     if classes is not None:
         if isinstance(classes, str):
             classes = [classes]
-        if not hasattr(classes, "__iter__"):
-            raise TypeError(f"`classes` must be a class name or a sequence of them; got {classes!r}.")
+        given = classes
+        # (bytes iterate as ints: b"apple" was shown as [97, 112, ...])
+        if not hasattr(classes, "__iter__") or isinstance(classes, (bytes, bytearray)):
+            raise TypeError(f"`classes` must be a class name or a sequence of them; got {given!r}.")
         classes = list(classes)  # once: a generator is used up by the check below
         if not all(isinstance(c, str) for c in classes):
             raise TypeError(f"`classes` must be a class name or a sequence of them; got {classes!r}.")
