@@ -388,6 +388,7 @@ def test_shape_estimators_check_every_parameter_at_fit(make, message):
         ([np.nan, 1.0], ValueError, r"`y` must not hold NaN or None"),
         ([0.5, 1.5], ValueError, r"`y` must hold class labels: Unknown label type"),
         ([0, 1, 2], ValueError, r"`y` must hold one label per image \(2\)"),
+        ([[0], [1]], ValueError, r"`y` must hold one label per image; got shape \(2, 1\)"),
     ],
 )
 def test_forest_labels_are_checked_as_the_retrieval_scores_check_them(y, error, message):

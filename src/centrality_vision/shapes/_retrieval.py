@@ -549,7 +549,8 @@ def _check_labels(labels, n: int | None, *, name: str = "labels", what: str = "s
     raw = labels
     labels = np.asarray(labels)
     if labels.ndim != 1 or (n is not None and labels.shape != (n,)):
-        raise InputError(f"`{name}` must hold one label per {what} ({n}); got shape {labels.shape}.")
+        count = "" if n is None else f" ({n})"
+        raise InputError(f"`{name}` must hold one label per {what}{count}; got shape {labels.shape}.")
     if labels.dtype.kind in "US" and not isinstance(raw, np.ndarray):
         # numpy turns [1, "1"] into two equal strings: one class out of two
         # (and [b"x", "x"] into two equal strings: bytes and text are different labels)
