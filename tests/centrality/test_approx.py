@@ -83,6 +83,26 @@ def test_small_epsilon_falls_back_to_exact(graphs):
     np.testing.assert_allclose(values, cen.harmonic(graph))
 
 
+@pytest.mark.parametrize("epsilon", [1e-4, 1e-20, 1e-160, 1e-300])
+@pytest.mark.parametrize("measure", ["closeness", "harmonic", "betweenness"])
+def test_a_tiny_epsilon_gives_exact_values(graphs, measure, epsilon):
+    """Sample sizes of 1 / epsilon^2 underflowed (ZeroDivisionError), overflowed int()
+    (OverflowError) or passed numpy's largest array (betweenness drew them all up front)."""
+    graph = graphs["delaunay"]
+    function = getattr(cen, measure)
+    values, info = function(graph, epsilon=epsilon, seed=0, return_info=True)
+    np.testing.assert_allclose(values, function(graph), rtol=1e-12)
+    assert info["samples"] == (0 if measure == "betweenness" else graph.shape[0])
+
+
+def test_sampled_pairs_beyond_the_cap_are_refused_by_name():
+    """More pairs than the cap, but fewer than the graph has (4e8): 6e7 pairs would take
+    1.4 GiB before the first search."""
+    graph = delaunay_graph(np.random.default_rng(0).random((20_000, 2)))
+    with pytest.raises(ValueError, match=r"`epsilon`=0.0003 asks for up to .* sampled pairs"):
+        cen.betweenness(graph, epsilon=3e-4)
+
+
 @pytest.mark.parametrize(
     ("options", "error", "match"),
     [

@@ -170,6 +170,13 @@ def test_pagerank_follows_a_subnormal_arc_like_any_other():
     np.testing.assert_allclose(tiny, [0.05, x1, 0.05 + 0.85 * x1], rtol=1e-10)
 
 
+def test_pagerank_refuses_a_tolerance_it_can_never_reach():
+    # tol=0 was accepted and ran max_iter iterations to "did not converge"
+    path = np.array([[0, 1.0, 0], [1.0, 0, 1.0], [0, 1.0, 0]])
+    with pytest.raises(ValueError, match=r"`tol` must be .*got 0"):
+        cen.pagerank(path, tol=0.0)
+
+
 def test_eigenvector_large_component_uses_sparse_solver():
     yy, xx = np.mgrid[:40, :40]
     graph, _ = pixel_graph((yy - 20) ** 2 + (xx - 20) ** 2 < 18**2)

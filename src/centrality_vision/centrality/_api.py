@@ -435,7 +435,9 @@ def betweenness(
         occupy (the same paths drawn with the same random numbers), another 2x; with 4
         neighbours they are the monotone staircases of the pair's box, counted row by row;
         on 26-neighbour 3D grids they advance one slice per step (1.6x on a 90,000-voxel
-        ball with a slot).
+        ball with a slot). Where that size reaches the number of ordered pairs
+        ``n (n - 1)``, the exact values are computed instead (cheaper, and ``"samples"`` is
+        0); sizes beyond 5e7 pairs (drawn up front) are refused: a larger ``epsilon``.
     delta : float in (0, 1), default=0.1
         Failure probability of the approximation.
     seed : int, numpy.random.Generator or None
@@ -487,10 +489,11 @@ def betweenness(
 
         grid = _Grid(graph) if on_grid else None
         values, info = sample_betweenness(prep, epsilon, delta, seed, progress, grid=grid)
-        values = prep.unpermute(values)  # normalised
-        if not normalized:
-            values = values * pairs
-    else:
+        if values is not None:
+            values = prep.unpermute(values)  # normalised
+            if not normalized:
+                values = values * pairs
+    if epsilon is None or values is None:  # (exact also where sampling would draw more pairs than exist)
         if on_grid:
             from ._grid import grid_betweenness
 

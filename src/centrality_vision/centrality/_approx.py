@@ -19,11 +19,14 @@ import numpy as np
 
 from .._parallel import get_num_threads, run_chunks
 from .._seeding import as_generator
+from ..exceptions import InputError
 from . import _kernels, _sampling
 
 __all__ = ["sample_betweenness", "sample_sources"]
 
 RK_CONSTANT = 0.5  # the universal constant c of the VC-dimension sample bound
+# The most pairs betweenness may draw (they are drawn up front, 24 bytes each: 1.1 GiB).
+MAX_PAIR_SAMPLES = 5 * 10**7
 _GROWTH = 1.5  # checkpoint sizes grow geometrically by this factor
 _LANDMARKS = 8  # pixel grids: landmarks whose hop counts bound the distance to a target
 _NO_RASTERS = (np.zeros(0, dtype=np.bool_), np.zeros(0, dtype=np.bool_))
@@ -87,7 +90,8 @@ def _grid_guides(grid, reach):
 def rk_sample_size(vertex_diameter: int, epsilon: float, delta: float) -> int:
     """Riondato-Kornaropoulos: samples for an ``epsilon`` error with probability ``1 - delta``."""
     vc = math.floor(math.log2(vertex_diameter - 2)) + 1 if vertex_diameter > 3 else 1
-    return int(math.ceil(RK_CONSTANT / epsilon**2 * (vc + math.log(1.0 / delta))))
+    size = RK_CONSTANT * (vc + math.log(1.0 / delta)) / epsilon**2 if epsilon**2 > 0 else math.inf
+    return int(math.ceil(size)) if size < 2**62 else 2**62  # (a tiny epsilon: beyond any count)
 
 
 def _bernstein(hits: np.ndarray, k: int, log_term: float) -> float:
@@ -116,6 +120,14 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
     else:
         vertex_diameter = _largest_eccentricity_bound(prep) + 1
     cap = rk_sample_size(vertex_diameter, target, delta / 2)
+    if cap >= n * (n - 1):  # more pairs than the graph has: exact values are cheaper
+        return None, {"samples": 0}
+    if cap > MAX_PAIR_SAMPLES:  # (drawn up front: 24 bytes each)
+        raise InputError(
+            f"`epsilon`={epsilon:g} asks for up to {cap:.3g} sampled pairs on this graph of {n} nodes "
+            f"(about {24 * cap / 2**30:.3g} GiB), more than the {MAX_PAIR_SAMPLES:.0e} allowed; use a larger "
+            "`epsilon`, or None for exact values."
+        )
     checkpoints = []
     k = min(cap, 256)
     while k < cap:
@@ -213,11 +225,14 @@ def sample_sources(prep, epsilon: float, delta: float, seed, progress: bool, des
 
     n = prep.n
     rng = as_generator(seed)
-    k = int(math.ceil(math.log(2.0 * n / delta) / (2.0 * (epsilon * (n - 1) / n) ** 2))) if n > 1 else n
-    if k >= n:  # sampling would not save anything: exact values
+    # (in floats: a tiny epsilon underflows the denominator, and its sample count is not an int)
+    spread = 2.0 * (epsilon * (n - 1) / n) ** 2 if n > 1 else 0.0
+    k_real = math.log(2.0 * n / delta) / spread if spread > 0 else math.inf
+    if not k_real < n:  # sampling would not save anything: exact values
         from ._api import _hop_stats
 
         return (*_hop_stats(prep.indptr, prep.indices, progress, desc), {"searches": n, "samples": n})
+    k = int(math.ceil(k_real))
     sources = np.sort(rng.choice(n, size=k, replace=False)).astype(np.int64)  # RCM order: nearby
     group_ptr = np.arange(0, k + 64, 64, dtype=np.int64)
     group_ptr[-1] = k

@@ -214,7 +214,7 @@ def pagerank(
         Damping factor.
     strengths : bool, default=False
         Follow arcs in proportion to their stored values (False: uniformly).
-    tol : float, default=1e-12
+    tol : float > 0, default=1e-12
         Stop when the L1 change of an iteration is below ``n * tol``.
     max_iter : int, default=1000
     as_dict : bool, default=False
@@ -235,7 +235,7 @@ def pagerank(
     alpha = check_float(alpha, name="alpha", low=0.0, high=1.0)
     if alpha == 1.0:
         raise InputError("`alpha` must be in [0, 1); got 1.0 (the iteration would not converge).")
-    tol = check_float(tol, name="tol", low=0.0)
+    tol = check_float(tol, name="tol", low=0.0, low_open=True)  # (0: a change below 0 never comes)
     max_iter = check_int(max_iter, name="max_iter", low=1)
     n = adjacency.shape[0]
     # the transitions do not depend on the values' scale: computed at a power-of-two scale
