@@ -883,6 +883,9 @@ def test_classify_tells_a_file_from_a_missing_folder(tmp_path, capsys):
         (b"\x89PNG\r\n\x1a\n", "must be a UTF-8 text file; got byte 0x89, not UTF-8 there"),
         (b"file,label\nbar0.png\n", "line 2 must give a file and its label; got 'bar0.png' and None"),
         (b"file,label\nbar0.png,\n", "line 2 must give a file and its label; got 'bar0.png' and ''"),
+        # a file listed twice kept its last label (the truth changed silently)
+        (b"file,label\nbar0.png,a\nbar1.png,a\nbar0.png,b\n", "line 4 labels 'bar0.png' again (line 2 did)"),
+        (b"", "the file is empty; expected a CSV with columns 'file' and 'label'"),  # (was "got None")
     ],
 )
 def test_classify_bad_label_files_are_one_line_errors(tmp_path, capsys, content, message):

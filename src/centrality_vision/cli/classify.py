@@ -125,18 +125,29 @@ def _read_labels(path) -> dict:
     try:
         with path.open("r", encoding="utf-8-sig", newline="") as handle:
             reader = csv.DictReader(handle)
-            if reader.fieldnames is None or not {"file", "label"} <= set(reader.fieldnames):
+            if reader.fieldnames is None:
                 raise InputError(
-                    f"{path}: a labels file must be a CSV with columns 'file' and 'label'; got {reader.fieldnames}."
+                    f"--labels: {path}: the file is empty; expected a CSV with columns 'file' and 'label'."
                 )
-            labels = {}
+            if not {"file", "label"} <= set(reader.fieldnames):
+                raise InputError(
+                    f"--labels: {path}: a labels file must be a CSV with columns 'file' and 'label'; got "
+                    f"{reader.fieldnames}."
+                )
+            labels, lines = {}, {}
             for row in reader:
                 file, label = row["file"], row["label"]
                 if not file or not label or not label.strip():
                     raise InputError(
-                        f"{path}: line {reader.line_num} must give a file and its label; got {file!r} and {label!r}."
+                        f"--labels: {path}: line {reader.line_num} must give a file and its label; got {file!r} "
+                        f"and {label!r}."
                     )
-                labels[file] = label
+                if file in labels:  # (the last row won: a second label silently changed the truth)
+                    raise InputError(
+                        f"--labels: {path}: line {reader.line_num} labels {file!r} again (line {lines[file]} "
+                        "did); each file must be listed once."
+                    )
+                labels[file], lines[file] = label, reader.line_num
             return labels
     except UnicodeDecodeError as exc:
         bad = exc.object[exc.start]

@@ -77,14 +77,15 @@ def add_parser(sub) -> argparse.ArgumentParser:
         "--n-neighbors",
         type=number(int, low=3, high=19),
         default=8,
-        help="--method robust: neighbours in each local MWME signature; the cost doubles with each "
+        help="--method robust: neighbours in each local MWME signature, 3 to 19; the cost doubles with each "
         "(default: %(default)s)",
     )
     parser.add_argument(
         "--n-candidates",
         type=number(int, low=1, high=1000),
         default=6,
-        help="--method robust: likely partners (hence pose hypotheses) per moving point (default: %(default)s)",
+        help="--method robust: likely partners (hence pose hypotheses) per moving point, 1 to 1000 "
+        "(default: %(default)s)",
     )
     parser.add_argument(
         "--w",
