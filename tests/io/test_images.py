@@ -115,6 +115,9 @@ def test_foreground_and_threshold(tmp_path):
     ("name", "content", "match"),
     [
         ("bad.png", b"GIF89a not a png", "not a readable PNG image"),
+        # a text file: the decoder's words were "Could not find a backend to open <_io.BytesIO ...>"
+        ("text.png", b"hello, world\n", r"not a readable PNG image \(it does not start as a PNG file: b'hello, w'\)"),
+        ("text.jpg", b"hello", r"not a readable JPG image \(it does not start as a JPG file"),
         ("bad.png", b"\x89PNG\r\n\x1a\n broken", "not a readable PNG image"),
         ("bad.tif", b"II*\x00 broken", "not a readable TIF image"),
         ("bad.png", b"", "empty"),
@@ -204,3 +207,10 @@ def test_a_complex_tiff_is_refused_not_cut_to_its_real_part(tmp_path):
     tifffile.imwrite(tmp_path / "complex.tif", pixels)
     with pytest.raises(InputError, match=r"complex\.tif: the image has complex pixels \(complex128\)"):
         read_image(tmp_path / "complex.tif")
+
+
+def test_an_image_under_another_formats_suffix_still_reads(tmp_path):
+    """Only a file that fails to decode is called not of its suffix's format."""
+    pixels = np.arange(64, dtype=np.uint8).reshape(8, 8) * 4
+    (tmp_path / "png-named.jpg").write_bytes(iio.imwrite("<bytes>", pixels, extension=".png"))
+    np.testing.assert_array_equal(read_image(tmp_path / "png-named.jpg"), pixels)

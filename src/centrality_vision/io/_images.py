@@ -15,6 +15,18 @@ __all__ = ["IMAGE_SUFFIXES", "read_image", "read_shape"]
 
 #: Suffixes :func:`read_shape` reads (case-insensitive), all decoded by imageio.
 IMAGE_SUFFIXES = (".png", ".bmp", ".gif", ".tif", ".tiff", ".jpg", ".jpeg", ".pgm", ".ppm", ".pbm", ".pnm", ".webp")
+# The first bytes every file of a format starts with: a file that does not decode and lacks
+# them is named as not of its suffix's format (the decoders' own words were their internals:
+# "Could not find a backend to open <_io.BytesIO object at 0x...>").
+_SIGNATURES = {
+    ".png": (b"\x89PNG\r\n\x1a\n",),
+    ".gif": (b"GIF87a", b"GIF89a"),
+    ".bmp": (b"BM",),
+    ".jpg": (b"\xff\xd8\xff",),
+    ".jpeg": (b"\xff\xd8\xff",),
+    ".tif": (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+"),
+    ".tiff": (b"II*\x00", b"MM\x00*", b"II+\x00", b"MM\x00+"),
+}
 
 
 def read_image(path, /) -> np.ndarray:
@@ -69,7 +81,14 @@ def read_image(path, /) -> np.ndarray:
     except InputError:
         raise
     except Exception as exc:  # imageio and its plugins raise OSError, ValueError, SyntaxError, ...
-        raise InputError(f"{path}: not a readable {kind} image ({type(exc).__name__}: {_first_line(exc)}).") from None
+        # (a file of another format under this suffix decodes: only a failure is explained so)
+        signatures = _SIGNATURES.get(path.suffix.lower(), ())
+        why = (
+            f"it does not start as a {kind} file: {data[:8]!r}"
+            if signatures and not data.startswith(signatures)
+            else f"{type(exc).__name__}: {_first_line(exc)}"
+        )
+        raise InputError(f"{path}: not a readable {kind} image ({why}).") from None
     if np.iscomplexobj(pixels):  # a grey value has no imaginary part to drop silently
         raise InputError(f"{path}: the image has complex pixels ({pixels.dtype}); expected real grey or colour values.")
     if not is_real_dtype(pixels.dtype):
