@@ -1205,10 +1205,10 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         own, ``history_["w"]`` the share each of its E-steps used). A ``callback`` sees both
         runs; one that stops a run ends the fit with it. The two runs cost about twice the
         former single run and 1.4 to 9 times a fixed ``w`` (2D rigid, 10,000 points with 20%
-        clutter: 10.5 s against 1.2 s; the estimate slows convergence). Estimated from the first step
-        alone, the share climbs while sigma2 is large, where the tails of any set look like
-        outliers, and exact copies turned by 30 degrees ended in a wrong pose; held alone, an
-        affine or non-rigid fit leans towards clutter. It is the maximum-likelihood fraction
+        clutter: 10.5 s against 1.2 s; the estimate slows convergence). Estimated from the
+        first step alone, the share climbs while sigma2 is large, where the tails of any set
+        look like outliers, and exact copies turned by 30 degrees ended in a wrong pose; held
+        alone, an affine or non-rigid fit leans towards clutter. It is the maximum-likelihood fraction
         for the chosen transform model: exact on rigid data with clutter, high when the model
         cannot fit the data (a similarity on a bent shape reads the bent parts as outliers).
         Measured on the bunny (1,000 points, 20% missing, clutter 10%; 5 seeds): rotation
