@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
+import sys
 import time
 
 import numpy as np
@@ -55,7 +56,11 @@ def main() -> None:
     import centrality_vision as cv
     from centrality_vision.graphs import mstme_graph, mwme_graph
 
+    sys.path.insert(0, os.path.dirname(__file__))
+    from _common import load_line
+
     print(f"cpus={os.cpu_count()} threads={cv.get_num_threads()}")
+    print(load_line("timings are inflated by the other processes"))
     rng = np.random.default_rng(0)
     warm = rng.random((10, 2))
     for m in ("exact", "greedy", "local"):

@@ -9,7 +9,7 @@ max over seeds), the estimate of w='auto' beside the true clutter fraction, and 
 seconds of one fit (w=0 and auto; the machine's load is printed: compare ratios).
 
 Run:  N_BUNNY=1000 nice -n 5 python benchmarks/outlier_weight.py 5   (CONFIGS=0,1 for a subset)
-Output: results/benchmarks/outlier_weight.txt
+Output: printed (results/benchmarks/outlier_weight.txt keeps the runs quoted in the READMEs).
 
 ``--models [SEEDS]``: CPD's dense model beside the k-nearest-neighbour model
 (``n_neighbors=10``), each with w = 0, 0.1 and 'auto', on the fish, the face (or the test
@@ -20,11 +20,11 @@ unit-RMS shape), rows shuffled; error = mean distance of each moving point to it
 position, in units of the shape's RMS radius. Also the CPD fish pair itself (its rows
 correspond). Rigid (bunny, 500 points, ``RigidCPD(scale=False)``): rotation by 10 and 40
 degrees about a random axis; error = rotation error in degrees. Median / max over seeds.
-Output appended to results/benchmarks/outlier_weight.txt.
+Output printed and appended to results/benchmarks/outlier_weight.txt (``--out FILE``, or
+``--out -`` for none).
 """
 
 import os
-import sys
 import time
 import warnings
 from multiprocessing import Pool
@@ -185,14 +185,38 @@ def models(seeds):
     return "\n".join(lines)
 
 
-if __name__ == "__main__" and "--models" in sys.argv:
-    n_seeds = int(sys.argv[sys.argv.index("--models") + 1]) if len(sys.argv) > sys.argv.index("--models") + 1 else 5
+def _arguments(argv=None):
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("seeds", nargs="?", type=int, default=5, help="seeds per configuration (default: 5)")
+    parser.add_argument(
+        "--models",
+        nargs="?",
+        type=int,
+        const=5,
+        default=None,
+        metavar="SEEDS",
+        help="the dense model beside the k-NN model instead (SEEDS per case, default 5)",
+    )
+    parser.add_argument(
+        "--out",
+        default=os.path.join(HERE, "..", "results", "benchmarks", "outlier_weight.txt"),
+        help="--models: the file the table is appended to ('-': none; default: %(default)s)",
+    )
+    return parser.parse_args(argv)
+
+
+ARGS = _arguments() if __name__ == "__main__" else None
+if ARGS is not None and ARGS.models is not None:
+    n_seeds = ARGS.models
     text = models(n_seeds)
     print(text)
-    with open(os.path.join(HERE, "..", "results", "benchmarks", "outlier_weight.txt"), "a") as out:
-        out.write("\n# python benchmarks/outlier_weight.py --models %d\n%s\n" % (n_seeds, text))
-elif __name__ == "__main__":
-    seeds = int(sys.argv[1]) if len(sys.argv) > 1 else 5
+    if ARGS.out != "-":
+        with open(ARGS.out, "a") as out:
+            out.write("\n# python benchmarks/outlier_weight.py --models %d\n%s\n" % (n_seeds, text))
+elif ARGS is not None:
+    seeds = ARGS.seeds
     print("load average (1, 5, 15 min): %.2f %.2f %.2f" % os.getloadavg())
     with Pool(2) as pool:
         res = pool.map(one, [(ci, s) for ci in range(len(CONFIGS)) for s in range(seeds)])

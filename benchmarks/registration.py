@@ -717,7 +717,11 @@ def measure(lib, problem, args, repeat):
             "skipped",
             note="needs ~%.1f GiB of dense arrays (> --max-gib %g)" % (gib, args.max_gib),
         )
-    run, params = make_runner(lib, problem.case, problem.n, args)
+    try:  # (a peer whose API changed fails while its call is set up: its row says so)
+        run, params = make_runner(lib, problem.case, problem.n, args)
+    except Exception as exc:
+        msg = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
+        return Row(problem.case, problem.n, lib, "error", note="%s: %s" % (type(exc).__name__, msg))
     row = Row(problem.case, problem.n, lib, "ok", params=params)
     caught = []
     try:

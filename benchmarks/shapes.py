@@ -59,7 +59,11 @@ def main() -> None:
     from centrality_vision.graphs import pixel_graph, salt_noise
     from centrality_vision.shapes import SHAPE_CENTRALITIES, default_cache
 
+    sys.path.insert(0, os.path.dirname(__file__))
+    from _common import load_line
+
     print(f"cpus={os.cpu_count()} threads={cv.get_num_threads()}")
+    print(load_line("timings are inflated by the other processes"))
     data = load_kimia99()
     images = data.images[:: 11 if args.quick else 1]
     # warm-up: compile the kernels
