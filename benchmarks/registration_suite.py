@@ -1335,7 +1335,17 @@ def main(argv=None):
     print(f"{len(units)} units; {len(load_results(path))} finished lines in {path}", flush=True)
     if args.report_only:
         done = load_results(path)
+        wanted = len(units)
         units = [u for u in units if unit_id(u) in done]  # stored under their ids (key and digest)
+        if len(units) < wanted:
+            # (the stored report covers the units of its own run: one of other --pairs, --trials
+            # or --angles finds fewer, and would have replaced it by a thinner or empty one)
+            sys.exit(
+                f"--report-only: {len(units)} of the {wanted} units asked for are finished in {path}; "
+                "give the --pairs, --trials, --angles, --families and --methods of the run that wrote it "
+                "(registration-suite.txt prints them), or a new --out. (Lines written before the results carried "
+                "a checksum, as the committed ones of 2026-11-23, are not read.)"
+            )
         results = {u.key: done[unit_id(u)] for u in units}
         args.families = [
             f
