@@ -20,7 +20,9 @@ Usage::
 from __future__ import annotations
 
 import argparse
+import atexit
 import importlib.util
+import shutil
 import statistics
 import subprocess
 import sys
@@ -52,6 +54,7 @@ def load_old_kernels(revision):
         ["git", "show", "%s:%s" % (revision, KERNELS)], cwd=ROOT, check=True, capture_output=True, text=True
     ).stdout
     folder = Path(tempfile.mkdtemp(prefix="estep_dense_"))
+    atexit.register(shutil.rmtree, folder, True)  # (one folder was left per run)
     path = folder / "old_registration_kernels.py"
     path.write_text(text)
     spec = importlib.util.spec_from_file_location("old_registration_kernels", path)
