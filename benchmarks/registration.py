@@ -1,5 +1,5 @@
 #!/usr/bin/env python
-"""Benchmark our Coherent Point Drift against pycpd and cycpd (rigid and non-rigid, 2D).
+"""Benchmark our Coherent Point Drift against rustcpd, biocpd, probreg, pycpd and cycpd (rigid and non-rigid, 2D).
 
 One process, the same seeded data for every library. For each size n the moving set Y
 (n x 2) is n points sampled inside a Kimia-99 silhouette (``--shape``, default ``dog1``:
