@@ -103,7 +103,8 @@ def _bernstein(hits: np.ndarray, k: int, log_term: float) -> float:
 
 
 def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool, grid=None):
-    """Normalised betweenness estimates (node order of ``prep``) and an info dict.
+    """Normalised betweenness estimates (node order of ``prep``) and an info dict; ``(None,
+    None)`` where the sample cap reaches the graph's ordered pairs (exact values are cheaper).
 
     With ``grid`` (a :class:`._grid._Grid` of the same graph) the searches walk the pixel
     grid, and the estimates come in the node order of the graph itself (prepare it
@@ -121,7 +122,7 @@ def sample_betweenness(prep, epsilon: float, delta: float, seed, progress: bool,
         vertex_diameter = _largest_eccentricity_bound(prep) + 1
     cap = rk_sample_size(vertex_diameter, target, delta / 2)
     if cap >= n * (n - 1):  # more pairs than the graph has: exact values are cheaper
-        return None, {"samples": 0}
+        return None, None
     if cap > MAX_PAIR_SAMPLES:  # (drawn up front: 24 bytes each)
         raise InputError(
             f"`epsilon`={epsilon:g} asks for up to {cap:.3g} sampled pairs on this graph of {n} nodes "

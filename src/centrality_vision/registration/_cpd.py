@@ -718,21 +718,21 @@ class _CPD(BaseEstimator):
         grows without bound there, and such runs won over exact ones.)"""
         before = {name: self.__dict__[name] for name in _FITTED if name in self.__dict__}
         try:
-            notes, objective, halted = self._run(*run, hold=True)
+            held_notes, objective, halted = self._run(*run, hold=True)
             if halted:  # the callback stopped the fit
-                return notes
-            first = ({name: getattr(self, name) for name in _FITTED}, notes, self._run_order(notes, objective))
+                return held_notes
+            held = {name: getattr(self, name) for name in _FITTED}
+            held_order = self._run_order(held_notes, objective)
             notes, objective, halted = self._run(*run, hold=False)
-            if halted or self._run_order(notes, objective) < first[2]:
+            if halted or self._run_order(notes, objective) < held_order:
                 return notes
         except BaseException:  # (a callback raised, or Ctrl-C): no half-kept fit
             for name in _FITTED:
                 self.__dict__.pop(name, None)
             self.__dict__.update(before)
             raise
-        for name, value in first[0].items():
-            setattr(self, name, value)
-        return first[1]
+        self.__dict__.update(held)
+        return held_notes
 
     def _run_order(self, notes, objective) -> tuple:
         """How w='auto' orders its runs (lower is kept): collapsed last, then an estimate at
