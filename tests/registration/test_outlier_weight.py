@@ -65,9 +65,9 @@ def test_auto_w_registers_exact_copies(make):
     assert not wrong
 
 
-def test_auto_w_keeps_the_likelier_run_and_its_own_record(fish, rot2):
+def test_auto_w_keeps_one_runs_whole_record(fish, rot2):
     """Both runs start alike; the kept one's history, iterations and estimate belong together,
-    and a callback that stops the fit stops both runs."""
+    and a callback that stops the first run ends the fit."""
     rng = np.random.default_rng(3)
     x = np.vstack([fish @ rot2(30).T, rng.uniform(-1.5, 1.5, (60, 2))])
     seen = []
