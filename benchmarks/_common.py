@@ -4,8 +4,24 @@ from __future__ import annotations
 
 import math
 import os
+import tempfile
+from pathlib import Path
 
-__all__ = ["table", "fmt_s", "load_line", "probreg_beta"]
+__all__ = ["table", "fmt_s", "load_line", "probreg_beta", "RESULTS", "scratch_dir"]
+
+#: The committed results: only a script's full, documented run writes here by default.
+RESULTS = Path(__file__).resolve().parent.parent / "results" / "benchmarks"
+
+
+def scratch_dir():
+    """Where smoke runs and partial analyses write unless told otherwise (not ``results/``).
+
+    ``<temp>/centrality-vision-benchmarks``, created on first use: a ``--quick`` run or an
+    analysis on a few pairs must not replace the committed tables of the full run.
+    """
+    path = Path(tempfile.gettempdir()) / "centrality-vision-benchmarks"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
 
 
 def table(headers, rows, align=None):

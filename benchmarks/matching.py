@@ -16,6 +16,10 @@ under a similarity transform), where the global MWME matching is exact too.
     python benchmarks/matching.py             # every 3rd Kimia-99 shape (33), every 2nd MPEG-7 class (35)
     python benchmarks/matching.py --quick     # 20 + 10 shapes
     python benchmarks/matching.py --from-json results/benchmarks/matching.json   # table and figure again
+
+A full run writes ``matching.{txt,json,png}`` into ``results/benchmarks`` (``--out DIR``
+elsewhere); ``--quick`` writes ``matching-quick.*`` into ``<temp>/centrality-vision-benchmarks``
+and ``--from-json`` next to the JSON it reads, unless given ``--out``.
 """
 
 from __future__ import annotations
@@ -30,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import load_line, table
+from _common import RESULTS, load_line, scratch_dir, table
 
 N_POINTS = 100
 NOISE = (0.0, 0.005, 0.01, 0.02, 0.05, 0.1)
@@ -244,7 +248,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--seed", type=int, default=0)
-    parser.add_argument("--out", default="results/benchmarks")
+    parser.add_argument(
+        "--out",
+        default=None,
+        help="output folder (default: results/benchmarks for a full run; --quick: a scratch folder under the "
+        "temporary directory; --from-json: the JSON's folder)",
+    )
     parser.add_argument("--from-json", default=None, help="rewrite the table and figure from a saved run")
     args = parser.parse_args()
     if args.from_json:
@@ -265,12 +274,18 @@ def main() -> None:
         + f"\ncpus={os.cpu_count()}; {result.get('load', '')}; total {result['seconds']:.0f} s (one process)"
     )
     print(text)
-    out = Path(args.out)
+    if args.out is not None:
+        out = Path(args.out)
+    elif args.from_json:
+        out = Path(args.from_json).resolve().parent
+    else:
+        out = scratch_dir() if args.quick else RESULTS
     out.mkdir(parents=True, exist_ok=True)
     stem = "matching-quick" if args.quick else "matching"
     (out / f"{stem}.txt").write_text(text + "\n")
     (out / f"{stem}.json").write_text(json.dumps(result, indent=1) + "\n")
     plot(result, out / f"{stem}.png")
+    print(f"written to {out / stem}.txt, .json and .png")
 
 
 if __name__ == "__main__":

@@ -240,6 +240,8 @@ def parse_args(argv=None):
         help="with --figure: read rows from these JSON files instead of running",
     )
     args = p.parse_args(argv)
+    if args.from_json and not args.figure:
+        p.error("--from-json only redraws a figure: give --figure PATH (where to write it)")
 
     def split(s, allowed, what):
         items = [x.strip() for x in s.split(",") if x.strip()]
@@ -1276,7 +1278,7 @@ def entry(args):
         OURS[0].set_num_threads(args.threads)
     if args.from_json:
         rows = [r for path in args.from_json for r in json.loads(Path(path).read_text())["rows"]]
-        figure(rows, args.figure or "results/benchmarks/registration-scaling.png")
+        figure(rows, args.figure)
         return 0
     if args.estep:
         blas_limit, _ = _limit_blas(args.blas_threads)

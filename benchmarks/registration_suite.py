@@ -53,7 +53,9 @@ means something else (see ``registration.py``); they get the same number. A libr
 fails on a case is reported with its error instead of a number.
 
 Run it with ``nice -n 5 python benchmarks/registration_suite.py [--pairs 20] [--trials 20]
-[--workers 2]``; ``--quick`` is a smoke run (2 pairs, 2 trials, 3 angles).
+[--workers 2]``; ``--quick`` is a smoke run (2 pairs, 2 trials, 3 angles). A full run writes
+``results/benchmarks/registration-suite.*`` (``--out PREFIX`` elsewhere); ``--quick`` and
+``--explain`` write into ``<temp>/centrality-vision-benchmarks/`` unless given ``--out``.
 ``--explain N [--sections ...]`` runs controlled experiments on N of the suite's pairs per
 case: biocpd's and probreg's departures from CPD switched off in turn, GPD's prior with its
 parts removed, every library's solution scored by CPD's own objective (which library
@@ -79,7 +81,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from _common import load_line, probreg_beta, table  # noqa: E402
+from _common import RESULTS, load_line, probreg_beta, scratch_dir, table  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 BUNNY = ROOT.parent / "shared" / "data" / "bunny" / "bunny.txt"
@@ -1285,6 +1287,34 @@ def explain(pairs, sections=None):
     return "\n".join(lines)
 
 
+REPORT_ARGS = ("pairs", "trials", "bunny", "families", "angles", "methods")
+
+
+def _refuse_other_report(parser, args):
+    """Exit before any work if ``<out>.json`` holds a report made with other arguments.
+
+    The finished units (``<out>.jsonl``) are keyed by their parameters and never reused under
+    others, but the tables and figures are one file each: a run with other ``--pairs``,
+    ``--trials``, ... would replace the stored report (the committed one is 100 pairs, 8
+    trials) at its end. ``--overwrite`` allows it.
+    """
+    path = Path(args.out + ".json")
+    if args.overwrite or not path.exists():
+        return
+    try:
+        stored = json.loads(path.read_text()).get("args", {})
+    except (OSError, UnicodeDecodeError, ValueError, AttributeError) as exc:
+        parser.error(f"--out {args.out}: {path} is not a report of this suite ({exc}); give --overwrite or a new --out")
+    ours = {k: getattr(args, k) for k in REPORT_ARGS}
+    differ = {k: (stored.get(k), ours[k]) for k in REPORT_ARGS if stored.get(k) != ours[k]}
+    if differ:
+        parser.error(
+            f"--out {args.out}: its report was made with other arguments "
+            + ", ".join(f"{k} {old!r} (now {new!r})" for k, (old, new) in differ.items())
+            + "; give those, --overwrite, or a new --out"
+        )
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument(
@@ -1297,9 +1327,18 @@ def main(argv=None):
     p.add_argument("--angles", default=",".join(map(str, ANGLES)))
     p.add_argument("--workers", type=int, default=2)
     p.add_argument("--scheduler", default="processes")
-    p.add_argument("--out", default=str(ROOT / "results" / "benchmarks" / "registration-suite"))
+    p.add_argument(
+        "--out",
+        default=None,
+        help="output prefix (default: results/benchmarks/registration-suite for a full run; --quick and "
+        "--explain write into a scratch folder under the temporary directory, so that they never replace "
+        "the committed tables)",
+    )
     p.add_argument("--quick", action="store_true", help="smoke run: 2 pairs, 2 trials, angles 0,90,180")
     p.add_argument("--report-only", action="store_true", help="tables and figures from the finished units only")
+    p.add_argument(
+        "--overwrite", action="store_true", help="replace <out>.txt/.json/.png even if made with other arguments"
+    )
     p.add_argument("--explain", type=int, default=0, help="N: the controlled runs of explain() on N pairs per case")
     p.add_argument(
         "--sections",
@@ -1308,6 +1347,9 @@ def main(argv=None):
         "<out>-explain-<sections>.txt)",
     )
     args = p.parse_args(argv)
+    scratch = args.out is None and bool(args.quick or args.explain)
+    if args.out is None:
+        args.out = str((scratch_dir() if scratch else RESULTS) / "registration-suite")
     if args.explain:
         sections = None if args.sections is None else [x.strip() for x in args.sections.split(",") if x.strip()]
         unknown = sorted(set(sections or ()) - set(EXPLAIN_SECTIONS))
@@ -1317,6 +1359,7 @@ def main(argv=None):
         print(text)
         suffix = "" if sections is None else "-" + "-".join(sections)
         Path(args.out + f"-explain{suffix}.txt").write_text(text + "\n")
+        print(f"written to {args.out}-explain{suffix}.txt")
         return
     if args.quick:
         args.pairs, args.trials, args.angles = 2, 2, "0,90,180"
@@ -1329,6 +1372,8 @@ def main(argv=None):
 
     from centrality_vision.experiments._runner import load_results, run_units, unit_id
 
+    if not scratch:  # (a smoke run's scratch report is for the eye only)
+        _refuse_other_report(p, args)
     units = build_units(args)
     path = Path(args.out + ".jsonl")
     print(load_line("timings are inflated; compare ratios"), flush=True)
@@ -1359,6 +1404,7 @@ def main(argv=None):
     Path(args.out + ".txt").write_text(text + "\n")
     Path(args.out + ".json").write_text(json.dumps(summary, indent=1, default=str) + "\n")
     figures(args, summary, args.out)
+    print(f"written to {args.out}.txt, .json, .jsonl and the figures")
 
 
 if __name__ == "__main__":
