@@ -968,8 +968,8 @@ def main(args):
                     r.library,
                     fmt_s(r),
                     len(r.times) if ok else "-",
-                    r.n_iter if ok else "-",
-                    r.stop if ok else "-",
+                    r.n_iter if ok and r.n_iter >= 0 else "-",
+                    r.stop if ok and r.stop != "?" else "-",
                     "%.2e" % r.error if ok else "-",
                     "%.2f" % r.ratio if r.ratio is not None else "-",
                 ]
@@ -980,7 +980,7 @@ def main(args):
                 notes.append("n=%d %s: warning %s" % (r.n, r.library, w[:200]))
         print(
             "### %s  (seconds: median of the runs, * = single run; RMS = |true - T(Y)|_F / sqrt(n); "
-            "ratio = library s / ours s)" % case
+            "ratio = library s / ours s; iters and stop '-': the library does not report them)" % case
         )
         print(
             table(

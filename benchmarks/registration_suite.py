@@ -640,7 +640,7 @@ def report(args, units, results):
                             syn_res[(family, shape, level, config)], syn_res[(family, shape, level, peer)]
                         )
                         lines.append(
-                            f"    {family}/{shape}/{level}: {ratio:.3f} of {peer}'s; paired bootstrap 95% "
+                            f"    {config} at {family}/{shape}/{level}: {ratio:.3f} of {peer}'s; paired bootstrap 95% "
                             f"{lo:.3f}-{hi:.3f}; {peer} better on {better} of {n} pairs"
                         )
             summary.setdefault("checks", {})[config] = {"within_5pct": n_c, "cases": len(cases), "worst": list(worst_c)}
