@@ -691,7 +691,7 @@ def test_out_that_is_a_file_is_a_named_one_line_error(tmp_path, capsys, argv):
     afile.write_text("")
     assert main([*argv, "--out", str(afile)]) == 2
     message = _one_line_error(capsys, only=True)
-    assert "`--out` must be a folder that can be created" in message and "afile' is a file, not a folder" in message
+    assert ": --out must be a folder that can be created" in message and "afile' is a file, not a folder" in message
     # an output folder under a file (fuzz round 15: it said only "Not a directory")
     assert main([*argv, "--out", str(afile / "sub")]) == 2
     assert f"({str(afile)!r} is a file, not a folder)" in _one_line_error(capsys, only=True)

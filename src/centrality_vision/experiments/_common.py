@@ -178,7 +178,7 @@ def make_out_folder(path) -> Path:
     except OSError as exc:
         ancestor = nearest_existing(out)
         why = f"{str(ancestor)!r} is a file, not a folder" if not ancestor.is_dir() else exc.strerror
-        raise InputError(f"`--out` must be a folder that can be created; got {str(out)!r} ({why}).") from None
+        raise InputError(f"`out` must be a folder that can be created; got {str(out)!r} ({why}).") from None
     return out
 
 
