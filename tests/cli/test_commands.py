@@ -643,17 +643,17 @@ def test_reproduce_seeds_reach_the_claims_and_are_checked(tmp_path, capsys):
         main(["reproduce", "fig-5.3", "--quick", "--seeds", "0", "--out", str(tmp_path)])
     assert info.value.code == 2
     err = capsys.readouterr().err.strip()
-    assert "argument --seeds: expected an int in [1, 100000]; got 0" in err
+    assert "argument --seeds: must be in [1, 100000]; got 0" in err
 
 
 @pytest.mark.parametrize(
     ("options", "message"),
     [
-        (["--workers", "0"], "argument --workers: expected an int in [1, 1024]"),
-        (["--workers", "-1"], "argument --workers: expected an int in [1, 1024]"),
-        (["--seed", "-1"], "argument --seed: expected an int in [0,"),
-        (["--seeds", "99999999999999999999999"], "argument --seeds: expected an int in [1, 100000]"),
-        (["--seeds", "abc"], "argument --seeds: expected an int"),
+        (["--workers", "0"], "argument --workers: must be in [1, 1024]"),
+        (["--workers", "-1"], "argument --workers: must be in [1, 1024]"),
+        (["--seed", "-1"], "argument --seed: must be in [0,"),
+        (["--seeds", "99999999999999999999999"], "argument --seeds: must be in [1, 100000]"),
+        (["--seeds", "abc"], "argument --seeds: must be an integer"),
     ],
 )
 @pytest.mark.parametrize("experiment", ["fig-5.3", "all"])

@@ -30,7 +30,7 @@ def test_seeds_stop_at_scikit_learn_s_range(capsys):
     assert MAX_SEED == 2**32 - 1
     with pytest.raises(SystemExit) as info:
         cli_main(["reproduce", "table-4.1", "--quick", "--seed", str(2**32)])
-    assert info.value.code == 2 and "--seed: expected an int in [0, 4294967295]" in capsys.readouterr().err
+    assert info.value.code == 2 and "--seed: must be in [0, 4294967295]" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("module", [e.module for e in REGISTRY.values()])
@@ -98,7 +98,7 @@ def test_a_huge_worker_count_is_a_usage_error(argv, capsys):
     # an OverflowError traceback from ProcessPoolExecutor's semaphore before
     with pytest.raises(SystemExit) as info:
         cli_main(["reproduce", "fig-5.3", "--quick", *argv])
-    assert info.value.code == 2 and "expected an int in [1, 1024]" in capsys.readouterr().err
+    assert info.value.code == 2 and "must be in [1, 1024]" in capsys.readouterr().err
 
 
 def test_run_all_takes_seeds_per_experiment_and_checks_only(tmp_path):
@@ -121,7 +121,7 @@ def test_fig_5_10_index_is_checked(tmp_path, capsys):
     for bad in ("-1", "99", "100000000000"):
         with pytest.raises(SystemExit):
             fig_5_10.main(["--out", str(tmp_path), "--index", bad])
-        assert "expected an int in [0, 98]" in capsys.readouterr().err
+        assert "must be in [0, 98]" in capsys.readouterr().err
     with pytest.raises(InputError, match=r"`index` must be an int in \[0, 98\]"):
         fig_5_10.run(index=99)
 
@@ -146,7 +146,7 @@ def test_python_m_prints_one_line_for_a_bad_argument(tmp_path):
         timeout=120,
     )
     assert run.returncode == 2
-    assert "Traceback" not in run.stderr and run.stderr.startswith("error: `--out` must be a folder")
+    assert "Traceback" not in run.stderr and run.stderr.startswith("error: --out must be a folder")
 
 
 # ------------------------------------------------------------------ what a result is keyed by

@@ -223,7 +223,7 @@ def test_a_second_fuzz_round_of_transforms_icp_and_landmarks(pair):
         # ICP: a start 1e154 radii away (cKDTree's "no neighbour" index was used: IndexError)
         (lambda: ICP(init=RigidTransform(np.eye(2), [1e154, 0.0])).fit(y, x), InputError, "`ICP.init` must bring"),
         # a trim that leaves too few pairs was blamed on max_distance=None
-        (lambda: ICP(trim=0.95).fit(y, x), InputError, r"`ICP.trim`=0.95 leaves 2 of 30 pairs"),
+        (lambda: ICP(trim=0.95).fit(y, x), InputError, r"`trim=0.95` leaves 2 of 30 pairs"),
         # a bool beside an int was cast to the index 1
         (lambda: RigidCPD().fit(y, x, landmarks=[(True, 0)]), TypeError, "got True of type bool"),
         # unnormalised points too close together: the start pose came back "converged"

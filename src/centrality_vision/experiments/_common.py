@@ -71,10 +71,10 @@ def int_in(low: int, high: int | None = None):
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an int; got {text!r}") from None
-        if value < low or (high is not None and value > high):
-            bound = f">= {low}" if high is None else f"in [{low}, {high}]"
-            raise argparse.ArgumentTypeError(f"expected an int {bound}; got {value}")
+            raise argparse.ArgumentTypeError(f"must be an integer; got {text!r}") from None
+        if value < low or (high is not None and value > high):  # (worded as the other commands' ranges)
+            bound = f"[{low}, inf)" if high is None else f"[{low}, {high}]"
+            raise argparse.ArgumentTypeError(f"must be in {bound}; got {value}")
         return value
 
     convert.__name__ = "int"
@@ -103,8 +103,15 @@ def command_line(main) -> int:
     try:
         return main()
     except (InputError, FileNotFoundError) as exc:
-        print(f"error: {' '.join(str(exc).split())}", file=sys.stderr)
+        message = " ".join(str(exc).split())
+        for option in COMMAND_LINE_OPTIONS:  # a parameter's name as the option that gives it
+            message = message.replace(f"`{option}`", f"--{option}")
+        print(f"error: {message}", file=sys.stderr)
         return 2
+
+
+#: The options of :func:`experiment_parser`, which a library message names as parameters.
+COMMAND_LINE_OPTIONS = ("out", "seed", "seeds", "scheduler", "workers")
 
 
 def experiment_parser(module: str, doc: str, name: str, *, quick_help=None, seed_help=None, runner=False, seeds=True):

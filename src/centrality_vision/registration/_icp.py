@@ -353,7 +353,7 @@ class ICP(BaseEstimator):
                     kept_by_distance = np.count_nonzero(self._kept(dist, max_d, trim=False))
                     if kept_by_distance >= dim + 1:  # the trimming took the rest
                         raise InputError(
-                            f"`ICP.trim`={self.trim} leaves {int(np.count_nonzero(keep))} of {dist.shape[0]} pairs "
+                            f"`trim={self.trim}` leaves {int(np.count_nonzero(keep))} of {dist.shape[0]} pairs "
                             f"(at least {dim + 1} are needed); lower it."
                         )
                     raise InputError(
