@@ -425,6 +425,28 @@ def test_icp_converges_at_a_tight_tol_whatever_the_offset(offset):
     np.testing.assert_allclose(shifted.moving_transformed_ - offset, at_origin.moving_transformed_, atol=1e-9)
 
 
+@pytest.mark.parametrize("offset", [1e7, 3e7])
+def test_icp_far_from_the_origin_does_not_take_a_misalignment_for_rounding(offset):
+    # audit round 23: a "rounding" floor 256 times the coordinates' squared rounding stopped
+    # ICP, 'converged', 1.3 degrees off at 1e7 (the fish at 1e-6 units) and at 0 degrees from 3e7
+    from centrality_vision.datasets import load_fish
+    from centrality_vision.registration import ICP
+
+    y = load_fish().moving
+    a = 0.1
+    r = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+    moving, fixed = 1e-6 * y + offset, 1e-6 * (y @ r.T + 0.02) + offset
+
+    def degrees(transform):
+        return np.degrees(np.arctan2(transform.rotation[1, 0], transform.rotation[0, 0]))
+
+    icp = ICP(tol=1e-14).fit(moving, fixed)
+    cpd = RigidCPD(scale=False, tol=1e-12).fit(moving, fixed)  # down to the data's own rounding
+    assert icp.converged_
+    assert abs(degrees(icp.transform_) - degrees(cpd.transform_)) < 0.01
+    assert abs(degrees(icp.transform_) - np.degrees(a)) < 0.05
+
+
 @pytest.mark.parametrize("make", [RigidCPD, NonRigidCPD, AffineCPD])
 def test_boolean_coordinates_are_refused_by_name(make):
     # a mask passed as a point set was read as 0/1 coordinates before

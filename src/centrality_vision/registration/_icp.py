@@ -308,7 +308,7 @@ class ICP(BaseEstimator):
         # the normalised coordinates carry the rounding of the caller's (an offset of 1e4
         # leaves ~1e-12 of a unit radius): residuals below it are rounding error too
         peak = max(float(np.max(np.abs(moving))), float(np.max(np.abs(fixed)))) / frame.scale
-        coincide = max(_COINCIDE, (16 * np.finfo(float).eps * peak) ** 2)
+        coincide = max(_COINCIDE, (np.finfo(float).eps * peak) ** 2)
         max_d = None if self.max_distance is None else float(self.max_distance) / frame.scale
         normals = estimate_normals(fixed_n, n_neighbors=normal_neighbors) if self.metric == "point_to_plane" else None
         tree = cKDTree(fixed_n)
