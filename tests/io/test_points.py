@@ -711,12 +711,38 @@ def test_paths_the_system_refuses_are_named_errors(tmp_path):
         ("x,y\n1,2\n3\n4,5\n", "line 3 has 1 value, the header 2"),  # (it blamed line 2: '1,2' is not a number)
         ("1;2\n3;4\n5\n6;7\n", "line 3 has 1 value, the rows before it 2"),
         ("1,2,\n3,4,\n", r"line 1, column 3: an empty cell \(a ',' too many\?\)"),  # (it said "a header line")
+        ("1,2\n3\n", "line 2 has 1 value, the rows before it 2"),  # (audit 24: '1,2' was taken for a header)
     ],
 )
 def test_a_ragged_delimited_file_names_its_short_line(tmp_path, text, message):
     (tmp_path / "ragged.csv").write_text(text)
     with pytest.raises(InputError, match=message):
         read_points(tmp_path / "ragged.csv")
+
+
+@pytest.mark.parametrize("text", ["1,5 2,5\n3 4\n5 6\n", "1,5 2,5\n3 4\n5 6\n7,5 8\n9 10\n"])
+def test_a_first_line_of_numbers_written_otherwise_is_not_dropped_as_a_header(tmp_path, text):
+    # audit round 24: decimal commas in a file split by spaces made the first line a header
+    # (cells '1,5' and '2,5'), and the point (1.5, 2.5) was dropped without a word
+    (tmp_path / "points.txt").write_text(text)
+    with pytest.raises(InputError, match=r"line 1, column 1: '1,5' is not a number \(decimal commas are read only"):
+        read_points(tmp_path / "points.txt")
+
+
+@pytest.mark.parametrize("header", ["x y", ",x,y", "X;Y", "lat lon"])
+def test_a_first_line_that_names_columns_is_still_a_header(tmp_path, header):
+    index = header.startswith(",")
+    delimiter = ";" if ";" in header else "," if index else " "
+    rows = [[0, 1.5, 2.0], [1, 3.0, 4.0]] if index else [[1.5, 2.0], [3.0, 4.0]]
+    body = "\n".join(delimiter.join(str(v) for v in row) for row in rows)
+    (tmp_path / "points.csv").write_text(f"{header}\n{body}\n")
+    np.testing.assert_array_equal(read_points(tmp_path / "points.csv"), [[1.5, 2.0], [3.0, 4.0]])
+
+
+def test_write_points_refuses_a_mask_as_every_reader_does(tmp_path):
+    with pytest.raises(TypeError, match=r"`points` must hold coordinates .*dtype bool \(a mask\?"):
+        write_points(tmp_path / "mask.csv", np.eye(2, dtype=bool))
+    assert not (tmp_path / "mask.csv").exists()
 
 
 def test_mixed_tabs_and_spaces_still_split_as_whitespace(tmp_path):

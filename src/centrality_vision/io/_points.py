@@ -83,9 +83,10 @@ def read_points(
         every line, else runs of spaces; a semicolon file may use decimal commas
         (``0,5;1,5``).
         Blank lines and lines starting with ``#`` are skipped, a UTF-8 byte-order mark is
-        ignored. The first line is a header when *none* of its cells is a number (e.g.
-        ``x,y,z,intensity`` or pandas' ``,x,y`` with an index column); a first line with
-        some numbers and some words is an error, never silently dropped.
+        ignored. The first line is a header when *none* of its cells is a number and one
+        holds a letter (e.g. ``x,y,z,intensity`` or pandas' ``,x,y`` with an index
+        column); a first line with some numbers and some words, or with cells that are
+        neither (``1,5 2,5`` in a file split by spaces), is an error, never silently dropped.
     ``.npy``
         A 2D numeric array saved with :func:`numpy.save` (no pickles). The header's shape
         is checked against the file size before anything is loaded.
@@ -302,6 +303,13 @@ def _read_text(path: Path) -> _Table:
     cells = split(first)
     numeric = [_is_number(cell, decimal_comma) for cell in cells]
     names = None
+    if not any(numeric) and not any(_LETTER.search(cell) for cell in cells):
+        # no cell is a number and none is a name: numbers written some other way (a decimal
+        # comma in a file split by spaces), not a header to drop
+        raise InputError(
+            f"{path}: line {first_number}, column 1: {_clip(cells[0].strip())!r} is not a number"
+            f"{_comma_hint(cells[0])}."
+        )
     if not any(numeric):
         names = [cell.strip().strip('"') for cell in cells]
         rows = rows[1:]
@@ -338,9 +346,22 @@ def _read_text(path: Path) -> _Table:
                 values[k, j] = _to_float(cell, decimal_comma)
             except (_NotANumber, ValueError):
                 raise InputError(
-                    f"{path}: line {number}, column {j + 1}: {_clip(cell.strip())!r} is not a number."
+                    f"{path}: line {number}, column {j + 1}: {_clip(cell.strip())!r} is not a number"
+                    f"{_comma_hint(cell)}."
                 ) from None
     return _Table(values, names, lines)
+
+
+# a header cell names something: it holds a letter ('x', 'intensity'; nan and inf are numbers)
+_LETTER = re.compile(r"[^\W\d_]")
+_DECIMAL_COMMA = re.compile(r"\s*[+-]?\d*,\d+([eE][+-]?\d+)?\s*")
+
+
+def _comma_hint(cell: str) -> str:
+    """Why a cell such as '1,5' was not read as 1.5, or ''."""
+    if _DECIMAL_COMMA.fullmatch(cell):
+        return " (decimal commas are read only in files whose cells are separated by ';' on every line)"
+    return ""
 
 
 def _sniff(sample: list[str], path: Path):
@@ -352,9 +373,10 @@ def _sniff(sample: list[str], path: Path):
     """
     delimiter = next((d for d in (";", "\t", ",") if all(d in line for line in sample)), " ")
     if delimiter == " ":
-        # a semicolon or comma on most lines but not all: a ragged file, whose short line the
-        # row check names (split by whitespace, a good line was blamed: '1,2' is not a number)
-        delimiter = next((d for d in (";", ",") if 2 * sum(d in line for line in sample) > len(sample) > 2), " ")
+        # a semicolon or comma on half the lines or more but not all: a ragged file, whose
+        # short line the row check names (split by whitespace, a good line was blamed: '1,2'
+        # is not a number, or taken for a header)
+        delimiter = next((d for d in (";", ",") if 2 * sum(d in line for line in sample) >= len(sample) >= 2), " ")
     if delimiter == " ":
         return (lambda line: line.split()), False, None
     decimal_comma = delimiter == ";" and any("," in line for line in sample)
@@ -1036,6 +1058,11 @@ def write_points(path, points, /) -> Path:
     arr = np.asarray(points)
     if not is_real_dtype(arr.dtype):
         raise TypeError(f"`points` must be a real numeric array; got {_describe(arr)}.")
+    if arr.dtype == bool:  # (as every reader and estimator refuses one)
+        raise TypeError(
+            f"`points` must hold coordinates (real numbers); got an {_describe(arr)} "
+            "(a mask? convert with .astype(float) if 0/1 coordinates are meant)."
+        )
     if arr.ndim != 2 or arr.shape[1] < 1:
         raise InputError(f"`points` must have shape (n_points, n_dims); got shape {arr.shape}.")
     if arr.shape[0] == 0:  # read_points refuses a file without points: none is written
