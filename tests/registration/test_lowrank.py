@@ -239,3 +239,54 @@ def test_multiscale_refine_iter_is_renamed_refine_max_iter():
     with pytest.warns(FutureWarning), pytest.raises(TypeError, match="`MultiscaleCPD.refine_iter` must be an int"):
         MultiscaleCPD(cpd, sizes=(100, 400), refine_iter=2.5).fit(y, x)
     assert clone(MultiscaleCPD(cpd, refine_iter=3)).get_params()["refine_iter"] == 3
+
+
+def _woodbury_m_step(kernel, post, moving, ls2):
+    """The textbook Woodbury form of the low-rank M-step: ``W = (R - d(P1) Q z) / ls2``."""
+    q, values, p1 = kernel.vectors, kernel.values, post.p1
+    rhs = post.px - p1[:, None] * moving
+    z = np.linalg.solve(q.T @ (p1[:, None] * q) + ls2 * np.diag(1.0 / values), q.T @ rhs)
+    return (rhs - p1[:, None] * (q @ z)) / ls2
+
+
+@pytest.mark.parametrize("sigma2", [1e-2, 1e-6, 1e-12])
+def test_low_rank_m_step_is_the_woodbury_solution_without_its_cancellation(sigma2):
+    # audit round 23: W = (R - d(P1) Q z) / (lam sigma2) cancels as sigma2 shrinks; the step
+    # takes the field Q z and W = Q diag(1 / values) z, which have the same Q^T W exactly
+    from centrality_vision.registration._estep import _e_step
+    from centrality_vision.registration._mstep import LowRankKernel, nonrigid_m_step
+
+    rng = np.random.default_rng(11)
+    moving = rng.random((300, 2))
+    fixed = moving + 0.05 * np.sin(3 * moving[:, ::-1])
+    kernel = LowRankKernel(moving, 0.5, 40)
+    post = _e_step(moving, fixed, 0.01, 0.0, None, method="dense")
+    lam = 2.0
+    w, moved, _, penalty = nonrigid_m_step(post, moving, fixed, kernel, lam, sigma2)
+    field = moved - moving
+    # W is the field's coefficients (to the rounding of G's spread of eigenvalues, 1e-10 here)
+    gw = kernel.apply(w)
+    np.testing.assert_allclose(gw, field, rtol=0, atol=1e-8 * np.abs(field).max())
+    assert penalty == pytest.approx(float(np.sum(w * gw)), rel=1e-6)
+    textbook = _woodbury_m_step(kernel, post, moving, lam * sigma2)
+    # the same model: the textbook field agrees up to its own rounding, eps |R| / (lam sigma2)
+    rounding = np.finfo(float).eps * np.abs(post.px).max() / (lam * sigma2)
+    np.testing.assert_allclose(kernel.apply(textbook), field, rtol=0, atol=1e-10 + 1e3 * rounding)
+
+
+def test_knn_fit_on_the_low_rank_kernel_settles_whatever_the_blas_threads():
+    # audit round 23: with n_neighbors the fit drives sigma2 to ~1e-12, where the Woodbury
+    # difference's rounding jumped sigma2 around, ran to max_iter and differed by 3e-4
+    # between one and two BLAS threads
+    from threadpoolctl import threadpool_limits
+
+    rng = np.random.default_rng(3)
+    moving = rng.random((1200, 3))
+    fixed = moving + 0.05 * np.sin(3 * moving[:, ::-1])
+    fits = []
+    for threads in (1, 2):
+        with threadpool_limits(threads):
+            fits.append(NonRigidCPD(n_neighbors=8, max_iter=40).fit(moving, fixed))
+    assert all(fit.converged_ for fit in fits)
+    np.testing.assert_allclose(fits[0].moving_transformed_, fits[1].moving_transformed_, rtol=0, atol=1e-12)
+    assert np.abs(fits[0].moving_transformed_ - fixed).max() < 1e-4

@@ -233,10 +233,17 @@ def nonrigid_m_step(post: Posteriors, moving: np.ndarray, fixed: np.ndarray, ker
 
 @njit(nogil=True, cache=True, fastmath={"contract", "reassoc", "nsz"})
 def _low_rank_step(qt, values, inner, p1, px, pt1, moving, fixed, ls2, n_p):
-    """The low-rank M-step after its Gram matrix ``inner = Q^T d(P1) Q`` (modified here):
-    ``W = (R - d(P1) Q z) / ls2`` with ``(inner + ls2 diag(1 / values)) z = Q^T R``,
-    ``R = P X - d(P1) Y`` (Woodbury); then ``G W = Q diag(values) Q^T W``, the moved points,
-    sigma2 and ``tr(W^T G W)``. Loops run along the M points (``qt`` = Q^T, K x M)."""
+    """The low-rank M-step after its Gram matrix ``inner = Q^T d(P1) Q`` (modified here).
+
+    Woodbury gives ``W = (R - d(P1) Q z) / ls2`` with ``(inner + ls2 diag(1 / values)) z =
+    Q^T R``, ``R = P X - d(P1) Y``; but that difference cancels as ``ls2 = lam sigma2``
+    shrinks (at sigma2 ~ 1e-10 its rounding, amplified by ``1 / ls2``, moved the fit by 1e-4
+    between BLAS thread counts). Only ``Q^T W`` enters the model, and the same system gives
+    ``Q^T W = diag(1 / values) z`` exactly, so without any difference: the field
+    ``G W = Q diag(values) Q^T W = Q z``, the penalty ``tr(W^T G W) = sum z^2 / values``, and
+    ``W = Q diag(1 / values) z`` (the coefficients with that ``Q^T W`` and no part outside
+    ``Q``'s span, which ``G`` maps to zero). Returns ``(W, T(Y), sigma2, tr(W^T G W))``.
+    Loops run along the M points (``qt`` = Q^T, K x M)."""
     n_rank, n_points = qt.shape
     n_dims = moving.shape[1]
     rhs = np.empty((n_dims, n_points))  # R^T
@@ -249,17 +256,20 @@ def _low_rank_step(qt, values, inner, p1, px, pt1, moving, fixed, ls2, n_p):
             b[k, d] = _dot(qt[k], rhs[d], 0.0)
         inner[k, k] += ls2 / values[k]
     z = np.linalg.solve(inner, b)
-    w = rhs.copy()  # W^T, built as R^T - d(P1) (Q z)^T, then / ls2
+    field = np.zeros((n_dims, n_points))  # (Q z)^T
+    w = np.zeros((n_dims, n_points))  # (Q diag(1 / values) z)^T
+    g_term = 0.0
     for d in range(n_dims):
+        fd = field[d]
         wd = w[d]
         for k in range(n_rank):
             q = qt[k]
             c = z[k, d]
+            c_w = c / values[k]
+            g_term += c * c_w
             for m in range(n_points):
-                wd[m] -= c * q[m] * p1[m]
-        for m in range(n_points):
-            wd[m] /= ls2
-    field = _field_t(qt, values, w)  # (G W)^T
+                fd[m] += c * q[m]
+                wd[m] += c_w * q[m]
     moved = np.empty((n_points, n_dims))
     w_out = np.empty((n_points, n_dims))
     x_px = 0.0
@@ -270,7 +280,6 @@ def _low_rank_step(qt, values, inner, p1, px, pt1, moving, fixed, ls2, n_p):
         x_px += pt1[n] * sq
     y_py = 0.0
     tr_pxy = 0.0
-    g_term = 0.0
     for m in range(n_points):
         sq = 0.0
         for d in range(n_dims):
@@ -279,7 +288,6 @@ def _low_rank_step(qt, values, inner, p1, px, pt1, moving, fixed, ls2, n_p):
             w_out[m, d] = w[d, m]
             sq += v * v
             tr_pxy += v * px[m, d]
-            g_term += w[d, m] * field[d, m]
         y_py += p1[m] * sq
     return w_out, moved, (x_px - 2.0 * tr_pxy + y_py) / (n_p * n_dims), g_term
 
