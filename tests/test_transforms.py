@@ -292,3 +292,33 @@ def test_fit_similarity_refuses_an_undetermined_fit():
     assert least_squares_similarity(square, mirror, scale=True)[2] == 1.0
     # a nearly degenerate set is fitted, not refused
     assert fit_similarity(points, same + np.r_[[[1e-9, 0.0]], np.zeros((5, 2))]).scale > 0
+
+
+def test_sets_spanning_float64s_whole_range_are_measured_or_named():
+    # audit round 23: points at +-1.7e308 centred to inf silently, rms_radius returned inf
+    # (its true 1.6e308 is a float), and the estimators blamed a `points` they do not take
+    from centrality_vision.exceptions import InputError
+    from centrality_vision.registration import RigidCPD
+    from centrality_vision.transforms import centred, rms_radius
+
+    wide = np.array([[1.7e308, 0.0], [-1.7e308, 0.0], [1.7e308, 1.0]])
+    expected = 1e300 * np.sqrt(np.mean(np.sum((wide / 1e300 - (wide / 1e300).mean(axis=0)) ** 2, axis=1)))
+    assert rms_radius(wide) == pytest.approx(expected, rel=1e-12)
+    with pytest.raises(InputError, match=r"^`points` must span less than float64's largest number .* axis 0"):
+        centred(wide)
+    with pytest.raises(InputError, match=r"^`fixed` must span less than float64's largest number"):
+        RigidCPD().fit(wide / 2**1000, wide)
+    with pytest.raises(InputError, match=r"^`moving` must span less than float64's largest number"):
+        RigidCPD().fit(wide, wide / 2**1000)
+
+
+@pytest.mark.parametrize(
+    "cross", ["ab", np.eye(2) * 1j, np.array([[None, 1], [1, 1]])], ids=["text", "complex", "object"]
+)
+def test_proper_rotation_refuses_what_is_not_real_numbers(cross):
+    # audit round 23: numpy's own error for text, the imaginary part dropped with a warning,
+    # and "coordinates too large" for a None
+    from centrality_vision.transforms import proper_rotation
+
+    with pytest.raises(TypeError, match=r"^`cross` must hold real numbers"):
+        proper_rotation(cross)

@@ -619,7 +619,7 @@ def proper_rotation(cross: np.ndarray) -> tuple[np.ndarray, float]:
     (array([[1., 0.],
            [0., 1.]]), 3.0)
     """
-    cross = np.asarray(cross, dtype=float)
+    cross = as_real_array(cross, name="cross").astype(np.float64, copy=False)  # (a TypeError for text, complex)
     if cross.ndim != 2 or cross.shape[0] != cross.shape[1] or cross.size == 0:
         raise InputError(f"`cross` must be a square (D, D) matrix; got shape {cross.shape}.")
     if not np.all(np.isfinite(cross)):
@@ -686,9 +686,9 @@ def rms_radius(points: np.ndarray) -> float:
     points = _finite_array(points, "points")
     if points.shape[0] == 0:
         return 0.0
-    rows = _centred(points)[1]
-    unit = _unit(rows)
-    return unit * math.sqrt(float(np.sum((rows / unit) ** 2)) / rows.shape[0])
+    unit, _, rows = _centred_scaled(points)  # (in units of a power of two: nothing overflows)
+    inner = _unit(rows)
+    return unit * (inner * math.sqrt(float(np.sum((rows / inner) ** 2)) / rows.shape[0]))
 
 
 def centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -721,12 +721,29 @@ def centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return _centred(points)
 
 
-def _centred(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _centred_scaled(points: np.ndarray) -> tuple[float, np.ndarray, np.ndarray]:
+    """``(unit, mean, centred)`` with ``mean`` and ``centred`` in units of ``unit`` (a power
+    of two: both within [-4, 4], whatever the coordinates)."""
     unit = _unit(points)
     scaled = points / unit
     mean = scaled.mean(axis=0)
     mean = mean + (scaled - mean).mean(axis=0)
-    return mean * unit, (scaled - mean) * unit
+    return unit, mean, scaled - mean
+
+
+def _centred(points: np.ndarray, name: str = "points") -> tuple[np.ndarray, np.ndarray]:
+    unit, mean, rows = _centred_scaled(points)
+    with np.errstate(over="ignore"):
+        out = rows * unit
+    if not np.isfinite(out).all():
+        # (points at +-1.7e308 lie 3.4e308 apart: their offsets from the mean are no floats)
+        axis = int(np.argmax(np.ptp(points / unit, axis=0)))
+        raise InputError(
+            f"`{name}` must span less than float64's largest number (1.8e308) along each axis, so that its "
+            f"centred coordinates exist; got axis {axis} from {points[:, axis].min():.3g} to "
+            f"{points[:, axis].max():.3g}."
+        )
+    return mean * unit, out
 
 
 @renamed_parameters(source="moving", target="fixed")
@@ -777,8 +794,8 @@ def _least_squares_similarity(moving, fixed, *, scale: bool) -> tuple[np.ndarray
         raise InputError(
             f"`moving` and `fixed` must be paired rows of one shape (n >= 1, D); got {moving.shape} and {fixed.shape}."
         )
-    mu_s, xs = _centred(moving)
-    mu_t, xt = _centred(fixed)
+    mu_s, xs = _centred(moving, "moving")
+    mu_t, xt = _centred(fixed, "fixed")
     a, b = _unit(xs), _unit(xt)
     xs, xt = xs / a, xt / b
     rotation, trace = proper_rotation(xt.T @ xs)

@@ -477,3 +477,32 @@ def test_the_last_unnamed_messages_now_start_with_the_parameter(pair):
     for call in calls:
         with pytest.raises(InputError, match=_LEADS_WITH_A_NAME):
             call()
+
+
+def test_knn_start_out_of_reach_names_init_not_the_sets():
+    # audit round 23: with n_neighbors the start enters the frame, whose range check said
+    # "`moving` and `fixed` must have an RMS radius ..." for sets that were fine
+    from centrality_vision.transforms import RigidTransform
+
+    y = np.random.default_rng(0).random((20, 2))
+    far = RigidTransform(np.eye(2), [1e200, 0.0])
+    for estimator in (RigidCPD(init=far), RigidCPD(n_neighbors=5, init=far)):
+        with pytest.raises(InputError, match=r"^`RigidCPD.init` must bring the moving set within 1e\+145 radii"):
+            estimator.fit(y, y)
+
+
+def test_icp_has_a_score_for_model_selection():
+    # audit round 23: GridSearchCV(ICP(), ...) failed ("should have a 'score' method")
+    from sklearn.model_selection import GridSearchCV
+
+    from centrality_vision.registration import ICP
+
+    rng = np.random.default_rng(2)
+    y = rng.random((40, 2))
+    x = y + 0.02
+    x[:8] += 5.0  # far outliers: trimming them scores better
+    index = np.arange(40)
+    search = GridSearchCV(ICP(max_iter=50), {"trim": [0.0, 0.25]}, cv=[(index, index)]).fit(y, x)
+    fit = ICP(trim=0.25, max_iter=50).fit(y, x)
+    assert search.best_params_ == {"trim": 0.25}
+    assert search.best_score_ == pytest.approx(fit.score(y, x)) and fit.score(y, x) <= 0.0

@@ -44,6 +44,7 @@ from ..transforms import (
     NonRigidTransform,
     RigidTransform,
     SimilarityTransform,
+    _centred,
     centred,
     power_of_two_scale,
     proper_rotation,
@@ -273,6 +274,21 @@ def alignment_error(true_moving, moving_transformed) -> float:
 
 
 # --------------------------------------------------------------------- the normalised frame
+def nearest_score(estimator, moving, fixed) -> float:
+    """``score`` of a fitted registration estimator: minus the mean distance from each fixed
+    point to its nearest point of ``estimator.transform_(moving)``, in the caller's units."""
+    from scipy.spatial import cKDTree
+
+    check_is_fitted(estimator, "transform_")
+    moved = estimator.transform_(as_points(moving, name="moving", n_dims=ANY_DIMS))
+    fixed = as_points(fixed, name="fixed", n_dims=(moved.shape[1],))
+    unit = max(power_of_two_scale(moved), power_of_two_scale(fixed))  # exact: no square overflows
+    mean = float(np.mean(cKDTree(moved / unit).query(fixed / unit, k=1)[0])) * unit
+    if not math.isfinite(mean):
+        raise InputError("The mean distance from `fixed` to the transformed `moving` is beyond float64.")
+    return -mean
+
+
 def _start_within_reach(frame, init, moving_n: np.ndarray, name: str):
     """``init`` in the normalised frame, checked to keep the moving set within reach.
 
@@ -348,7 +364,7 @@ class _Frame:
                     f"`normalize=False` (their squared distances must stay normal floats); got "
                     f"{span:.3g}. Use normalize=True."
                 )
-        mu_x, xc = centred(fixed)
+        mu_x, xc = _centred(fixed, "fixed")
         if not normalize:
             # Both sets are still moved by one common translation, the fixed set's mean: that
             # keeps every parameter in the caller's units and the caller's pose as the start,
@@ -359,7 +375,7 @@ class _Frame:
             mu_y = mu_x
             yc = _shifted(moving, mu_x)
         else:
-            mu_y, yc = centred(moving)
+            mu_y, yc = _centred(moving, "moving")
         sized = yc  # the moving set as the scale sees it
         r_moving = r_fixed = 0.0
         if moving_scale:  # the moving set's radius about its own mean
@@ -755,7 +771,20 @@ class _CPD(BaseEstimator):
                     posed = self.init(moving)
             except InputError:  # another dimension, or beyond float64: `_start` names it
                 posed = None
-        return _Frame.of(moving, fixed, bool(self.normalize), moving_scale=True, posed=posed)
+        try:
+            return _Frame.of(moving, fixed, bool(self.normalize), moving_scale=True, posed=posed)
+        except InputError:
+            if posed is None:
+                raise
+            # the sets are fine where they are (else this raises their own error): the start
+            # put the moving set out of reach, which `init` is to blame for
+            _Frame.of(moving, fixed, bool(self.normalize), moving_scale=True)
+            with np.errstate(all="ignore"):
+                reach = float(np.max(np.abs(posed - fixed.mean(axis=0)))) / max(rms_radius(moving), 1e-300)
+            raise InputError(
+                f"`{type(self).__name__}.init` must bring the moving set within {_SCALE_RANGE[1]:g} radii of the "
+                f"fixed set (the data's scale); it maps it {reach:.3g} radii away. Check its scale and translation."
+            ) from None
 
     def _validate(self, moving, fixed, true_moving):
         moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
@@ -1149,16 +1178,7 @@ class _CPD(BaseEstimator):
         Larger is better; in the caller's units. It lets scikit-learn's model selection
         (e.g. ``GridSearchCV(..., cv=[(index, index)])`` on sets of equal size) rank settings.
         """
-        from scipy.spatial import cKDTree
-
-        check_is_fitted(self, "transform_")
-        moved = self.transform_(as_points(moving, name="moving", n_dims=ANY_DIMS))
-        fixed = as_points(fixed, name="fixed", n_dims=(moved.shape[1],))
-        unit = max(power_of_two_scale(moved), power_of_two_scale(fixed))  # exact: no square overflows
-        mean = float(np.mean(cKDTree(moved / unit).query(fixed / unit, k=1)[0])) * unit
-        if not math.isfinite(mean):
-            raise InputError("The mean distance from `fixed` to the transformed `moving` is beyond float64.")
-        return -mean
+        return nearest_score(self, moving, fixed)
 
     def posterior(self) -> np.ndarray:
         """The full posterior matrix ``P`` (M x N) of the final state; ``P[m, n] = P(m | x_n)``.
