@@ -273,7 +273,6 @@ def alignment_error(true_moving, moving_transformed) -> float:
     return error
 
 
-# --------------------------------------------------------------------- the normalised frame
 def nearest_score(estimator, moving, fixed) -> float:
     """``score`` of a fitted registration estimator: minus the mean distance from each fixed
     point to its nearest point of ``estimator.transform_(moving)``, in the caller's units."""
@@ -289,6 +288,7 @@ def nearest_score(estimator, moving, fixed) -> float:
     return -mean
 
 
+# --------------------------------------------------------------------- the normalised frame
 def _start_within_reach(frame, init, moving_n: np.ndarray, name: str):
     """``init`` in the normalised frame, checked to keep the moving set within reach.
 
