@@ -7,6 +7,7 @@ Nothing here modifies its input: arrays are copied when they would be changed.
 
 from __future__ import annotations
 
+import argparse
 import math
 import numbers
 from collections.abc import Iterable
@@ -496,3 +497,30 @@ def check_float(
         hi = "inf" if high is None else shown_bound(high)
         raise InputError(f"`{name}` must be a finite number in {lb}{lo}, {hi}{rb}; got {shown or repr(value)}.")
     return value
+
+
+def argparse_number(kind, *, low=None, low_open=False, high=None, high_open=False):
+    """An argparse ``type``: an int or float (``kind``) in a range, or argparse's one-line
+    usage error ('must be in [1, inf); got 0'). The command line's options and the
+    experiments' ``python -m`` options both use it, so their errors read alike."""
+
+    def check(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            wanted = "an integer" if kind is int else "a number"
+            raise argparse.ArgumentTypeError(f"must be {wanted}; got {text!r}") from None
+        if kind is float and not math.isfinite(value):  # the library refuses inf anyway, after the reading
+            raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}")
+        too_low = low is not None and (value <= low if low_open else value < low)
+        too_high = high is not None and (value >= high if high_open else value > high)
+        if too_low or too_high:
+            left = "(" if low_open or low is None else "["  # an infinite end is open
+            right = ")" if high_open or high is None else "]"
+            ends = ("-inf" if low is None else shown_bound(low), "inf" if high is None else shown_bound(high))
+            span = f"{left}{ends[0]}, {ends[1]}{right}"
+            raise argparse.ArgumentTypeError(f"must be in {span}; got {text}")
+        return value
+
+    check.__name__ = "integer" if kind is int else "number"
+    return check

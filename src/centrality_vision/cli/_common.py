@@ -9,6 +9,8 @@ import math
 import sys
 from pathlib import Path
 
+from .._validation import argparse_number as number  # (the experiments' options use it too)
+
 __all__ = [
     "GRAPH_KINDS",
     "GPD_GRAPHS",
@@ -104,33 +106,6 @@ def subparser(sub, name: str, *, summary: str, description: str, example: str) -
         epilog="example:\n  " + example.strip().replace("\n", "\n  "),
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-
-
-def number(kind, *, low=None, low_open=False, high=None, high_open=False):
-    """An argparse type: an int or float in a range."""
-
-    def check(text: str):
-        try:
-            value = kind(text)
-        except ValueError:
-            wanted = "an integer" if kind is int else "a number"
-            raise argparse.ArgumentTypeError(f"must be {wanted}; got {text!r}") from None
-        if kind is float and not math.isfinite(value):  # the library refuses inf anyway, after the reading
-            raise argparse.ArgumentTypeError(f"must be a finite number; got {text!r}")
-        too_low = low is not None and (value <= low if low_open else value < low)
-        too_high = high is not None and (value >= high if high_open else value > high)
-        if too_low or too_high:
-            from .._validation import shown_bound
-
-            left = "(" if low_open or low is None else "["  # an infinite end is open
-            right = ")" if high_open or high is None else "]"
-            ends = ("-inf" if low is None else shown_bound(low), "inf" if high is None else shown_bound(high))
-            span = f"{left}{ends[0]}, {ends[1]}{right}"
-            raise argparse.ArgumentTypeError(f"must be in {span}; got {text}")
-        return value
-
-    check.__name__ = "integer" if kind is int else "number"
-    return check
 
 
 def suffix(path) -> str:

@@ -65,20 +65,11 @@ def check_run(quick, seed) -> tuple[bool, int]:
 
 
 def int_in(low: int, high: int | None = None):
-    """An argparse ``type``: an int in ``[low, high]``, or argparse's one-line usage error."""
+    """An argparse ``type``: an int in ``[low, high]``, or argparse's one-line usage error
+    worded as the command line's ('must be in [1, 100000]; got 0')."""
+    from .._validation import argparse_number
 
-    def convert(text: str) -> int:
-        try:
-            value = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"must be an integer; got {text!r}") from None
-        if value < low or (high is not None and value > high):  # (worded as the other commands' ranges)
-            bound = f"[{low}, inf)" if high is None else f"[{low}, {high}]"
-            raise argparse.ArgumentTypeError(f"must be in {bound}; got {value}")
-        return value
-
-    convert.__name__ = "int"
-    return convert
+    return argparse_number(int, low=low, high=high)
 
 
 def scheduler_arg(text: str) -> str:
