@@ -303,14 +303,14 @@ def _read_text(path: Path) -> _Table:
     cells = split(first)
     numeric = [_is_number(cell, decimal_comma) for cell in cells]
     names = None
-    if not any(numeric) and not any(_LETTER.search(cell) for cell in cells):
-        # no cell is a number and none is a name: numbers written some other way (a decimal
-        # comma in a file split by spaces), not a header to drop
-        raise InputError(
-            f"{path}: line {first_number}, column 1: {_clip(cells[0].strip())!r} is not a number"
-            f"{_comma_hint(cells[0])}."
-        )
     if not any(numeric):
+        if not any(_LETTER.search(cell) for cell in cells):
+            # no cell is a number and none is a name: numbers written some other way (a
+            # decimal comma in a file split by spaces), not a header to drop
+            raise InputError(
+                f"{path}: line {first_number}, column 1: {_clip(cells[0].strip())!r} is not a number"
+                f"{_comma_hint(cells[0])}."
+            )
         names = [cell.strip().strip('"') for cell in cells]
         rows = rows[1:]
         if not rows:
