@@ -1,8 +1,11 @@
 """w='auto': the outlier fraction estimated by EM, and its effect on the registration."""
 
+import warnings
+
 import numpy as np
 import pytest
 
+from centrality_vision.exceptions import CollapseWarning
 from centrality_vision.registration import GPD, AffineCPD, NonRigidCPD, RigidCPD
 
 
@@ -120,3 +123,33 @@ def test_auto_w_callback_stops_and_errors_end_the_fit_cleanly(fish, rot2):
     with pytest.raises(KeyboardInterrupt):
         estimator.fit(fish, x)
     assert not hasattr(estimator, "transform_")
+
+
+@pytest.mark.parametrize("n_neighbors", [None, 10])
+def test_auto_w_on_a_flat_3d_set_is_not_all_outliers(fish_pair, n_neighbors):
+    """A 2D outline with z = 0 (or 1e-6 noise) in 3D: w='auto''s uniform box had a side of 0,
+    floored at 1e-12, so its density swamped every Gaussian: w_ rose to its bound, nothing was
+    matched and the fit was called a collapse. Thin sides are now as wide as the Gaussians."""
+    y, x = fish_pair.moving, fish_pair.fixed
+    rng = np.random.default_rng(1)
+    cluttered = np.vstack([x, rng.uniform(x.min(0), x.max(0), (20, 2))])
+    for lift in (np.zeros, lambda n: 1e-6 * rng.standard_normal(n)):
+        moving, fixed = np.c_[y, lift(len(y))], np.c_[cluttered, lift(len(cluttered))]
+        with warnings.catch_warnings():
+            warnings.simplefilter("error", CollapseWarning)
+            reg = NonRigidCPD(w="auto", n_neighbors=n_neighbors).fit(moving, fixed)
+        assert reg.w_ < 0.7
+        assert np.sqrt(np.mean(np.sum((reg.moving_transformed_[:, :2] - x) ** 2, axis=1))) < 0.15
+
+
+def test_auto_w_collapse_on_a_flat_set_says_how_to_register_it(fish_pair):
+    """Rigid CPD on the flat fish still reads its residual as outliers (sigma2 is averaged over
+    three axes, the residual lies in two): the collapse message says to register in the plane."""
+    y, x = fish_pair.moving, fish_pair.fixed
+    rng = np.random.default_rng(1)
+    cluttered = np.vstack([x, rng.uniform(x.min(0), x.max(0), (20, 2))])
+    with pytest.warns(CollapseWarning, match="The fixed set spans 2 of 3 dimensions: if both sets lie in it"):
+        RigidCPD(w="auto").fit(np.c_[y, np.zeros(len(y))], np.c_[cluttered, np.zeros(len(cluttered))])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", CollapseWarning)
+        RigidCPD(w="auto").fit(y, cluttered)  # the same sets in 2D

@@ -106,6 +106,9 @@ _SIGMA2_MAX = 1e10
 # float64's rounding (1e-11 of the extent at 1e6; 2e-5 at 1e12, and 1e100 gave a
 # scale of 3.6e16 reported as converged).
 _LANDMARK_WEIGHT_MAX = 1e6
+# w="auto": a side of the outlier box below this share of the longest is floored at the
+# Gaussians' width (see _box_volume); longer sides are the set's extent.
+_THIN_SIDE = 1e-3
 # w="auto": start and bounds of the estimated outlier fraction.
 _AUTO_W_START, _AUTO_W_MAX = 0.1, 0.9
 # ... and the most the E-step's w may take from it (odds of 1e12 to 1)
@@ -508,17 +511,33 @@ def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
 KERNEL_RANGE = (1e-150, 1e150)
 
 
-def _principal_box_volume(points: np.ndarray) -> float:
-    """Volume of the points' bounding box in their principal axes (each side at least 1e-12).
+def _principal_sides(points: np.ndarray) -> np.ndarray:
+    """Sides of the points' bounding box in their principal axes (the covariance's eigenvectors).
 
-    The box of ``w="auto"``'s uniform outlier density. Taken along the principal axes (the
-    covariance's eigenvectors) rather than the coordinate axes, so that the estimate does not
-    depend on how the sets are oriented: the axis-aligned box of a set rotated by 45 degrees
-    has up to twice the volume (a fuzz run found ``w_`` 0.83 for a long thin set with 20%
-    clutter and 1e-10 for the same sets rotated together)."""
+    The box of ``w="auto"``'s uniform outlier density (see :func:`_box_volume`). Taken along the
+    principal axes rather than the coordinate axes, so that the estimate does not depend on how
+    the sets are oriented: the axis-aligned box of a set rotated by 45 degrees has up to twice
+    the volume (a fuzz run found ``w_`` 0.83 for a long thin set with 20% clutter and 1e-10 for
+    the same sets rotated together)."""
     centred_points = points - points.mean(axis=0)
     _, axes = np.linalg.eigh(centred_points.T @ centred_points)
-    return float(np.prod(np.maximum(np.ptp(centred_points @ axes, axis=0), 1e-12)))
+    return np.ptp(centred_points @ axes, axis=0)
+
+
+def _box_volume(sides: np.ndarray, sigma2: float) -> float:
+    """Volume of the uniform outlier density's box at variance ``sigma2``: each side at least
+    the width ``sqrt(2 pi sigma2)`` of CPD's Gaussians.
+
+    Along a direction in which the fixed set has no extent (a planar set in 3D, a line), a
+    Gaussian centred in the set has density ``1 / sqrt(2 pi sigma2)`` at every fixed point, and
+    a box of that width gives the uniform density the same factor: the two cancel, and the set
+    is weighed as the lower-dimensional set it is. With a side of 0 (or a fixed floor) the
+    uniform density was unbounded and took every point as an outlier: the fish with ``z = 0``
+    added and 20 clutter points ended with ``w_`` 0.9 and nothing matched. Along a direction
+    the set spans, the side is its extent once the Gaussians are narrower than it."""
+    thin = sides <= _THIN_SIDE * float(np.max(sides))
+    width = max(math.sqrt(2.0 * math.pi * sigma2), 1e-300)
+    return float(np.prod(np.where(thin, np.maximum(sides, width), sides)))
 
 
 def _check_prior(prior, n_moving: int, n_fixed: int, name: str) -> None:
@@ -871,7 +890,7 @@ class _CPD(BaseEstimator):
         holding, released, halted = auto_w and hold, False, False
         # w="auto" estimates the fraction of outliers under a uniform density over the fixed
         # set's bounding box; CPD's E-step takes the weight of a density 1/N instead.
-        box = _principal_box_volume(fixed) if auto_w else 1.0
+        sides = _principal_sides(fixed) if auto_w else None
         history = {"objective": [], "sigma2": [], "error": [], "method": [], "w": []}
         log_s = math.log(frame.scale)
         converged = False
@@ -897,7 +916,11 @@ class _CPD(BaseEstimator):
                     current_prior = prior(sigma2 / sigma2_start)
                     if current_prior is not None:
                         _check_prior(current_prior, moving.shape[0], fixed.shape[0], "prior(sigma2_ratio)")
-                w_e = _box_weight(w_fraction, n_fixed, box) if auto_w and not holding else w_fraction
+                w_e = (
+                    _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2))
+                    if auto_w and not holding
+                    else w_fraction
+                )
                 planner.hold = pending is not None  # a jump's E-step: no probing
                 post = e_step(moving_t, sigma2, w_e, current_prior)
                 objective = post.neg_log_likelihood + self._penalty(state)
@@ -1004,7 +1027,7 @@ class _CPD(BaseEstimator):
             # the estimate, and the final posteriors under it: w_, posteriors_ and posterior()
             # agree, and the run is scored as the other one is
             w_fraction = min(max(1.0 - post.n_p / n_fixed, 0.0), _AUTO_W_MAX)
-            w_e = _box_weight(w_fraction, n_fixed, box)
+            w_e = _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2))
             post = e_step(moving_t, sigma2, w_e, current_prior)
             final_objective = post.neg_log_likelihood + self._penalty(state) + n_fixed * n_dims * log_s
         name = type(self).__name__
@@ -1122,6 +1145,15 @@ class _CPD(BaseEstimator):
         tries += ["a fixed `w`"] if auto else ["a smaller `w`"] if w > 0 else []
         tries.append("a starting pose (`init`)")
         advice = "Try " + (", ".join(tries[:-1]) + ", or " if len(tries) > 1 else "") + tries[-1] + "."
+        sides = _principal_sides(fixed)
+        flat = int(np.sum(sides <= _THIN_SIDE * float(np.max(sides))))
+        if 0 < flat < fixed.shape[1]:
+            # (CPD's Gaussians have the sets' dimension: on a flat set sigma2 is 1/D of a
+            # residual spread over fewer axes, and w='auto' reads the narrower fit as outliers)
+            advice += (
+                f" The fixed set spans {fixed.shape[1] - flat} of {fixed.shape[1]} dimensions: if both sets lie "
+                "in it, register their coordinates in it."
+            )
         if min(radius_y, radius_x) > 0 and radius_t < _COLLAPSE_RADIUS * min(radius_y, radius_x):
             return (
                 f"the transformed moving set collapsed (RMS radius {radius_t / radius_y:.3g} of the moving set's); "
@@ -1216,7 +1248,8 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         moving set has parts the fixed set lacks (the larger the share of such points, the
         larger w). 'auto' estimates it during EM: the fraction of fixed points that are
         outliers under a uniform density over the fixed set's bounding box (along its
-        principal axes, so that it does not depend on the sets' orientation), updated as
+        principal axes, so that it does not depend on the sets' orientation; a side below
+        1/1000 of the longest, as of a flat set in 3D, is as wide as the Gaussians), updated as
         ``1 - Np / N`` after each E-step (CPD's posterior, also under GPD), from 0.1 and at
         most 0.9 (the estimate is ``w_``). EM runs twice: with ``w`` held at CPD's 0.1 until
         it settles, then estimated, and estimated from the first step. A run that collapsed
