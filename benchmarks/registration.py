@@ -446,6 +446,7 @@ def make_problem(case, n, args, shape=None):
 
 # --------------------------------------------------------------------------- the calls
 # Each runner takes (Y, X) and returns (T(Y), iterations, stop reason); it is timed whole.
+# A library that reports neither (probreg) returns None for both.
 
 
 def _cycpd_num_eig(n, args):
@@ -595,7 +596,7 @@ def make_runner(lib, case, n, args, method="auto"):
                 # plane (checked: 500 points turned 30 degrees and scaled 1.2, recovered to 2e-15)
                 y, x = (np.column_stack([p, np.zeros(len(p))]) for p in (y, x))
             res = probreg_cpd.registration_cpd(y, x, tf_type_name=kind, w=0.0, maxiter=max_iter, tol=tol, **extra)
-            return np.asarray(res.transformation.transform(y))[:, :n_dims], -1, "?"
+            return np.asarray(res.transformation.transform(y))[:, :n_dims], None, None  # (not reported)
 
         return run, {"tf_type_name": kind, "w": 0.0, "maxiter": max_iter, "tol": tol, **extra}
 
@@ -944,7 +945,12 @@ def main(args):
             print(
                 " %s"
                 % (
-                    fmt_s(row) + (" s, %d iterations, RMS %.2e" % (row.n_iter, row.error) if row.status == "ok" else "")
+                    fmt_s(row)
+                    + (
+                        " s, %s iterations, RMS %.2e" % ("?" if row.n_iter is None else row.n_iter, row.error)
+                        if row.status == "ok"
+                        else ""
+                    )
                 ),
                 flush=True,
             )
@@ -973,8 +979,8 @@ def main(args):
                     r.library,
                     fmt_s(r),
                     len(r.times) if ok else "-",
-                    r.n_iter if ok and r.n_iter >= 0 else "-",
-                    r.stop if ok and r.stop != "?" else "-",
+                    r.n_iter if ok and r.n_iter is not None else "-",
+                    r.stop if ok and r.stop is not None else "-",
                     "%.2e" % r.error if ok else "-",
                     "%.2f" % r.ratio if r.ratio is not None else "-",
                 ]
