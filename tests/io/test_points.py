@@ -1,6 +1,7 @@
 """read_points / write_points: files written by the formats' own libraries, and round trips."""
 
 import struct
+import warnings
 
 import numpy as np
 import pytest
@@ -710,7 +711,6 @@ def test_paths_the_system_refuses_are_named_errors(tmp_path):
     [
         ("x,y\n1,2\n3\n4,5\n", "line 3 has 1 value, the header 2"),  # (it blamed line 2: '1,2' is not a number)
         ("1;2\n3;4\n5\n6;7\n", "line 3 has 1 value, the rows before it 2"),
-        ("1,2,\n3,4,\n", r"line 1, column 3: an empty cell \(a ',' too many\?\)"),  # (it said "a header line")
         ("1,2\n3\n", "line 2 has 1 value, the rows before it 2"),  # (audit 24: '1,2' was taken for a header)
     ],
 )
@@ -759,3 +759,60 @@ def test_too_few_columns_get_no_advice_to_choose_columns(tmp_path):
     (tmp_path / "q.csv").write_text("a,b,c,d\n0,1,2,3\n")
     with pytest.raises(InputError, match="pick the coordinates with `columns`"):
         read_points(tmp_path / "q.csv", n_dims=(3,))
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        ("id,x,y,label\n0,1.5,2,p0\n1,2.5,3,p1\n", [[1.5, 2.0], [2.5, 3.0]]),  # a label column beside x, y
+        ("a,0,0\nb,1,0\nc,0,1\n", [[0, 0], [1, 0], [0, 1]]),  # a leading name column, no header
+        ("x,y,note\n0,0,\n1,0,\n0,1,hi\n", [[0, 0], [1, 0], [0, 1]]),  # an optional note, mostly empty
+        ("1,2,\n3,4,\n", [[1, 2], [3, 4]]),  # a delimiter closing every line
+        ("u;v;class\n0,5;1;cat\n1;2,5;dog\n", [[0.5, 1.0], [1.0, 2.5]]),  # decimal commas, no x/y names
+    ],
+)
+def test_label_and_empty_columns_are_not_coordinates(tmp_path, text, expected):
+    """A cell that is not a number made the whole file unreadable, even with `columns`
+    picking other columns (audit 26): a column of labels or empty cells is now no
+    coordinate, and a cell that is not a number counts only in a picked column."""
+    path = tmp_path / "points.csv"
+    path.write_text(text)
+    np.testing.assert_array_equal(read_points(path), expected)
+
+
+@pytest.mark.parametrize(
+    ("text", "columns", "message"),
+    [
+        ("id,x,y,label\n0,1.5,2,p0\n1,2.5,3,p1\n", ["x", "label"], r"line 2, column 4: 'p0' is not a number\.$"),
+        ("1,2,\n3,,\n", None, r"line 2, column 2: an empty cell \(a ',' too many\?\); pick the coordinates"),
+        ("1_000 2.5 3.0\n4 5 6\n", None, "line 1, column 1: '1_000' is not a number"),  # a number, wrongly written
+        ("1 2,5 3\n4 5 6\n7 8 9\n", [0, 1], r"column 2: '2,5' is not a number \(decimal commas are read only"),
+    ],
+)
+def test_a_cell_that_is_not_a_number_in_a_picked_column_is_named(tmp_path, text, columns, message):
+    path = tmp_path / "points.csv"
+    path.write_text(text)
+    with pytest.raises(InputError, match=message):
+        read_points(path, columns=columns)
+
+
+@pytest.mark.parametrize("start", [0, 1])
+def test_a_first_column_of_row_numbers_without_a_header_is_read_with_a_warning(tmp_path, start):
+    """pandas' to_csv(header=False) writes the row numbers first: 2D data was read as 3D
+    with the row number as x, silently (audit 26). It stays a coordinate (the file says
+    nothing else; a curve sampled at 0, 1, 2, ... is data) but the reader says so."""
+    rows = np.c_[np.arange(start, start + 4), RNG.random((4, 2))]
+    path = tmp_path / "indexed.csv"
+    path.write_text("\n".join(",".join(repr(float(v)) for v in row) for row in rows) + "\n")
+    with pytest.warns(UserWarning, match=r"column 1 holds the row numbers .* pick the coordinates with `columns` "):
+        assert read_points(path).shape == (4, 3)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        np.testing.assert_array_equal(read_points(path, columns=[1, 2]), rows[:, 1:])
+        # no warning where the rest is no point (a curve y(i)) or the numbers do not count rows
+        (tmp_path / "curve.csv").write_text("0,1.5\n1,2.5\n2,0.5\n")
+        assert read_points(tmp_path / "curve.csv").shape == (3, 2)
+        shifted = rows.copy()
+        shifted[:, 0] += 0.5
+        path.write_text("\n".join(",".join(repr(float(v)) for v in row) for row in shifted) + "\n")
+        assert read_points(path).shape == (4, 3)

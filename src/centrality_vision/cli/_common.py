@@ -271,7 +271,8 @@ def add_point_options(parser: argparse.ArgumentParser) -> None:
         type=_column_list,
         metavar="COLS",
         help="coordinate columns of the point file, by 0-based index (any format) or by name (text with a header, "
-        "PLY, PCD), e.g. x,y,z or 1,2 (default: the columns named x, y[, z], else all columns but an index column)",
+        "PLY, PCD), e.g. x,y,z or 1,2 (default: the columns named x, y[, z], else all columns but an index column "
+        "and columns of labels)",
     )
     parser.add_argument(
         "--variable", metavar="NAME", help="the array to read from .mat files (default: the only 2D array)"

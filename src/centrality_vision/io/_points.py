@@ -9,10 +9,12 @@ properties, the PCD fields). One rule then picks the coordinates from the table 
 from __future__ import annotations
 
 import csv
+import dataclasses
 import math
 import os
 import re
 import struct
+import warnings
 import zlib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -43,6 +45,10 @@ class _Table:
     values: np.ndarray
     names: list[str] | None = None
     lines: np.ndarray | None = None  # line number of each row in a text file
+    # text files: a column -> the message naming its first cell that is not a number (the
+    # cell is NaN in ``values``), and the columns of labels: every cell empty or with a letter
+    not_numbers: dict[int, str] = dataclasses.field(default_factory=dict)
+    text_columns: frozenset[int] = frozenset()
 
     def where(self, row: int) -> str:
         return f"line {int(self.lines[row])}" if self.lines is not None else f"row {row}"
@@ -85,8 +91,10 @@ def read_points(
         Blank lines and lines starting with ``#`` are skipped, a UTF-8 byte-order mark is
         ignored. The first line is a header when *none* of its cells is a number and one
         holds a letter (e.g. ``x,y,z,intensity`` or pandas' ``,x,y`` with an index
-        column); a first line with some numbers and some words, or with cells that are
-        neither (``1,5 2,5`` in a file split by spaces), is an error, never silently dropped.
+        column); a first line with some numbers and some words is data, and a first line
+        with cells that are neither (``1,5 2,5`` in a file split by spaces) is an error,
+        never silently dropped. A cell that is not a number (a label, an empty note) is
+        an error only in a column picked as a coordinate.
     ``.npy``
         A 2D numeric array saved with :func:`numpy.save` (no pickles). The header's shape
         is checked against the file size before anything is loaded.
@@ -112,8 +120,11 @@ def read_points(
     the columns named ``x``, ``y`` (and ``z`` if present), whatever their case, when the
     file names its columns; else every column, after dropping a leading index column
     (named ``""``, ``index``, ``id``, ``node``, ``Unnamed: 0``, ...) where the columns
-    left are a point of ``n_dims`` coordinates (so ``i,j`` is read as two). Other columns, such
-    as an intensity, are ignored unless ``columns`` selects them.
+    left are a point of ``n_dims`` coordinates (so ``i,j`` is read as two); a column in
+    which every cell is empty or holds a letter (a label) is left out first. Other columns, such as an
+    intensity, are ignored unless ``columns`` selects them. A file without a header whose
+    first column holds the row numbers (0, 1, 2, ... or 1, 2, 3, ...) and whose other
+    columns would make a point is read with that column as a coordinate, with a warning.
 
     Parameters
     ----------
@@ -264,15 +275,43 @@ def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
         if "x" in lower and "y" in lower:
             picked = [_named_column(path, lower, axis, shown) for axis in ("x", "y", "z") if axis in lower]
         else:
-            picked = list(range(n_columns))
-            if names and n_columns > 1 and lower[0] in _INDEX_NAMES and n_columns - 1 in n_dims:
+            # (a column of labels or of empty cells is no coordinate)
+            picked = [j for j in range(n_columns) if j not in table.text_columns]
+            if names and len(picked) > 1 and lower[picked[0]] in _INDEX_NAMES and len(picked) - 1 in n_dims:
                 picked = picked[1:]
+            elif not names and len(picked) - 1 in n_dims and len(picked) in n_dims:
+                _warn_row_numbers(path, table, picked)
+    for j in picked:
+        if j in table.not_numbers:
+            # (choosing columns helps only where the file has other columns to choose)
+            hint = _COLUMNS_HINT if columns is None and n_columns > min(n_dims) else ""
+            raise InputError(f"{table.not_numbers[j]}{hint}.")
     wanted = " or ".join(str(d) for d in n_dims)
     if len(picked) not in n_dims:
         # (choosing columns helps only where the file has more of them than wanted)
         hint = "" if columns is not None or len(picked) < min(n_dims) else _COLUMNS_HINT
         raise InputError(f"{path}: points must have {wanted} coordinates; got {len(picked)} columns{shown}{hint}.")
     return picked
+
+
+def _warn_row_numbers(path: Path, table: _Table, picked: list[int]) -> None:
+    """Warn where a file without a header starts with the row numbers (0, 1, 2, ... or 1, 2,
+    3, ...; pandas' ``to_csv(header=False)`` writes them): they are read as a coordinate, as
+    the file says nothing else, but a set whose first coordinate counts its rows is rare."""
+    first = table.values[:, picked[0]]
+    n_rows = first.shape[0]
+    if n_rows < 3:
+        return
+    steps = np.arange(n_rows, dtype=np.float64)
+    if np.array_equal(first, steps) or np.array_equal(first, steps + 1):
+        rest = ", ".join(str(j) for j in picked[1:])
+        warnings.warn(
+            f"{path}: column {picked[0] + 1} holds the row numbers {first[0]:.0f}, {first[1]:.0f}, ..., "
+            f"{first[-1]:.0f}, read as a coordinate; if it is an index, pick the coordinates with `columns` "
+            f"(0-based: {rest}).",
+            UserWarning,
+            stacklevel=4,  # read_points' caller
+        )
 
 
 # ------------------------------------------------------------------------------- text
@@ -315,14 +354,6 @@ def _read_text(path: Path) -> _Table:
         rows = rows[1:]
         if not rows:
             raise InputError(f"{path}: holds no points (only the header line {first_number}).")
-    elif not all(numeric):
-        bad = cells[numeric.index(False)]
-        why = (
-            f"an empty cell (a '{delimiter}' too many?)"
-            if not bad.strip() and delimiter
-            else f"{_clip(bad.strip())!r} is not a number (a header line must name every column)"
-        )
-        raise InputError(f"{path}: line {first_number}, column {numeric.index(False) + 1}: {why}.")
     width = len(names) if names is not None else len(cells)
     lines = np.array([number for number, _ in rows])
     if not decimal_comma:  # the fast path; on any doubt the loop below finds and names the bad cell
@@ -334,7 +365,11 @@ def _read_text(path: Path) -> _Table:
             values = None
         if values is not None and values.shape == (len(rows), width):
             return _Table(values, names, lines)
+    # a cell that is not a number is an error only in a column picked as a coordinate (a
+    # label or an empty note column beside the coordinates is ignored, as a numeric one is)
     values = np.empty((len(rows), width), dtype=np.float64)
+    not_numbers: dict[int, str] = {}
+    counts = np.zeros(width, dtype=np.int64)
     for k, (number, line) in enumerate(rows):
         cells = split(line)
         if len(cells) != width:
@@ -345,11 +380,19 @@ def _read_text(path: Path) -> _Table:
             try:
                 values[k, j] = _to_float(cell, decimal_comma)
             except (_NotANumber, ValueError):
-                raise InputError(
-                    f"{path}: line {number}, column {j + 1}: {_clip(cell.strip())!r} is not a number"
-                    f"{_comma_hint(cell)}."
-                ) from None
-    return _Table(values, names, lines)
+                values[k, j] = np.nan
+                # (a label holds a letter; "1_000" or "1,5" is a number written wrongly)
+                counts[j] += bool(_LETTER.search(cell)) or not cell.strip()
+                if j not in not_numbers:
+                    if not cell.strip() and delimiter:
+                        why = f"an empty cell (a '{delimiter}' too many?)"
+                    else:
+                        first_line = k == 0 and names is None
+                        header_hint = " (a header line must name every column)" if first_line else ""
+                        why = f"{_clip(cell.strip())!r} is not a number" + (_comma_hint(cell) or header_hint)
+                    not_numbers[j] = f"{path}: line {number}, column {j + 1}: {why}"
+    text_columns = frozenset(int(j) for j in np.flatnonzero(counts == len(rows)))
+    return _Table(values, names, lines, not_numbers, text_columns)
 
 
 # a header cell names something: it holds a letter ('x', 'intensity'; nan and inf are numbers)
