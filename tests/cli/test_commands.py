@@ -1095,3 +1095,31 @@ def test_records_list_only_the_options_that_applied(tmp_path):
     assert record["k"]["k"] == 3 and "lam" not in record["k"]
     assert not {"graph", "k", "lam", "columns"} & set(record["i"]) and record["i"]["connectivity"] == 8
     assert not {"connectivity", "foreground", "threshold", "k", "lam"} & set(record["c"]) and record["c"]["graph"]
+
+
+def _documented_examples():
+    """Every example command line: each subcommand's --help epilog and the README's block."""
+    import argparse
+    import pathlib
+    import re
+    import shlex
+
+    parser = cli.build_parser()
+    sub = next(action for action in parser._actions if isinstance(action, argparse._SubParsersAction))
+    lines = [line for child in sub.choices.values() for line in (child.epilog or "").splitlines()]
+    readme = (pathlib.Path(__file__).parents[2] / "README.md").read_text(encoding="utf-8")
+    block = re.search(r"## Command line\n\n```bash\n(.*?)```", readme, re.S).group(1)
+    lines += block.splitlines()
+    lines = re.sub(r"\\\n\s*", " ", "\n".join(lines)).splitlines()  # (a line continued by a backslash)
+    return [shlex.split(line) for line in lines if line.strip().startswith("centrality-vision ")]
+
+
+@pytest.mark.parametrize("words", _documented_examples(), ids=" ".join)
+def test_documented_examples_parse_and_write_over_none_of_their_inputs(words):
+    """The README's and --help's `centrality --plot cow1.png` on `cow1.png` could never run: the
+    command refuses to write over its input (audit 26)."""
+    args = cli.build_parser().parse_args(words[1:])
+    outputs = [getattr(args, name, None) for name in ("out", "plot")]
+    outputs = [str(path) for path in outputs if path is not None]
+    for output in outputs:
+        assert words.count(output) <= 1, f"{output} is written and also named elsewhere in {' '.join(words)}"

@@ -50,7 +50,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
         ".csv/.npy: that table (the parameters go to NAME.json beside it);\n"
         ".json/.npz: the same columns by name, plus the parameters.",
         example="centrality-vision centrality fish.txt --centrality closeness --out fish_closeness.csv\n"
-        "centrality-vision centrality cow1.png --centrality all --out cow1.json --plot cow1.png",
+        "centrality-vision centrality cow1.png --centrality all --out cow1.json --plot cow1-centrality.png",
     )
     parser.add_argument("input", type=in_path, metavar="INPUT", help="point-set file or image")
     parser.add_argument(
