@@ -303,3 +303,12 @@ def test_table_5_1_run_without_out_writes_nothing_in_the_working_folder(tmp_path
     result = table_5_1.run(quick=True, n_sets=1, scheduler="serial", progress=False)
     assert result["n_sets"] == 1 and not (tmp_path / "results").exists()
     json.dumps(result)  # still a JSON-able result
+
+
+def test_every_experiment_run_says_where_it_wrote(tmp_path, capsys):
+    """Most `reproduce` experiments wrote 4 to 6 files without a word (audit 26): the staged
+    outputs are now listed on stderr as they land."""
+    assert run_experiment("table-2.1", tmp_path, quick=True) == 0
+    err = capsys.readouterr().err
+    assert f"wrote {tmp_path}/: table-2.1-quick" in err
+    assert "table-2.1-quick.txt" in err and "table-2.1-quick.json" in err

@@ -14,6 +14,7 @@ import json
 import math
 import os
 import shutil
+import sys
 from pathlib import Path
 
 from ._runner import MAX_WORKERS
@@ -87,8 +88,6 @@ def scheduler_arg(text: str) -> str:
 def command_line(main) -> int:
     """What ``python -m centrality_vision.experiments.<module>`` runs: ``main()``, with a bad
     argument or missing data as one line on stderr and exit status 2 (not a traceback)."""
-    import sys
-
     from ..exceptions import InputError
 
     try:
@@ -245,6 +244,7 @@ def run_outputs(out: Path, name: str, *, quick: bool):
             os.replace(path, out / final)
             names.append(final)
         manifest.write_text(json.dumps({"experiment": name, "quick": quick, "files": names}, indent=1) + "\n")
+        print(f"wrote {out}/: {', '.join(names)}", file=sys.stderr)
     finally:
         shutil.rmtree(stage, ignore_errors=True)
 

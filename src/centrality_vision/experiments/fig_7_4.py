@@ -502,7 +502,6 @@ def main(argv=None) -> int:
         plot_mstme(stage / "fig-7.2.png")
         plot_noise_levels("cow1", stage / "fig-7.3-cow1.png", seed=args.seed)
         plot_perturbed("dog1", 3, stage / "fig-7.5-dog1.png", seed=args.seed, n_copies=result["n_copies"])
-    print(f"wrote {out}/ ({result['seconds']:.0f} s)", file=sys.stderr)
     return 0
 
 

@@ -36,7 +36,6 @@ from ._common import (
     check_run,
     int_in,
     make_out_folder,
-    outputs_of,
     run_outputs,
     run_stem,
     save_outputs,
@@ -526,8 +525,6 @@ def main(argv=None) -> int:
     with run_outputs(out, "table-4.1", quick=args.quick) as stage:
         save_outputs(stage, "table-4.1", format_table(result), result.to_json())
         plot_confusion(result, stage / "fig-4.8.png")
-    written = ", ".join(path.name for path in outputs_of(out, "table-4.1", quick=args.quick))
-    print(f"wrote {out}/: {written} ({result.seconds['total']:.0f} s)", file=sys.stderr)
     return 0
 
 
