@@ -1123,3 +1123,15 @@ def test_documented_examples_parse_and_write_over_none_of_their_inputs(words):
     outputs = [str(path) for path in outputs if path is not None]
     for output in outputs:
         assert words.count(output) <= 1, f"{output} is written and also named elsewhere in {' '.join(words)}"
+
+
+def test_every_command_takes_progress_and_no_progress():
+    """The README promises --progress/--no-progress; `match` refused it (audit 26), so a
+    script passing it to every command broke there."""
+    import argparse
+
+    parser = cli.build_parser()
+    sub = next(action for action in parser._actions if isinstance(action, argparse._SubParsersAction))
+    for name, child in sub.choices.items():
+        options = {option for action in child._actions for option in action.option_strings}
+        assert {"--progress", "--no-progress"} <= options, name

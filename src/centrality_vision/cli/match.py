@@ -11,6 +11,7 @@ from ._common import (
     add_out,
     add_plot,
     add_point_options,
+    add_progress,
     in_path,
     number,
     options,
@@ -95,6 +96,7 @@ def add_parser(sub) -> argparse.ArgumentParser:
     )
     add_out(parser, ".json", ".npz")
     add_plot(parser, "the matching (2D sets)")
+    add_progress(parser)  # (matching shows no bar of its own; this governs the bars of what it calls)
     # the library's advice in this command's options
     phrases = {
         "`scale=True`": "--transform similarity",
