@@ -402,8 +402,8 @@ def as_binary_image(
         if 2 * int(border.sum()) > border.size and not mask.all():
             warn(
                 f"`{name}` looks inverted: its shape (foreground) touches {int(border.sum())} of the "
-                f"{border.size} border pixels. Pass foreground='auto' (grey images), 'dark' or 'light' "
-                "if the shape is the other side.",
+                f"{border.size} border pixels. Pass `foreground='auto'` (grey images), `foreground='dark'` or "
+                "`foreground='light'` if the shape is the other side.",
                 UserWarning,
             )
     return mask

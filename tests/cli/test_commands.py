@@ -1135,3 +1135,24 @@ def test_every_command_takes_progress_and_no_progress():
     for name, child in sub.choices.items():
         options = {option for action in child._actions for option in action.option_strings}
         assert {"--progress", "--no-progress"} <= options, name
+
+
+def test_library_advice_in_warnings_reads_as_options(tmp_path, capsys):
+    """Warnings read `Pass foreground='auto' ...` and `match(method='robust')` in Python words on
+    the command line (audit 26): they now name --foreground and --method."""
+    pixels = np.full((40, 40), 255)
+    pixels[10:30, 12:28] = 0  # a dark square on a light ground
+    image = _png(tmp_path / "square.png", pixels)
+    argv = ["centrality", str(image), "--centrality", "degree", "--foreground", "light", "--out"]
+    assert main([*argv, str(tmp_path / "c.csv")]) == 0
+    err = capsys.readouterr().err
+    assert "looks inverted" in err and "Pass --foreground auto (grey images), --foreground dark or" in err
+    rng = np.random.default_rng(0)
+    fixed = rng.random((30, 2))
+    np.savetxt(tmp_path / "f.txt", fixed)
+    np.savetxt(tmp_path / "m.txt", fixed + rng.normal(0, 0.05, fixed.shape))
+    argv = ["match", str(tmp_path / "m.txt"), str(tmp_path / "f.txt"), "--method", "mwme"]
+    assert main([*argv, "--out", str(tmp_path / "m.json")]) == 0
+    err = capsys.readouterr().err
+    assert "not nearest neighbours" in err and "match's --method robust handles noise" in err
+    assert "method=" not in err

@@ -52,7 +52,7 @@ def _warn_unless_pairs_agree(moving, partners, rot, t, s) -> None:
             f"{min(residual / max(spread, np.finfo(float).tiny), 99.0):.0%} of the fixed partners' spread "
             "unexplained: many pairs join unrelated points (a symmetric set, whose pairings tie; noise, clutter "
             "or missing parts that change the descriptors), and the transform, fitted to them all, is not "
-            "reliable. match(method='robust') scores poses on all points.",
+            "reliable. match's `method='robust'` scores poses on all points.",
             MatchingWarning,
         )
 

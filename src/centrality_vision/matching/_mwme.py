@@ -124,7 +124,7 @@ def mwme_match(
             f"mwme_match: {disagree} of {n} matched pairs are not nearest neighbours under the fitted "
             "transform, so the two MWME graphs differ (noise, sets that are not similar copies, or "
             "tied optima on regular grids) and the correspondences are not reliable. "
-            "match(method='robust') handles noise and missing parts.",
+            "match's `method='robust'` handles noise and missing parts.",
             MatchingWarning,
         )
     return chosen, similarity_to_units(*fit, norm_m, norm_f)
