@@ -9,6 +9,11 @@ import pytest
 from centrality_vision.exceptions import InputError
 from centrality_vision.io import read_image, read_shape
 
+
+def _several_frames():
+    return pytest.warns(UserWarning, match=r"frames \(pages\); the first is read")
+
+
 DARK_ON_WHITE = np.full((12, 14), 255, dtype=np.uint8)
 DARK_ON_WHITE[3:8, 4:11] = 10
 SHAPE = DARK_ON_WHITE < 128
@@ -24,7 +29,8 @@ def test_every_format_imageio_writes(tmp_path, suffix):
 def test_single_and_multi_frame_gif_and_colour(tmp_path):
     frames = np.stack([DARK_ON_WHITE, 255 - DARK_ON_WHITE])
     iio.imwrite(tmp_path / "two.gif", frames)
-    assert np.array_equal(read_shape(tmp_path / "two.gif"), SHAPE)  # the first frame
+    with _several_frames():
+        assert np.array_equal(read_shape(tmp_path / "two.gif"), SHAPE)  # the first frame
     rgb = np.repeat(DARK_ON_WHITE[:, :, None], 3, axis=2)
     iio.imwrite(tmp_path / "rgb.png", rgb)
     assert np.array_equal(read_shape(tmp_path / "rgb.png"), SHAPE)
@@ -40,7 +46,8 @@ def test_multi_page_tiff_gives_its_first_page(tmp_path, colour):
     tifffile.imwrite(tmp_path / "pages.tif", pages, photometric="rgb" if colour else "minisblack")
     with tifffile.TiffFile(tmp_path / "pages.tif") as tif:
         assert len(tif.pages) == 3
-    assert np.array_equal(read_shape(tmp_path / "pages.tif"), SHAPE)
+    with _several_frames():
+        assert np.array_equal(read_shape(tmp_path / "pages.tif"), SHAPE)
 
 
 @pytest.mark.parametrize("compression", ["tiff_lzw", "jpeg", "packbits"])
@@ -52,10 +59,12 @@ def test_a_compressed_tiff_is_read_with_or_without_imagecodecs(tmp_path, compres
     pixels = np.where(SHAPE, 0, 255).astype(np.uint8)
     pages = [Image.fromarray(pixels), Image.fromarray(255 - pixels)]
     pages[0].save(tmp_path / "c.tif", compression=compression, save_all=True, append_images=pages[1:])
-    read = read_image(tmp_path / "c.tif")
+    with _several_frames():
+        read = read_image(tmp_path / "c.tif")
     assert read.shape == SHAPE.shape
     if compression == "jpeg":  # lossy
-        assert np.array_equal(read_shape(tmp_path / "c.tif"), SHAPE)
+        with _several_frames():
+            assert np.array_equal(read_shape(tmp_path / "c.tif"), SHAPE)
     else:
         np.testing.assert_array_equal(read, pixels)
 
@@ -86,10 +95,12 @@ def test_a_multi_page_tiff_of_narrow_pages_gives_its_first_page(tmp_path, width)
     tifffile.imwrite(tmp_path / "narrow.tif", pages, photometric="minisblack")
     with tifffile.TiffFile(tmp_path / "narrow.tif") as tif:
         assert len(tif.pages) == 3
-    np.testing.assert_array_equal(read_image(tmp_path / "narrow.tif"), pages[0])
+    with _several_frames():
+        np.testing.assert_array_equal(read_image(tmp_path / "narrow.tif"), pages[0])
     # a stack of stacks: its first page too
     tifffile.imwrite(tmp_path / "deep.tif", np.arange(2 * 2 * 6 * 5, dtype=np.uint8).reshape(2, 2, 6, 5))
-    np.testing.assert_array_equal(read_image(tmp_path / "deep.tif"), np.arange(30).reshape(6, 5))
+    with _several_frames():
+        np.testing.assert_array_equal(read_image(tmp_path / "deep.tif"), np.arange(30).reshape(6, 5))
 
 
 def test_a_silhouette_stored_as_transparency(tmp_path):
@@ -214,3 +225,25 @@ def test_an_image_under_another_formats_suffix_still_reads(tmp_path):
     pixels = np.arange(64, dtype=np.uint8).reshape(8, 8) * 4
     (tmp_path / "png-named.jpg").write_bytes(iio.imwrite("<bytes>", pixels, extension=".png"))
     np.testing.assert_array_equal(read_image(tmp_path / "png-named.jpg"), pixels)
+
+
+@pytest.mark.parametrize("suffix", [".tif", ".gif"])
+def test_a_file_of_several_frames_is_read_as_its_first_with_a_warning(tmp_path, suffix):
+    """A 3-page TIFF or a 3-frame GIF gave its first frame without a word (audit 26); the
+    reader now says how many frames it held."""
+    frames = np.zeros((3, 20, 24), dtype=np.uint8)
+    frames[0, 5:15, 6:18] = 255
+    frames[1, 2:8, 2:8] = 255
+    frames[2, 10:18, 10:22] = 255
+    path = tmp_path / f"stack{suffix}"
+    if suffix == ".gif":
+        iio.imwrite(path, frames, loop=0)
+    else:
+        pytest.importorskip("tifffile").imwrite(path, frames, photometric="minisblack")
+    with pytest.warns(UserWarning, match=r"holds 3 frames \(pages\); the first is read"):
+        image = read_image(path)
+    np.testing.assert_array_equal(image > 127, frames[0] > 127)
+    iio.imwrite(tmp_path / f"one{suffix}", frames[0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_image(tmp_path / f"one{suffix}")

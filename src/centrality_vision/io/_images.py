@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -34,8 +35,9 @@ def read_image(path, /) -> np.ndarray:
     """Read an image file as a 2D float64 grey image (colour averaged, alpha handled).
 
     The pixels are decoded by :func:`imageio.v3.imread` (TIFF files by :mod:`tifffile`):
-    the first frame of an animated GIF, the first page of a multi-page TIFF. Colour images
-    become the mean of their red, green and blue channels. An alpha channel is ignored
+    the first frame of an animated GIF, the first page of a multi-page TIFF (with a warning
+    that says how many the file holds). Colour images become the mean of their red, green
+    and blue channels. An alpha channel is ignored
     unless the colour is the same everywhere and only the alpha varies (a silhouette stored
     as transparency): then the alpha is the image.
 
@@ -90,6 +92,11 @@ def read_image(path, /) -> np.ndarray:
             else f"{type(exc).__name__}: {_first_line(exc)}"
         )
         raise InputError(f"{path}: not a readable {kind} image ({why}).") from None
+    frames = _frame_count(data)
+    if frames > 1:  # (a command-line user with a TIFF stack got a 2D result without a word)
+        warnings.warn(
+            f"{path}: holds {frames} frames (pages); the first is read, as a 2D image.", UserWarning, stacklevel=2
+        )
     if np.iscomplexobj(pixels):  # a grey value has no imaginary part to drop silently
         raise InputError(f"{path}: the image has complex pixels ({pixels.dtype}); expected real grey or colour values.")
     if not is_real_dtype(pixels.dtype):
@@ -113,6 +120,18 @@ def read_image(path, /) -> np.ndarray:
     if not np.all(np.isfinite(pixels)):
         raise InputError(f"{path}: the image holds NaN or inf values.")
     return pixels
+
+
+def _frame_count(data: bytes) -> int:
+    """How many frames (GIF, WebP, PNG animations) or pages (TIFF) the decoded file holds; 1
+    where Pillow cannot tell."""
+    from PIL import Image
+
+    try:
+        with Image.open(io.BytesIO(data)) as image:
+            return int(getattr(image, "n_frames", 1))
+    except Exception:  # (a format Pillow does not open was decoded by another plugin)
+        return 1
 
 
 def _first_tiff_page(data: bytes, path) -> np.ndarray:
