@@ -140,8 +140,8 @@ def add_parser(sub) -> argparse.ArgumentParser:
     parser.add_argument(
         "--metric",
         choices=("point_to_point", "point_to_plane"),
-        help="ICP only: point_to_plane uses normals from the fixed set's local PCA (point to line in 2D) "
-        "(default: point_to_point)",
+        help="ICP only: point_to_plane uses normals from the fixed set's local PCA (point to line in 2D) and "
+        "fits a rigid motion (with --transform rigid) (default: point_to_point)",
     )
     parser.add_argument(
         "--max-iter",
