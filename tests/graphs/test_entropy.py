@@ -10,6 +10,7 @@ from scipy import sparse
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial.distance import pdist, squareform
 
+from centrality_vision.exceptions import InputError
 from centrality_vision.graphs import _entropy_kernels as kernels
 from centrality_vision.graphs import (
     complete_graph,
@@ -425,3 +426,15 @@ def test_the_solver_is_named_solver_and_method_still_works(build, solver):
         assert new.method == solver
     with pytest.raises(TypeError, match="give `solver` only"):
         build(points, method=solver, solver=solver)
+
+
+def test_nhdd_graph_refuses_more_nodes_than_memory_holds():
+    """`n` up to 2^62 was allowed; 10^6 nodes (2.5e11 edges) ended in a MemoryError (audit 25)."""
+    with pytest.raises(InputError, match=r"`n` must be an int in \[3, 20000\]; got 1000000"):
+        nhdd_graph(10**6)
+
+
+def test_the_dynamic_range_error_reports_the_true_shortest_distance():
+    """pdist's squares underflow: points 1e-200 apart were reported 0 times the longest apart (audit 25)."""
+    with pytest.raises(InputError, match=r"the shortest distance is 7.07e-201 times the longest"):
+        mwme_graph(np.array([[0, 0], [1e-200, 0], [1, 1], [0, 1.0]]))

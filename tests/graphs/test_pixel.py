@@ -57,7 +57,7 @@ def test_input_not_modified():
     [
         (np.zeros((4, 4), dtype=bool), {}, "at least one foreground pixel"),
         (np.zeros((0, 5)), {}, "must not be empty"),
-        (np.ones((2, 2, 2, 2)), {}, "must be a 2D array"),
+        (np.ones((2, 2, 2, 2)), {}, "must be a 2D or 3D array"),
         (np.full((2, 2, 2), 2.0), {}, "must be binary"),
         (np.array([[np.nan, 1.0]]), {}, "finite"),
         (np.ones((3, 3), bool), {"connectivity": 6}, "`connectivity` must be 8 or 4 for a 2D image"),
@@ -205,3 +205,10 @@ def test_spacing_keeps_path_sums_within_float64(connectivity):
         for name in ("closeness", "harmonic"):
             got = getattr(cen, name)(graph, weights=True) * step  # both go as 1 / length
             np.testing.assert_allclose(got, getattr(cen, name)(unit, weights=True), rtol=1e-12)
+
+
+@pytest.mark.parametrize("shape", [(5,), (1, 2, 3, 4, 5)])
+def test_an_image_of_other_dimension_is_named_as_2d_or_3d(shape):
+    """A 1D or 4D image was told it "must be a 2D array", though 3D images are taken (audit 25)."""
+    with pytest.raises(ValueError, match=r"`image` must be a 2D or 3D array; got shape"):
+        pixel_graph(np.ones(shape, dtype=bool))

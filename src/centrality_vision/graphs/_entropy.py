@@ -101,7 +101,8 @@ def nhdd_graph(n: int, /, *, connected: bool = True) -> sparse.csr_array:
 
     Parameters
     ----------
-    n : int >= 3
+    n : int in [3, 20000]
+        (The graph has about ``n**2 / 4`` edges: 20,000 nodes take some 5 GB.)
     connected : bool, default=True
         The connected graph (True) or its complement, which has one isolated node.
 
@@ -116,7 +117,8 @@ def nhdd_graph(n: int, /, *, connected: bool = True) -> sparse.csr_array:
     >>> (graph > 0).sum(axis=1).tolist()  # degrees (1, 2, 2, 3, 4) in some order
     [2, 2, 3, 1, 4]
     """
-    n = check_int(n, name="n", low=3)
+    # (about n^2 / 4 edges: 10^6 nodes asked numpy for 1.8 TiB)
+    n = check_int(n, name="n", low=3, high=_NHDD_MAX_NODES)
     joining = nhdd_joining(n, connected=check_bool(connected, name="connected"))
     cols = np.repeat(np.flatnonzero(joining), np.flatnonzero(joining))
     rows = np.concatenate([np.arange(j) for j in np.flatnonzero(joining)]) if joining.any() else np.array([], int)
@@ -126,6 +128,8 @@ def nhdd_graph(n: int, /, *, connected: bool = True) -> sparse.csr_array:
 #: Smallest ratio of the shortest to the longest distance between points that the entropy
 #: graphs accept: below it, squared distances underflow even after rescaling.
 MIN_DISTANCE_RATIO = 1e-150
+# nhdd_graph: the most nodes (about n^2 / 4 edges, stored twice: 20,000 nodes take some 5 GB)
+_NHDD_MAX_NODES = 20_000
 
 
 @dataclass(frozen=True)
@@ -161,13 +165,23 @@ def _distance_matrix(points, *, min_points: int = 3) -> _Distances:
     scaled = squareform(pdist(np.ldexp(pts, -exponent)))  # exact rescaling: a power of two
     off = scaled[~np.eye(pts.shape[0], dtype=bool)]
     if not np.all(np.isfinite(off)) or off.min() <= MIN_DISTANCE_RATIO * off.max():
-        ratio = off.min() / off.max() if off.max() > 0 else 0.0
+        ratio = _shortest_distance(np.ldexp(pts, -exponent), scaled) / off.max() if off.max() > 0 else 0.0
         raise InputError(
             "`points` must have distances within a dynamic range float64 can square: the shortest "
             f"distance is {ratio:.3g} times the longest (at least {MIN_DISTANCE_RATIO:g} needed); "
             "rescale or deduplicate the points."
         )
     return _Distances(pts, scaled, exponent)
+
+
+def _shortest_distance(pts: np.ndarray, distances: np.ndarray) -> float:
+    """The shortest distance between two points, exact where ``pdist``'s squares underflow
+    (points 1e-200 apart came out 0 apart)."""
+    masked = distances + np.diag(np.full(pts.shape[0], np.inf))
+    i, j = np.unravel_index(int(np.argmin(masked)), masked.shape)
+    diff = pts[i] - pts[j]
+    peak = float(np.abs(diff).max())
+    return peak * float(np.linalg.norm(diff / peak)) if peak > 0 else 0.0
 
 
 def _former_solver_name(result) -> str:

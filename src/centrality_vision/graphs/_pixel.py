@@ -246,6 +246,8 @@ def pixel_graph(
         raise TypeError("`image` must be a dense 2D or 3D array; got a sparse matrix.")
     image = as_real_array(image, name="image", shape="a 2D or 3D array")  # not copied
     ndim = image.ndim
+    if ndim not in (2, 3):  # (the 2D reader's error said "must be a 2D array" of a 4D one)
+        raise InputError(f"`image` must be a 2D or 3D array; got shape {image.shape}.")
     foreground = check_choice(foreground, FOREGROUNDS, name="foreground")
     if ndim == 3:
         mask = _volume_mask(image, threshold, foreground)
