@@ -256,4 +256,22 @@ def test_extreme_spacings_give_the_adjacency_lists_values(spacing, mask):
     _close(cen.closeness(graph, weights=True, normalized=False), cen.closeness(plain, weights=True, normalized=False))
     _close(cen.betweenness(graph), cen.betweenness(plain))
     if min(spacing) / max(spacing) > 1e-180:  # (edges of 1e-200 against 0.5 tie like zero-length ones)
-        _close(cen.betweenness(graph, weights=True), cen.betweenness(plain, weights=True))
+        with pytest.warns(UserWarning, match="spacing's ratio"):  # (these small masks have no near-ties)
+            on_grid = cen.betweenness(graph, weights=True)
+        _close(on_grid, cen.betweenness(plain, weights=True))
+
+
+def test_weighted_betweenness_warns_beyond_the_spacing_ratio_it_is_exact_at():
+    """At a spacing ratio of 1e10 the grid path and the same graph's plain copy differed by
+    238 (of about 2,000) and neither was exact, silently (audit 25)."""
+    import warnings
+
+    y, x = np.mgrid[-12:13, -9:10]
+    mask = (x * x / 81 + y * y / 144) <= 1
+    graph, _ = pixel_graph(mask, spacing=(1e-10, 1.0))
+    with pytest.warns(UserWarning, match=r"spacing's ratio is 1e\+10; beyond about 10000, .* not exact"):
+        cen.betweenness(graph, weights=True)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        cen.betweenness(graph)  # hop counts do not depend on the spacing
+        cen.betweenness(pixel_graph(mask, spacing=(1e-3, 1.0))[0], weights=True)

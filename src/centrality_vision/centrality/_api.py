@@ -357,6 +357,11 @@ def degree(graph, /, *, strengths: bool = False, normalized: bool = False, as_di
 # --- betweenness ------------------------------------------------------------------------
 
 
+# betweenness(weights=True) on a pixel graph: the largest spacing ratio at which distinct
+# path lengths stay apart by more than its tie tolerance (1e-10 relative)
+_TIE_SPACING_RATIO = 1e4
+
+
 def betweenness(
     graph,
     /,
@@ -388,7 +393,8 @@ def betweenness(
     graphs with equal spacing (distinct lengths of images up to a million pixels differ by
     about 1e-7 relative) and with spacing ratios up to about 1e4; beyond, distinct lengths
     can differ by less than ``1e-10`` relative and tie (a diagonal step and a step along the
-    farther-spaced axis differ by ``1 / (2 ratio^2)``). A zero-length edge counts as
+    farther-spaced axis differ by ``1 / (2 ratio^2)``), with a warning on such a pixel
+    graph. A zero-length edge counts as
     infinitesimally long: among paths of tied length, only those with the fewest zero-length
     edges are shortest. (Counting every tied path is ill-defined here, since a cycle of
     zero-length edges gives infinitely many; networkx's result then depends on the order its
@@ -473,6 +479,16 @@ def betweenness(
     """
     on_grid = _on_pixel_grid(graph)
     weights = check_bool(weights, name="weights")
+    if weights and on_grid and graph.spacing is not None:
+        spacing = np.asarray(graph.spacing, dtype=float)
+        ratio = float(spacing.max() / spacing.min())
+        if ratio > _TIE_SPACING_RATIO:
+            warn(
+                f"betweenness(weights=True): the pixel spacing's ratio is {ratio:.3g}; beyond about "
+                f"{_TIE_SPACING_RATIO:g}, path lengths that differ (a diagonal step and a step along the "
+                "farther-spaced axis) can tie, and the result is not exact.",
+                UserWarning,
+            )
     prep = _prepare(graph, reorder=not on_grid, lengths=weights)  # the grid path walks the mask, not these lists
     normalized = check_bool(normalized, name="normalized")
     progress = check_bool(progress, name="progress")
