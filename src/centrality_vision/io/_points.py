@@ -121,10 +121,11 @@ def read_points(
     file names its columns; else every column, after dropping a leading index column
     (named ``""``, ``index``, ``id``, ``node``, ``Unnamed: 0``, ...) where the columns
     left are a point of ``n_dims`` coordinates (so ``i,j`` is read as two); a column in
-    which every cell is empty or holds a letter (a label) is left out first. Other columns, such as an
-    intensity, are ignored unless ``columns`` selects them. A file without a header whose
-    first column holds the row numbers (0, 1, 2, ... or 1, 2, 3, ...) and whose other
-    columns would make a point is read with that column as a coordinate, with a warning.
+    which every cell is empty or holds a letter (a label) is left out first. Other
+    columns, such as an intensity, are ignored unless ``columns`` selects them. A file
+    without a header whose first column holds the row numbers (0, 1, 2, ... or 1, 2, 3,
+    ...) and whose other columns would make a point is read with that column as a
+    coordinate, with a warning.
 
     Parameters
     ----------
@@ -279,13 +280,13 @@ def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
             picked = [j for j in range(n_columns) if j not in table.text_columns]
             if names and len(picked) > 1 and lower[picked[0]] in _INDEX_NAMES and len(picked) - 1 in n_dims:
                 picked = picked[1:]
-            elif not names and len(picked) - 1 in n_dims and len(picked) in n_dims:
-                _warn_row_numbers(path, table, picked)
     for j in picked:
         if j in table.not_numbers:
             # (choosing columns helps only where the file has other columns to choose)
             hint = _COLUMNS_HINT if columns is None and n_columns > min(n_dims) else ""
             raise InputError(f"{table.not_numbers[j]}{hint}.")
+    if columns is None and not names and len(picked) - 1 in n_dims and len(picked) in n_dims:
+        _warn_row_numbers(path, table, picked)
     wanted = " or ".join(str(d) for d in n_dims)
     if len(picked) not in n_dims:
         # (choosing columns helps only where the file has more of them than wanted)
