@@ -535,9 +535,14 @@ def _box_volume(sides: np.ndarray, sigma2: float) -> float:
     uniform density was unbounded and took every point as an outlier: the fish with ``z = 0``
     added and 20 clutter points ended with ``w_`` 0.9 and nothing matched. Along a direction
     the set spans, the side is its extent once the Gaussians are narrower than it."""
-    thin = sides <= _THIN_SIDE * float(np.max(sides))
     width = max(math.sqrt(2.0 * math.pi * sigma2), 1e-300)
-    return float(np.prod(np.where(thin, np.maximum(sides, width), sides)))
+    return float(np.prod(np.where(_thin(sides), np.maximum(sides, width), sides)))
+
+
+def _thin(sides: np.ndarray) -> np.ndarray:
+    """Which of a box's sides are below :data:`_THIN_SIDE` of its longest: directions the set
+    does not span (a planar set in 3D)."""
+    return sides <= _THIN_SIDE * float(np.max(sides))
 
 
 def _check_prior(prior, n_moving: int, n_fixed: int, name: str) -> None:
@@ -1145,8 +1150,7 @@ class _CPD(BaseEstimator):
         tries += ["a fixed `w`"] if auto else ["a smaller `w`"] if w > 0 else []
         tries.append("a starting pose (`init`)")
         advice = "Try " + (", ".join(tries[:-1]) + ", or " if len(tries) > 1 else "") + tries[-1] + "."
-        sides = _principal_sides(fixed)
-        flat = int(np.sum(sides <= _THIN_SIDE * float(np.max(sides))))
+        flat = int(np.sum(_thin(_principal_sides(fixed))))
         if 0 < flat < fixed.shape[1]:
             # (CPD's Gaussians have the sets' dimension: on a flat set sigma2 is 1/D of a
             # residual spread over fewer axes, and w='auto' reads the narrower fit as outliers)
