@@ -34,7 +34,17 @@ __all__ = [
     "check_choice",
     "check_int",
     "check_float",
+    "counted",
 ]
+
+
+def counted(n: int, noun: str, plural: str | None = None) -> str:
+    """``n`` and ``noun`` in the number it takes, for messages: "1 point", "3 points".
+
+    >>> counted(1, "class", "classes"), counted(0, "point")
+    ('1 class', '0 points')
+    """
+    return f"{n} {noun if n == 1 else plural or noun + 's'}"
 
 
 def _describe(value) -> str:

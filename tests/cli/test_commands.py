@@ -37,9 +37,11 @@ def test_demo_unknown_shape_is_a_one_line_error(tmp_path, capsys):
     assert not (tmp_path / "demo").exists()  # the folder was made before the name was checked
 
 
-def test_no_command_prints_help(capsys):
-    assert main([]) == 0
-    assert "demo" in capsys.readouterr().out
+def test_no_command_prints_help_as_a_usage_error(capsys):
+    # audit 26 L8: no command printed the help and exited 0, as if something had run
+    assert main([]) == 2
+    captured = capsys.readouterr()
+    assert "demo" in captured.err and not captured.out
 
 
 def test_reproduce_rejects_unknown_experiment(capsys):
@@ -168,7 +170,7 @@ def test_centrality_of_points_matches_the_graph(tmp_path):
     )
     lines = out.read_text().splitlines()
     parameters = json.loads((tmp_path / "c.json").read_text())["parameters"]
-    assert parameters["centrality"] == "all" and parameters["graph"] == "delaunay" and parameters["seed"] is None
+    assert parameters["centrality"] == "all" and parameters["graph"] == "delaunay" and "seed" not in parameters
     header = lines[0].split(",")
     assert header == ["node", "x", "y", *cli.CENTRALITY_NAMES]
     table = np.loadtxt(out, delimiter=",", skiprows=1)
@@ -1092,6 +1094,7 @@ def test_records_list_only_the_options_that_applied(tmp_path):
     )
     record = {name: json.loads((tmp_path / f"{name}.json").read_text())["parameters"] for name in "gkic"}
     assert "k" not in record["g"] and "lam" not in record["g"] and record["g"]["kind"] == "delaunay"
+    assert not any("seed" in parameters for parameters in record.values())  # (was "seed": null; none draws)
     assert record["k"]["k"] == 3 and "lam" not in record["k"]
     assert not {"graph", "k", "lam", "columns"} & set(record["i"]) and record["i"]["connectivity"] == 8
     assert not {"connectivity", "foreground", "threshold", "k", "lam"} & set(record["c"]) and record["c"]["graph"]

@@ -287,3 +287,39 @@ def test_the_record_lists_only_the_options_that_applied(tmp_path, fish):
     assert record["parameters"]["method"] == "icp" and "trim" in record["parameters"]
     record = _register(tmp_path, fish, fish[::-1] + 0.1, "--transform", "nonrigid", name="n.json")
     assert record["parameters"]["beta"] > 0 and "trim" not in record["parameters"]
+
+
+def test_a_record_lists_the_values_a_run_used_and_no_other_option(tmp_path):
+    # audit 26 L3: GPD on a Delaunay graph recorded the k of k-NN, ICP and a CPD run without
+    # the global search recorded a seed, and ICP's trim and metric were null, not the values used
+    fixed = np.random.default_rng(1).random((25, 2))
+    gpd = _register(tmp_path, fixed + 0.01, fixed, "--method", "gpd", "--centrality", "degree")["parameters"]
+    assert gpd["graph"] == "delaunay" and "k" not in gpd and "seed" not in gpd
+    knn = _register(tmp_path, fixed + 0.01, fixed, "--method", "gpd", "--graph", "knn", "--k", "4")["parameters"]
+    assert knn["k"] == 4
+    icp = _register(tmp_path, fixed + 0.01, fixed, "--method", "icp")["parameters"]
+    assert icp["trim"] == 0.0 and icp["metric"] == "point_to_point" and "seed" not in icp
+    seeded = _register(tmp_path, fixed + 0.01, fixed, "--init", "global", "--seed", "5")["parameters"]
+    assert seeded["seed"] == 5
+
+
+def test_a_record_beside_an_output_never_replaces_another_file(tmp_path, capsys):
+    # audit 26 L5: --out al.csv then --out al.ply wrote both records to al.json (al.csv was left
+    # described by the other run), and --out mvv.csv replaced a user's own mvv.json
+    fixed = np.random.default_rng(2).random((20, 3))
+    np.save(tmp_path / "m.npy", fixed + 0.01)
+    np.save(tmp_path / "f.npy", fixed)
+
+    def run(out):
+        return main(["register", str(tmp_path / "m.npy"), str(tmp_path / "f.npy"), "--out", str(tmp_path / out)])
+
+    assert run("al.csv") == 0 and run("al.csv") == 0  # a run again replaces its own record
+    before = (tmp_path / "al.json").read_bytes()
+    assert run("al.ply") == 2
+    assert "al.json, which is the record of al.csv" in _error_line(capsys)
+    assert (tmp_path / "al.json").read_bytes() == before and not (tmp_path / "al.ply").exists()
+    (tmp_path / "mine.json").write_text('{"notes": 1}\n')
+    assert run("mine.csv") == 2 and "did not write" in _error_line(capsys)
+    assert (tmp_path / "mine.json").read_text() == '{"notes": 1}\n' and not (tmp_path / "mine.csv").exists()
+    (tmp_path / "al.csv").unlink()  # a record whose output is gone is replaced
+    assert run("al.ply") == 0 and json.loads((tmp_path / "al.json").read_text())["file"] == "al.ply"

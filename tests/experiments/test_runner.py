@@ -124,10 +124,11 @@ def test_other_parameters_in_the_same_file_are_recomputed_never_reused(tmp_path,
     assert "1 stored result(s) are not units of this run" in err and "Computing 0 of 1" in err
 
 
-def test_damaged_or_edited_lines_are_recomputed_never_read(tmp_path):
+def test_damaged_or_edited_lines_are_recomputed_never_read(tmp_path, capsys):
     """Lines that are not a record of this runner, or whose result was edited, were read back
     (an edited iteration count flipped a thesis claim) or crashed the run (TypeError, KeyError,
-    UnicodeDecodeError)."""
+    UnicodeDecodeError). Each is counted in a note (audit 26 L9: a resume recomputed work
+    without saying why)."""
     unit = Unit("u", _square, {"x": 2, "marker_dir": str(tmp_path)})
     path = tmp_path / "r.jsonl"
     good = run_units([unit], path, scheduler="serial", progress=False)
@@ -137,12 +138,20 @@ def test_damaged_or_edited_lines_are_recomputed_never_read(tmp_path):
     damaged = [b"\xff\xfe\x00garbage\x80\n", b"[1,2]\n", b"null\n", b"{}\n", b'"abc"\n', b'{"key":[1],"result":1}\n']
     damaged += [b'{"key":"' + unit_id(unit).encode() + b'","result":null}\n', edited]
     damaged += [b"[" * 200_000 + b"\n"]  # nested past the JSON parser: was a RecursionError
+    capsys.readouterr()
     for text in damaged:
         path.write_bytes(text)
         assert load_results(path) == {}
         before = _calls(tmp_path)
         assert run_units([unit], path, scheduler="serial", progress=False) == good
         assert _calls(tmp_path) == before + 1
+        assert "skipped 1 damaged line (" in capsys.readouterr().err
+    path.write_bytes(line)  # one whole record
+    assert run_units([unit], path, scheduler="serial", progress=False) == good
+    assert "damaged" not in capsys.readouterr().err
+    path.write_bytes(b"".join(damaged[:3]) + line + b'{"key": "b", "res')  # and a torn last line
+    run_units([unit], path, scheduler="serial", progress=False)
+    assert "skipped 4 damaged lines" in capsys.readouterr().err
 
 
 def test_an_address_that_is_not_a_dask_scheduler_is_an_error_not_a_hang():

@@ -761,6 +761,16 @@ def test_too_few_columns_get_no_advice_to_choose_columns(tmp_path):
         read_points(tmp_path / "q.csv", n_dims=(3,))
 
 
+def test_too_many_columns_picked_are_named_as_picked(tmp_path):
+    # audit 26 L8: "got 4 columns ('x', 'y', 'z', 'nx', 'ny', 'nz', 'red')" named all the file's columns
+    (tmp_path / "p.csv").write_text("x,y,z,nx,ny,nz,red\n0,1,2,0,0,1,9\n1,2,3,0,1,0,9\n")
+    with pytest.raises(InputError, match=r"got 4 columns \('x', 'y', 'z', 'nx'\)\.$"):
+        read_points(tmp_path / "p.csv", columns=["x", "y", "z", "nx"])
+    (tmp_path / "one.csv").write_text("a\n0\n1\n")
+    with pytest.raises(InputError, match=r"got 1 column \('a'\)"):
+        read_points(tmp_path / "one.csv")
+
+
 @pytest.mark.parametrize(
     ("text", "expected"),
     [

@@ -97,9 +97,9 @@ def main(argv: list[str] | None = None) -> int:
     args, extras = parser.parse_known_args(_glued_columns(sys.argv[1:] if argv is None else list(argv)))
     if extras:  # argparse would blame the top-level parser; name the subcommand instead
         getattr(args, "_parser", parser).error(f"unrecognized arguments: {' '.join(extras)}")
-    if args.command is None:
-        parser.print_help()
-        return 0
+    if args.command is None:  # a usage error, as in argparse: the help on stderr, status 2
+        parser.print_help(sys.stderr)
+        return 2
     prog = f"centrality-vision {args.command}"
     args._warnings = []
 

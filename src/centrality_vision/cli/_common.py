@@ -197,6 +197,7 @@ def check_output_places(args) -> None:
         places.append(("--out", out))
         if out.suffix.lower() not in (".json", ".npz"):
             places.append(("--out (its .json record beside it)", out.with_suffix(".json")))
+            _check_sidecar(out, out.with_suffix(".json"))
     if getattr(args, "plot", None):
         places.append(("--plot", Path(args.plot)))
     for option, path in places:
@@ -220,6 +221,36 @@ def check_output_places(args) -> None:
                 pass
         except OSError as exc:
             raise InputError(f"{option}: cannot write {path}: {ancestor} refuses new files ({exc.strerror}).") from None
+
+
+def _check_sidecar(out: Path, sidecar: Path) -> None:
+    """An InputError when writing the record of ``out`` would replace a file that is not
+    ``out``'s own earlier record: the record of another output sharing the stem (``al.csv``
+    then ``al.ply``: ``al.csv`` would be left described by the other run), or a file the
+    user wrote. A record whose output no longer exists is replaced."""
+    import json
+
+    from ..exceptions import InputError
+
+    if not sidecar.is_file():
+        return
+    try:
+        record = json.loads(sidecar.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError):
+        record = None
+    owner = record.get("file") if isinstance(record, dict) and "command" in record else None
+    if owner == out.name or (isinstance(owner, str) and not (out.parent / owner).exists()):
+        return
+    if isinstance(owner, str):
+        what = f"the record of {owner}, another output"
+    elif isinstance(record, dict) and "command" in record:
+        what = "the output of an earlier run (--out FILE.json)"
+    else:
+        what = "a file that centrality-vision did not write"
+    raise InputError(
+        f"--out: the record of {out.name} goes to {sidecar}, which is {what}; writing it would replace that "
+        "file. Choose another name for --out (or remove the file)."
+    )
 
 
 def _file_identity(path: Path) -> tuple[int, int]:

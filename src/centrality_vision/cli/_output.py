@@ -30,12 +30,12 @@ import numpy as np
 __all__ = ["parameters_block", "to_jsonable", "write_json", "write_npz", "sidecar_path", "write_output"]
 
 
-def parameters_block(options: Mapping, *, seed=None) -> dict:
-    """The ``"parameters"`` block: every option, the seed and the package version."""
+def parameters_block(options: Mapping) -> dict:
+    """The ``"parameters"`` block: every option that applied (``--seed`` among them where the
+    run drew at random) and the package version."""
     from .. import __version__
 
     block = {key: to_jsonable(value) for key, value in options.items() if not callable(value)}
-    block["seed"] = to_jsonable(seed)
     block["version"] = __version__
     return block
 

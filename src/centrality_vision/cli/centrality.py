@@ -6,6 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
+from .._validation import counted
 from ._common import (
     CENTRALITY_NAMES,
     GRAPH_OPTION_KINDS,
@@ -168,7 +169,7 @@ def run(args: argparse.Namespace) -> int:
         say(f"read a {mask.shape[0]}x{mask.shape[1]} image with {int(mask.sum())} foreground pixels from {args.input}")
     else:
         points = read_point_file(args.input, args)
-        say(f"read {points.shape[0]} points in {points.shape[1]}D from {args.input}")
+        say(f"read {counted(points.shape[0], 'point')} in {points.shape[1]}D from {args.input}")
         graph, extra = data_graph(
             points, args.graph, k=args.k, lam=args.lam, source=args.input, progress=progress_on(args)
         )

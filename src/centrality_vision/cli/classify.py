@@ -7,6 +7,7 @@ import re
 import time
 from pathlib import Path
 
+from .._validation import counted
 from ._common import (
     CENTRALITY_NAMES,
     MAX_BINS,
@@ -158,6 +159,9 @@ def _read_labels(path) -> dict:
         raise InputError(f"--labels: {path}: not a readable CSV file ({exc}).") from None
 
 
+_APPLIES = {"trees": ("classifier", ("forest",))}  # the options one classifier uses
+
+
 def _classifier(name: str, seed: int, trees: int = 300):
     from sklearn.ensemble import RandomForestClassifier
     from sklearn.naive_bayes import GaussianNB
@@ -178,7 +182,7 @@ def run(args: argparse.Namespace) -> int:
     from ..exceptions import InputError
     from ..io import IMAGE_SUFFIXES, read_shape
 
-    refuse_unused(args, {"trees": ("classifier", ("forest",))}, {"classifier": args.classifier})
+    refuse_unused(args, _APPLIES, {"classifier": args.classifier})
     started = time.perf_counter()
     folder = Path(args.images_dir)
     if not folder.is_dir():
@@ -201,7 +205,7 @@ def run(args: argparse.Namespace) -> int:
         labels = np.array([label_of(path) for path in files])
     images = [read_shape(path, foreground=args.foreground) for path in files]
     classes, counts = np.unique(labels, return_counts=True)
-    say(f"read {len(files)} images in {classes.size} classes from {folder}")
+    say(f"read {counted(len(files), 'image')} in {counted(classes.size, 'class', 'classes')} from {folder}")
     if classes.size < 2:
         raise InputError(
             f"{folder}: classification needs at least 2 classes; every image is labelled {str(classes[0])!r}."
@@ -214,7 +218,7 @@ def run(args: argparse.Namespace) -> int:
         )
         raise InputError(
             f"{folder}: every class needs at least 2 images for cross-validation; "
-            f"{len(lonely)} class(es) have 1, e.g. {lonely[0]!r}{hint}."
+            f"{counted(len(lonely), 'class has', 'classes have')} 1, e.g. {lonely[0]!r}{hint}."
         )
     n_splits = min(args.folds, smallest)
     note = None
@@ -268,8 +272,11 @@ def run(args: argparse.Namespace) -> int:
     record = {
         "command": NAME,
         "parameters": parameters_block(
-            {**options(args), "histogram": histogram_params, "classifier_estimator": " ".join(repr(model).split())},
-            seed=args.seed,
+            {
+                **options(args, applies=_APPLIES),
+                "histogram": histogram_params,
+                "classifier_estimator": " ".join(repr(model).split()),
+            }
         ),
         "cross_validation": {"splitter": "StratifiedKFold(shuffle=True)", "n_splits": n_splits, "note": note},
         "accuracy": accuracy,
@@ -298,7 +305,7 @@ def run(args: argparse.Namespace) -> int:
         written.append(Path(args.plot))
     print(
         f"accuracy {accuracy:.3f} (mean of {n_splits} cross-validation folds; {correct} of {len(files)} images "
-        f"right, {classes.size} classes)"
+        f"right, {counted(classes.size, 'class', 'classes')})"
     )
     say(f"wrote {', '.join(map(str, written))}")
     return 0

@@ -6,6 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
+from .._validation import counted
 from ._common import (
     GRAPH_OPTION_KINDS,
     GRAPH_PHRASES,
@@ -61,7 +62,7 @@ def run(args: argparse.Namespace) -> int:
     applies = {dest: ("kind", kinds) for dest, kinds in GRAPH_OPTION_KINDS.items()}
     refuse_unused(args, applies, vars(args))
     points = read_point_file(args.points, args)
-    say(f"read {points.shape[0]} points in {points.shape[1]}D from {args.points}")
+    say(f"read {counted(points.shape[0], 'point')} in {points.shape[1]}D from {args.points}")
     graph, extra = data_graph(points, args.kind, k=args.k, lam=args.lam, source=args.points, progress=progress_on(args))
     i, j, length = edge_list(points, graph)
     say(f"{args.kind} graph: {points.shape[0]} nodes, {i.size} edges")

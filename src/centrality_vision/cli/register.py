@@ -6,6 +6,7 @@ import argparse
 import time
 from pathlib import Path
 
+from .._validation import counted
 from ._common import (
     CENTRALITY_NAMES,
     GPD_GRAPHS,
@@ -204,14 +205,16 @@ _APPLIES = {
 
 
 def _method_defaults(args: argparse.Namespace) -> None:
-    """``--max-iter`` and ``--tol`` not given: the estimator's own defaults (ICP's differ from
-    CPD's; one CLI default for both ran ICP with CPD's limits), kept in ``args`` for the record."""
+    """Options not given: the estimator's own defaults (ICP's ``--max-iter`` and ``--tol`` differ
+    from CPD's; one CLI default for both ran ICP with CPD's limits), kept in ``args`` so that
+    the record shows the values the run used, not null."""
     import inspect
 
     from ..registration import ICP, RigidCPD
 
     signature = inspect.signature(ICP if args.method == "icp" else RigidCPD).parameters
-    for name in ("max_iter", "tol"):
+    names = ("max_iter", "tol", "trim", "metric") if args.method == "icp" else ("max_iter", "tol")
+    for name in names:
         if getattr(args, name) is None:
             setattr(args, name, signature[name].default)
 
@@ -239,8 +242,8 @@ def _estimator(args: argparse.Namespace, callback):
             max_iter=args.max_iter,
             tol=args.tol,
             max_distance=args.max_distance,
-            trim=0.0 if args.trim is None else args.trim,
-            metric=args.metric or "point_to_point",
+            trim=args.trim,
+            metric=args.metric,
             callback=callback,
         )
     common = {
@@ -310,7 +313,7 @@ def _read_landmarks(path):
     if pairs.shape[1] != 2:
         raise InputError(
             f"--landmarks {path}: expected two columns, a moving row and a fixed row per line; "
-            f"got {pairs.shape[1]} columns."
+            f"got {counted(pairs.shape[1], 'column')}."
         )
     fraction = pairs[pairs != np.round(pairs)]
     if fraction.size:
@@ -374,7 +377,8 @@ def run(args: argparse.Namespace) -> int:
         **{f"{name}: ": f"{label}: " for name in ("RigidCPD", "AffineCPD", "NonRigidCPD", "ICP")},
     }
     say(
-        f"{label}: moving {args.moving} ({moving.shape[0]} points), fixed {args.fixed} ({fixed.shape[0]} points), "
+        f"{label}: moving {args.moving} ({counted(moving.shape[0], 'point')}), "
+        f"fixed {args.fixed} ({counted(fixed.shape[0], 'point')}), "
         f"{moving.shape[1]}D"
     )
     watch = _Watch(total=args.max_iter, label=label, show=progress_on(args), true_moving=true_moving)
@@ -405,7 +409,7 @@ def run(args: argparse.Namespace) -> int:
     transform = transform_record(estimator.transform_)
     record = {
         "command": NAME,
-        "parameters": parameters_block(options(args, applies=_APPLIES), seed=args.seed),
+        "parameters": parameters_block(options(args, applies=_APPLIES, unused=() if args.graph == "knn" else ("k",))),
         "estimator": " ".join(repr(estimator).split()),
         "transform": transform,
         "n_iter": int(estimator.n_iter_),

@@ -254,12 +254,18 @@ def load_results(path) -> dict:
     other JSON and a record edited by hand are skipped (their units are recomputed). The
     checksum guards against damage and stray edits, not forgery: a record whose checksum was
     recomputed after an edit is taken as it stands."""
+    return _read_results(path)[0]
+
+
+def _read_results(path) -> tuple[dict, int]:
+    """:func:`load_results` and the number of lines it skipped as damaged."""
     path = Path(path)
-    out = {}
+    out, damaged = {}, 0
     if not path.exists():
-        return out
+        return out, damaged
     with path.open("rb") as handle:
         for raw in handle:
+            damaged += 1  # until the line proves whole
             if not raw.endswith(b"\n"):
                 break  # the process died while writing this line
             try:
@@ -271,7 +277,8 @@ def load_results(path) -> dict:
             if record.get("check") != _checksum(record["key"], record["result"]):
                 continue
             out[record["key"]] = record["result"]
-    return out
+            damaged -= 1
+    return out, damaged
 
 
 class _Appender:
@@ -367,9 +374,15 @@ def run_units(
     if path.exists() and not path.is_file():
         raise InputError(f"`path` must be a results file (JSON lines); got {str(path)!r}, which is a folder.")
     ids = {u.key: unit_id(u) for u in units}
-    stored = load_results(path)
+    stored, damaged = _read_results(path)
     done = {key: stored[i] for key, i in ids.items() if i in stored}
     todo = [u for u in units if u.key not in done]
+    if damaged:  # (a resume that recomputes work says why)
+        print(
+            f"{path}: skipped {damaged} damaged line{'' if damaged == 1 else 's'} (a write cut short, or a record "
+            "edited by hand); a unit of this run stored there is computed again.",
+            file=sys.stderr,
+        )
     other = len(set(stored) - set(ids.values()))
     if other:
         print(

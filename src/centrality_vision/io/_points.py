@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import _describe, check_bool, is_real_dtype, nearest_existing
+from .._validation import _describe, check_bool, counted, is_real_dtype, nearest_existing
 from ..exceptions import InputError
 
 __all__ = ["POINT_SUFFIXES", "WRITE_SUFFIXES", "read_points", "write_points"]
@@ -291,7 +291,11 @@ def _pick_columns(path: Path, table: _Table, columns, n_dims) -> list[int]:
     if len(picked) not in n_dims:
         # (choosing columns helps only where the file has more of them than wanted)
         hint = "" if columns is not None or len(picked) < min(n_dims) else _COLUMNS_HINT
-        raise InputError(f"{path}: points must have {wanted} coordinates; got {len(picked)} columns{shown}{hint}.")
+        if columns is not None and names:  # the picked columns, not all the file's
+            shown = f" ({', '.join(repr(names[j]) for j in picked)})"
+        raise InputError(
+            f"{path}: points must have {wanted} coordinates; got {counted(len(picked), 'column')}{shown}{hint}."
+        )
     return picked
 
 
