@@ -326,3 +326,19 @@ def test_a_precomputed_mwme_matrix_names_what_is_wrong_and_where():
     distances[0, 0], distances[0, 2], distances[2, 0] = 0.0, 0.0, 0.0
     with pytest.raises(InputError, match=r"off-diagonal entry \(0, 2\) is 0 \(distinct points"):
         mwme_graph(distances, metric="precomputed")
+
+
+def test_numbers_held_as_objects_are_points_as_a_graphs_are_edge_lengths():
+    # audit 25 L5: an object array of numbers (a mixed-type DataFrame's .values, ints past
+    # int64) was refused as points but read as a graph; now both read it, and keep the input
+    held = np.array([[0, 0], [1, 0], [0, 1.5]], dtype=object)
+    before = held.copy()
+    np.testing.assert_array_equal(
+        graphs.delaunay_graph(held).toarray(), graphs.delaunay_graph(before.astype(float)).toarray()
+    )
+    assert held.dtype == object and np.array_equal(held, before)
+    big = graphs.knn_graph([[0, 0], [1, 0], [0, 10**20]], n_neighbors=1)  # 10**20 makes numpy choose objects
+    assert big.shape == (3, 3)
+    for bad in ([[0, None], [1, 1]], [[0, "1"], [1, 1]], [[0, 10**400], [1, 1]]):
+        with pytest.raises(TypeError, match="`points` must hold real numbers"):
+            graphs.delaunay_graph(np.array(bad, dtype=object))

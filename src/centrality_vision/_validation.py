@@ -8,6 +8,7 @@ Nothing here modifies its input: arrays are copied when they would be changed.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import numbers
 from collections.abc import Iterable
@@ -79,6 +80,11 @@ def as_real_array(value, *, name: str, shape: str = "an array") -> np.ndarray:
         raise InputError(f"`{name}` must be {shape}; got {_describe(value)} ({exc}).") from None
     if np.iscomplexobj(arr):
         raise TypeError(f"`{name}` must hold real numbers; got complex dtype {arr.dtype}.")
+    if arr.dtype == object and arr.size and all(isinstance(item, numbers.Real) for item in arr.flat):
+        # numbers held as objects (a mixed-type DataFrame's .values, Python ints past int64)
+        # are numbers: as floats, as a graph's object array is read (a copy; the input is kept)
+        with contextlib.suppress(OverflowError):  # an int past float's range: refused below
+            arr = arr.astype(np.float64)
     if not is_real_dtype(arr.dtype):
         raise TypeError(f"`{name}` must hold real numbers; got {_describe(value if arr.dtype == object else arr)}.")
     return arr
