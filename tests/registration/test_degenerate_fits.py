@@ -149,6 +149,35 @@ def test_a_fixed_set_of_one_point_is_not_reported_as_a_registration(estimator, n
     assert not estimator.converged_
 
 
+@pytest.mark.parametrize("estimator", [RigidCPD(), RigidCPD(scale=False), ICP()], ids=repr)
+def test_a_fixed_set_that_leaves_a_turn_free_is_named(estimator):
+    # audit 27 F4/F5: a moving blob fitted onto 2 points, 3 collinear points or a line of 50 in
+    # 3D came back converged_=True with no warning (the turn about the line is arbitrary), and
+    # ICP said nothing where RigidCPD warned of a moving set on one line
+    rng = np.random.default_rng(4)
+    blob = rng.normal(size=(40, 3))
+    for fixed in (np.array([[0.0, 0, 0], [1, 2, 3]]), np.outer(np.linspace(-1, 1, 50), [1.0, 0.5, -2])):
+        with pytest.warns(UserWarning, match=r"`fixed` spans 1 of 3 dimensions \(\d+ points\): a rotation onto it"):
+            estimator.fit(blob, fixed)
+    with pytest.warns(UserWarning, match=r"`moving` spans 1 of 3 dimensions \(40 points\)"):
+        estimator.fit(np.outer(np.linspace(-1, 1, 40), [1.0, 2, 0]), blob)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        estimator.fit(blob, blob[:, [1, 2, 0]] + 0.1)  # a plane or more on both sides: determined
+        estimator.fit(blob[:, :2], blob[::2, :2])  # and in 2D
+
+
+def test_an_affine_fit_onto_a_flat_fixed_set_is_named():
+    blob = np.random.default_rng(5).normal(size=(40, 3))
+    plane = blob.copy()
+    plane[:, 2] = 0
+    with pytest.warns(UserWarning, match=r"`fixed` spans 2 of 3 dimensions \(40 points\): an affine map onto it"):
+        AffineCPD().fit(blob, plane)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        AffineCPD().fit(blob, blob @ np.diag([1.0, 2, 0.5]))
+
+
 def test_rigid_cpd_warns_when_the_moving_points_do_not_determine_a_rotation():
     fixed = np.random.default_rng(1).random((20, 3))
     line = np.c_[np.arange(5.0), 2 * np.arange(5.0), np.zeros(5)]

@@ -38,6 +38,14 @@ def test_gpd_nested_parameters():
     assert gpd.get_params(deep=True)["base_cpd__w"] == 0.1
     gpd.set_params(base_cpd__w=0.2, centrality="degree")
     assert gpd.base_cpd.w == 0.2 and gpd.centrality == "degree"
+    # audit 27 F8: on the default GPD (base_cpd=None, meaning RigidCPD()) a grid search over
+    # base_cpd__* raised a bare AttributeError about None
+    from sklearn.base import clone
+
+    default = GPD()
+    tuned = clone(default).set_params(base_cpd__w=0.3, base_cpd__scale=False)
+    assert tuned.base_cpd.w == 0.3 and tuned.base_cpd.scale is False and default.base_cpd is None
+    assert GPD().set_params(base_cpd=AffineCPD(), base_cpd__w=0.1).base_cpd.get_params()["w"] == 0.1
 
 
 @pytest.mark.parametrize("estimator", ESTIMATORS, ids=lambda e: type(e).__name__)

@@ -66,6 +66,13 @@ def test_weak_landmarks_give_way_to_the_data(fish, rot2):
         ([(0, 500)], ValueError, "fixed indices"),
         ([(-1, 0)], ValueError, "moving indices"),
         ([(0, 1), (0, 2)], ValueError, "at most once"),
+        # audit 27 F9: two moving points pinned to one fixed point were accepted (a rigid fit
+        # ended 0.36 apart, converged_=True)
+        (
+            [(5, 0), (3, 7), (30, 0)],
+            ValueError,
+            "each fixed point at most once; got fixed index 0 for moving points 5 and 30",
+        ),
         ([(0.5, 1)], ValueError, "integer"),
         ("ab", TypeError, "landmarks"),
         # found by a fuzz run: an overflow, numpy's messages, or read as indices before

@@ -363,6 +363,19 @@ class GPD(BaseEstimator):
         self.graph_neighbors = graph_neighbors
         self.k = k
 
+    def set_params(self, **params):
+        """Set parameters, nested ones too (``base_cpd__w=0.2``, as in a grid search): on a GPD
+        whose ``base_cpd`` is None they apply to its default, ``RigidCPD()``.
+
+        Examples
+        --------
+        >>> GPD().set_params(base_cpd__w=0.2).base_cpd
+        RigidCPD(w=0.2)
+        """
+        if self.base_cpd is None and "base_cpd" not in params and any(key.startswith("base_cpd__") for key in params):
+            self.base_cpd = RigidCPD()  # (sklearn's own would call None.set_params: an AttributeError)
+        return super().set_params(**params)
+
     def __getattr__(self, name):
         # the base estimator's fitted attributes, read through estimator_ (no copies kept)
         if name.endswith("_") and not name.startswith("_"):

@@ -21,7 +21,15 @@ from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_f
 from .._warnings import warn
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
 from ..transforms import RigidTransform, SimilarityTransform, least_squares_similarity, power_of_two_scale
-from ._cpd import IterationInfo, _Frame, _start_within_reach, _stops, nearest_score, one_point_fixed
+from ._cpd import (
+    IterationInfo,
+    _Frame,
+    _start_within_reach,
+    _stops,
+    nearest_score,
+    one_point_fixed,
+    warn_rotation_spans,
+)
 
 __all__ = ["ICP", "estimate_normals"]
 
@@ -304,6 +312,7 @@ class ICP(BaseEstimator):
                 f"got {fixed.shape[0]}."
             )
         frame, moving_n, fixed_n = _Frame.of(moving, fixed, True, same_centre=True)
+        warn_rotation_spans(moving, fixed, "ICP: ")  # (after the frame's errors: no warning before one)
         true_n = frame.true_in(true_moving)
         # the normalised coordinates carry the rounding of the caller's (an offset of 1e4
         # leaves ~1e-12 of a unit radius): residuals below it are rounding error too
