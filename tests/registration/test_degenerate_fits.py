@@ -280,3 +280,17 @@ def test_what_the_global_search_needs_is_named_with_it(moving, fixed, match):
     with pytest.raises(ValueError, match=r"`RigidCPD.init`='global' " + match), warnings.catch_warnings():
         warnings.filterwarnings("ignore", "`moving` spans 0 of 2", UserWarning)  # (one point: rightly)
         RigidCPD(init="global", random_state=0).fit(moving, fixed)
+
+
+def test_a_mirror_image_is_fitted_by_affine_cpd_from_a_mirrored_start_only():
+    # audit 27 F2, as docs/conventions.rst states it: the determinant cannot pass through 0
+    from centrality_vision.datasets import load_fish
+    from centrality_vision.transforms import AffineTransform
+
+    y = load_fish().moving
+    c, s = np.cos(0.4), np.sin(0.4)
+    x = y @ (np.array([[c, -s], [s, c]]) @ np.diag([-1.0, 1.0])).T + [3.0, 1.0]
+    proper = AffineCPD().fit(y, x)
+    assert np.linalg.det(proper.transform_.linear) > 0 and np.abs(proper.moving_transformed_ - x).max() > 0.5
+    mirrored = AffineCPD(init=AffineTransform(np.diag([-1.0, 1.0]), np.zeros(2))).fit(y, x)
+    np.testing.assert_allclose(mirrored.moving_transformed_, x, atol=1e-9)
