@@ -254,7 +254,7 @@ def _arguments(argv=None):
     parser.add_argument(
         "--out",
         default=os.path.join(HERE, "..", "results", "benchmarks", "outlier_weight.txt"),
-        help="--models: the file the table is appended to ('-': none; default: %(default)s)",
+        help="--models and --far-start: the file the table is appended to ('-': none; default: %(default)s)",
     )
     return parser.parse_args(argv)
 

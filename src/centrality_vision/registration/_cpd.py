@@ -36,7 +36,7 @@ from sklearn.base import BaseEstimator
 from sklearn.utils.validation import check_is_fitted
 
 from .._seeding import as_generator
-from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int
+from .._validation import ANY_DIMS, as_points, check_bool, check_choice, check_float, check_int, counted
 from .._warnings import warn
 from ..exceptions import CollapseWarning, ConvergenceWarning, InputError
 from ..transforms import (
@@ -505,15 +505,14 @@ def _as_landmarks(landmarks, n_moving: int, n_fixed: int) -> np.ndarray | None:
         raise InputError("`landmarks` must pin each moving point at most once; got a repeated moving index.")
     # two moving points pinned to one fixed point: no transform puts them both there (a rigid
     # fit ended 0.36 apart, "converged")
-    fixed_index, first = np.unique(arr[:, 1], return_index=True)
-    if fixed_index.size != arr.shape[0]:
-        again = next(i for i in range(arr.shape[0]) if i not in set(first.tolist()))
-        j = int(arr[again, 1])
-        other = int(arr[arr[:, 1] == j][0, 0])
-        raise InputError(
-            f"`landmarks` must pin each fixed point at most once; got fixed index {j} for moving points {other} "
-            f"and {int(arr[again, 0])}."
-        )
+    pinned = {}  # fixed index -> the moving point pinned to it
+    for i, j in pairs:
+        if j in pinned:
+            raise InputError(
+                f"`landmarks` must pin each fixed point at most once; got fixed index {j} for moving points "
+                f"{pinned[j]} and {i}."
+            )
+        pinned[j] = i
     return arr
 
 
@@ -1416,10 +1415,6 @@ def _stops(answer) -> bool:
     return isinstance(answer, (bool, np.bool_)) and bool(answer)
 
 
-def _count(n: int, noun: str) -> str:
-    return f"{n} {noun}" if n == 1 else f"{n} {noun}s"
-
-
 def _box_weight(w_fraction: float, n_fixed: int, box: float) -> float:
     """CPD's outlier weight (of a density 1/N) for w='auto''s share ``w_fraction`` of a uniform
     density over a box of volume ``box``."""
@@ -1488,15 +1483,15 @@ def warn_rotation_spans(moving: np.ndarray, fixed: np.ndarray, who: str = "") ->
     shape = "point" if dim == 2 else "line"
     if rank < dim - 1:
         warn(
-            f"{who}`moving` spans {rank} of {dim} dimensions ({_count(moving.shape[0], 'point')}): a rotation is not "
+            f"{who}`moving` spans {rank} of {dim} dimensions ({counted(moving.shape[0], 'point')}): a rotation is not "
             f"determined by it (it takes points not all on one {shape}); `transform_` is right on `moving` only.",
             UserWarning,
         )
     rank = _span(fixed)
     if 0 < rank < dim - 1:
         warn(
-            f"{who}`fixed` spans {rank} of {dim} dimensions ({_count(fixed.shape[0], 'point')}): a rotation onto it is "
-            f"not determined (it takes points not all on one {shape}); the turn about it is arbitrary, not a "
+            f"{who}`fixed` spans {rank} of {dim} dimensions ({counted(fixed.shape[0], 'point')}): a rotation onto it "
+            f"is not determined (it takes points not all on one {shape}); the turn about it is arbitrary, not a "
             "registration.",
             UserWarning,
         )
@@ -1656,7 +1651,7 @@ class AffineCPD(_CPD):
         dim, rank = moving.shape[1], _span(moving)
         if rank < dim:
             warn(
-                f"`moving` spans {rank} of {dim} dimensions ({_count(moving.shape[0], 'point')}): an affine transform "
+                f"`moving` spans {rank} of {dim} dimensions ({counted(moving.shape[0], 'point')}): an affine transform "
                 f"is not determined by it (it takes at least {dim + 1} points, not all on one "
                 f"{'line' if dim == 2 else 'hyperplane'}); `transform_` is right on `moving` only.",
                 UserWarning,
@@ -1664,7 +1659,7 @@ class AffineCPD(_CPD):
         rank = _span(fixed)
         if 0 < rank < dim:  # (one point: the collapse one_point_fixed names)
             warn(
-                f"`fixed` spans {rank} of {dim} dimensions ({_count(fixed.shape[0], 'point')}): an affine map onto it "
+                f"`fixed` spans {rank} of {dim} dimensions ({counted(fixed.shape[0], 'point')}): an affine map onto it "
                 f"flattens the moving set into it (it takes at least {dim + 1} points, not all on one "
                 f"{'line' if dim == 2 else 'hyperplane'}); `transform_` is singular, not a registration.",
                 UserWarning,
