@@ -1029,7 +1029,7 @@ class _CPD(BaseEstimator):
                     # from CPD's posterior: a centrality prior's histogram weights lower the
                     # inlier mass and would inflate the estimate
                     n_p = post.n_p if current_prior is None else e_step(moving_t_used, sigma2_used, w_e, None).n_p
-                    w_fraction = min(max(1.0 - n_p / n_fixed, 0.0), _AUTO_W_MAX)
+                    w_fraction = _w_estimate(n_p, n_fixed)
                 iteration += 1
                 if bar is not None:
                     bar.update(1)
@@ -1041,7 +1041,7 @@ class _CPD(BaseEstimator):
         if holding:  # (the sets coincided, or max_iter or the callback came, before EM settled)
             # the estimate, and the final posteriors under it: w_, posteriors_ and posterior()
             # agree, and the run is scored as the other one is
-            w_fraction = min(max(1.0 - post.n_p / n_fixed, 0.0), _AUTO_W_MAX)
+            w_fraction = _w_estimate(post.n_p, n_fixed)
             w_e = _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2))
             post = e_step(moving_t, sigma2, w_e, current_prior)
             final_objective = post.neg_log_likelihood + self._penalty(state) + n_fixed * n_dims * log_s
@@ -1413,6 +1413,12 @@ def _stops(answer) -> bool:
     """Whether a callback's answer asks the fit to stop: ``True`` or ``numpy.True_`` (what a
     comparison returns); None, False and anything else go on."""
     return isinstance(answer, (bool, np.bool_)) and bool(answer)
+
+
+def _w_estimate(n_p: float, n_fixed: int) -> float:
+    """w='auto''s share of outliers from the posterior's inlier mass ``n_p``: ``1 - Np / N``,
+    within [0, :data:`_AUTO_W_MAX`]."""
+    return min(max(1.0 - n_p / n_fixed, 0.0), _AUTO_W_MAX)
 
 
 def _box_weight(w_fraction: float, n_fixed: int, box: float) -> float:
