@@ -153,3 +153,21 @@ def test_auto_w_collapse_on_a_flat_set_says_how_to_register_it(fish_pair):
     with warnings.catch_warnings():
         warnings.simplefilter("error", CollapseWarning)
         RigidCPD(w="auto").fit(y, cluttered)  # the same sets in 2D
+
+
+def test_auto_w_at_the_end_of_a_held_gpd_run_is_from_cpds_posterior(fish, rot2):
+    """A run that ends before EM settles (here a callback stops it) estimates w once at its end. Under
+    GPD that estimate took the posterior with the centrality prior, whose histogram weights
+    lower the inlier mass, while every estimate inside the loop takes CPD's posterior: w_ read
+    0.11 where the loop's rule gives 0.014 on the same state."""
+    from centrality_vision.registration._cpd import _AUTO_W_START, _w_estimate
+    from centrality_vision.registration._estep import dense_posterior
+
+    rng = np.random.default_rng(3)
+    fixed = np.vstack([fish @ rot2(20).T, rng.uniform(-1.5, 1.5, (30, 2))])
+    gpd = GPD(RigidCPD(w="auto", callback=lambda info: info.iteration >= 3)).fit(fish, fixed)
+    assert len(gpd.history_["w"]) == 4 and set(gpd.history_["w"]) == {_AUTO_W_START}  # held to the end
+    moving_t, fixed_n, sigma2, _, prior = gpd.estimator_._posterior_state
+    assert prior is not None
+    n_p = dense_posterior(moving_t, fixed_n, sigma2, _AUTO_W_START).sum()
+    assert gpd.w_ == pytest.approx(_w_estimate(n_p, len(fixed)), abs=1e-9)

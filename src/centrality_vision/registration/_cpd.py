@@ -1040,8 +1040,9 @@ class _CPD(BaseEstimator):
         final_objective = history["objective"][-1]
         if holding:  # (the sets coincided, or max_iter or the callback came, before EM settled)
             # the estimate, and the final posteriors under it: w_, posteriors_ and posterior()
-            # agree, and the run is scored as the other one is
-            w_fraction = _w_estimate(post.n_p, n_fixed)
+            # agree, and the run is scored as the other one is; from CPD's posterior, as in the loop
+            n_p = post.n_p if current_prior is None else e_step(moving_t, sigma2, w_fraction, None).n_p
+            w_fraction = _w_estimate(n_p, n_fixed)
             w_e = _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2))
             post = e_step(moving_t, sigma2, w_e, current_prior)
             final_objective = post.neg_log_likelihood + self._penalty(state) + n_fixed * n_dims * log_s
