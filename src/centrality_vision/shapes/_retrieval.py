@@ -95,6 +95,33 @@ def _largest_component(mask: np.ndarray) -> np.ndarray:
     return labels == keep
 
 
+def _joined(resized: np.ndarray, core: np.ndarray) -> np.ndarray:
+    """The 8-connected part of ``resized >= t`` that holds every pixel of ``core``, at the
+    highest threshold ``t`` (found by bisection, to 2^-20) at which one part holds them all.
+
+    ``resized`` is an enlarged connected mask, interpolated bilinearly: above zero it is one
+    part, so a threshold that joins ``core`` exists."""
+    eight = np.ones((3, 3))
+
+    def part(threshold):
+        labels, _ = ndimage.label(resized >= threshold, structure=eight)
+        found = np.unique(labels[core])
+        return labels == found[0] if found.size == 1 and found[0] > 0 else None
+
+    low, high = float(np.finfo(np.float32).tiny), 0.5
+    joined = part(low)
+    if joined is None:  # (cannot happen for an interpolated connected mask; kept as it was)
+        return core
+    for _ in range(20):
+        middle = 0.5 * (low + high)
+        candidate = part(middle)
+        if candidate is None:
+            high = middle
+        else:
+            low, joined = middle, candidate
+    return joined
+
+
 def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
     """The largest 8-connected part of a mask, cropped and resized to about ``resolution**2``
     pixels (of parts with equal areas, the one with the largest second moment about its
@@ -104,7 +131,10 @@ def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
     images are first averaged over blocks (so thin parts are not aliased away), then
     resized with bilinear interpolation and thresholded at one half (where that keeps
     less than half the area, as for parts thinner than a pixel at this size, the
-    ``resolution**2`` brightest pixels are kept instead). A two-pixel
+    ``resolution**2`` brightest pixels are kept instead; where an enlarged part falls
+    apart, as a one-pixel line that steps diagonally does, the threshold is lowered, by
+    bisection, until the part is whole, and the part is closed over half an input pixel).
+    A two-pixel
     margin of background is added. This makes every descriptor independent of the
     image size and bounds its cost.
 
@@ -142,6 +172,15 @@ def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
     shape = (max(1, round(image.shape[0] * scale)), max(1, round(image.shape[1] * scale)))
     resized = resize(image, shape, order=1, anti_aliasing=False)
     small = resized > 0.5
+    if scale > 1 and ndimage.label(small, structure=np.ones((3, 3)))[1] > 1:
+        # enlarged, a part one pixel wide that steps diagonally interpolates to exactly one
+        # half between its pixels and fell apart (a 20-pixel diagonal line kept a fifth of
+        # itself): the threshold is lowered until it is whole again, and the notches left
+        # where it joins (a chain of diamonds) are closed over half an input pixel
+        small = _joined(resized, small)
+        radius = max(1, round(0.5 * scale))
+        disk = np.hypot(*np.mgrid[-radius : radius + 1, -radius : radius + 1]) <= radius
+        small = ndimage.binary_closing(np.pad(small, radius), structure=disk)[radius:-radius, radius:-radius]
     target = resolution**2
     if small.sum() < 0.5 * target:
         # parts thinner than a pixel at this size (a comb's teeth, a line) average below one
