@@ -432,3 +432,19 @@ def test_a_3d_set_given_to_a_2d_method_is_pointed_to_mwme(method):
     with pytest.raises(InputError) as info:  # a wrong shape that is not 3D gets no such hint
         match(points[:, :1], points[:, :1], method=method)
     assert "mwme" not in str(info.value)
+
+
+@pytest.mark.parametrize("method", ["robust", "mwme"])
+def test_points_closer_than_the_graphs_resolve_are_refused_by_the_matchers_name(method):
+    """The matchers measured the closest pair against the normalised coordinates' range, the
+    graphs they build against the longest distance (up to 2 sqrt(d) of that range): a pair
+    in between passed the first check and the second refused it, naming `point_sets[0]` or
+    `points`, which the caller never passed."""
+    square = np.array([[-1.0, -1], [1, -1], [-1, 1], [1, 1], [0, 0]])
+    close, other = np.vstack([square, [2.4e-150, 0]]), np.vstack([square, [0.5, 0]])  # (mwme: equal sizes)
+    with pytest.raises(InputError, match=r"^`moving` has points closer than 1e-150 times its diameter"):
+        match(close, other, method=method)
+    with pytest.raises(InputError, match=r"^`fixed` has points closer"):
+        match(other, close, method=method)
+    resolved = np.vstack([square, [1e-140, 0]])  # resolved by both: matched onto itself
+    np.testing.assert_allclose(match(resolved, resolved, method=method).transform.scale, 1.0)

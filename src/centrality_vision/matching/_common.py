@@ -8,6 +8,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..exceptions import InputError
+from ..graphs._entropy import MIN_DISTANCE_RATIO
 from ..transforms import SimilarityTransform, least_squares_similarity
 
 __all__ = ["MatchResult", "Normalised", "normalise", "similarity_to_units", "assign_nearest"]
@@ -100,17 +101,22 @@ def normalise(points: np.ndarray) -> Normalised:
     return Normalised(np.ldexp(centred, -second), centre, first, second)
 
 
-#: Smallest distance between two points, relative to the set's extent, that matching accepts:
-#: below it the local graphs' squared distances underflow.
-MIN_RELATIVE_SPACING = 1e-150
+#: Smallest distance between two points, relative to the set's diameter, that matching accepts:
+#: below it the local graphs' squared distances underflow (the graphs' own limit)
+MIN_RELATIVE_SPACING = MIN_DISTANCE_RATIO
 
 
 def check_resolution(points: np.ndarray, name: str, *, original: np.ndarray) -> None:
     """Refuse a set whose closest points coincide, or nearly, once centred and scaled to
-    (-1, 1) (``points``, from :func:`normalise`); ``original``: the set as given, for the message."""
+    (-1, 1) (``points``, from :func:`normalise`); ``original``: the set as given, for the message.
+
+    "Nearly" is the graphs' limit: the closest pair within :data:`MIN_RELATIVE_SPACING` of the
+    set's diameter, here its bounding box's diagonal (at least the diameter: a set accepted
+    here is accepted by the graphs the matchers build on it)."""
     dist, index = cKDTree(points).query(points, k=2)
     row = int(np.argmin(dist[:, 1]))
-    spacing = float(dist[row, 1])
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    spacing = float(dist[row, 1]) / diagonal if diagonal > 0 else 0.0
     if spacing > MIN_RELATIVE_SPACING:
         return
     other = int(index[row, 1]) if index[row, 1] != row else int(index[row, 0])  # ties at 0: either order
@@ -128,7 +134,7 @@ def check_resolution(points: np.ndarray, name: str, *, original: np.ndarray) -> 
             "the origin, subtract a point near it from all coordinates first."
         )
     raise InputError(
-        f"`{name}` has points closer than {MIN_RELATIVE_SPACING:g} times its extent "
+        f"`{name}` has points closer than {MIN_RELATIVE_SPACING:g} times its diameter "
         f"(rows {i} and {j}: {spacing:.3g} of it): float64 cannot tell them apart at this dynamic range; "
         "rescale or deduplicate the points."
     )
