@@ -216,7 +216,8 @@ def test_bad_options_of_the_shape_layer_name_the_parameter():
         shape_centralities([square], "degree")[0]["degree"], shape_centralities([square], ["degree"])[0]["degree"]
     )
     cases = [
-        (lambda: shape_centralities([square], None), TypeError, "`centrality` must be a centrality name or a sequence"),
+        (lambda: shape_centralities([square], None), TypeError, "`centrality` must be a centrality name, 'all' or a"),
+        (lambda: shape_centralities([square], ["degree", "degree"]), InputError, "must name each centrality once"),
         (lambda: shape_centralities([square], ["degree"], connectivity=8.0), InputError, "`connectivity` must be 4"),
         (lambda: shape_centralities([square], ["degree"], progress="x"), TypeError, "`progress` must be True"),
         (lambda: CentralityHistogram(connectivity=8.0).fit([square]), InputError, "connectivity"),
@@ -477,3 +478,14 @@ def test_an_enlarged_one_pixel_path_keeps_its_area(steps):
     mask[position[:, 0], position[:, 1]] = True
     small = normalize_shape(mask, resolution=32)
     assert small.sum() >= 0.5 * 32**2
+
+
+def test_shape_centralities_takes_all_as_the_other_shape_functions_do():
+    # CentralityHistogram and pairwise_shape_distances took 'all'; shape_centralities refused it
+    from centrality_vision.shapes import SHAPE_CENTRALITIES, shape_centralities
+
+    square = np.zeros((6, 6), dtype=bool)
+    square[1:5, 1:5] = True
+    every = shape_centralities([square], "all")[0]
+    assert set(every) == {*SHAPE_CENTRALITIES, "nodes"}
+    np.testing.assert_array_equal(every["degree"], shape_centralities([square], "degree")[0]["degree"])

@@ -628,6 +628,28 @@ def _effective_jobs(n_jobs) -> int:
     return effective_n_jobs(n_jobs)
 
 
+def resolve_centralities(centrality, *, name: str = "centrality") -> tuple[str, ...]:
+    """``"all"`` -> the four shape centralities; a name -> itself; a list -> checked tuple."""
+    if isinstance(centrality, str):
+        if centrality == "all":
+            return SHAPE_CENTRALITIES
+        return (check_choice(centrality, CENTRALITIES + ("all",), name=name),)
+    if isinstance(centrality, (bytes, bytearray)):  # (iterated, its letters read as ints: "got 100")
+        raise TypeError(f"`{name}` must be a centrality name (str), 'all' or a list of names; got {centrality!r}.")
+    try:
+        names = tuple(centrality)
+    except TypeError:
+        raise TypeError(f"`{name}` must be a centrality name, 'all' or a list of names; got {centrality!r}.") from None
+    if not names:
+        raise InputError(f"`{name}` must name at least one centrality; got an empty list.")
+    names = tuple(check_choice(n, CENTRALITIES, name=name) for n in names)
+    repeated = sorted({n for n in names if names.count(n) > 1})
+    if repeated:
+        twice = ", ".join(map(repr, repeated))
+        raise InputError(f"`{name}` must name each centrality once; got {twice} more than once.")
+    return names
+
+
 @renamed_parameters(names="centrality")
 def shape_centralities(
     images,
@@ -649,8 +671,9 @@ def shape_centralities(
         Shapes; sizes may differ. Masks (True/1 = shape) or grey images (see
         :func:`as_shape_images` for ``foreground`` and ``threshold``).
     centrality : str or sequence of str, default=SHAPE_CENTRALITIES
-        Centralities to compute (see :data:`centrality_vision.centrality.CENTRALITIES`;
-        formerly ``names``).
+        Centralities to compute, each once (see :data:`centrality_vision.centrality.CENTRALITIES`;
+        ``'all'``: the four of ``SHAPE_CENTRALITIES``, as elsewhere in this module; formerly
+        ``names``).
     connectivity : {8, 4}
     weights : bool, default=False
         False counts hops (the thesis). True gives pixel edges their Euclidean lengths,
@@ -688,16 +711,7 @@ def shape_centralities(
            [3., 5., 3.]])
     """
     masks = as_shape_images(images, foreground=foreground, threshold=threshold)
-    names = [centrality] if isinstance(centrality, str) else centrality  # one name, not its letters
-    if isinstance(names, (bytes, bytearray)):  # (iterated, its letters read as ints: "got 100")
-        raise TypeError(f"`centrality` must be a centrality name (str) or a sequence of names; got {names!r}.")
-    try:
-        names = list(names)
-    except TypeError:
-        raise TypeError(f"`centrality` must be a centrality name or a sequence of names; got {names!r}.") from None
-    if not names:  # (each image's record had no "nodes" either)
-        raise InputError("`centrality` must name at least one centrality; got an empty list.")
-    names = [check_choice(n, CENTRALITIES, name="centrality") for n in names]
+    names = resolve_centralities(centrality)
     if not is_connectivity(connectivity):
         raise InputError(f"`connectivity` must be 4 or 8; got {connectivity!r}.")
     connectivity = int(connectivity)

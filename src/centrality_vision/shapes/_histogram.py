@@ -6,14 +6,13 @@ import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin
 
 from .._validation import check_bool, check_choice, check_int
-from ..centrality import CENTRALITIES
 from ..exceptions import InputError
 from ._cache import (
-    SHAPE_CENTRALITIES,
     _effective_jobs,
     as_shape_images,
     is_connectivity,
     resolve_cache,
+    resolve_centralities,
     shape_centralities,
 )
 
@@ -106,28 +105,6 @@ class ShapeInputMixin:
 #: The most histogram bins a shape feature takes: far more than any shape has pixel values
 #: to tell apart, and 100,000 float64 per image and centrality is still small.
 MAX_BINS = 100_000
-
-
-def resolve_centralities(centrality, *, name: str = "centrality") -> tuple[str, ...]:
-    """``"all"`` -> the four shape centralities; a name -> itself; a list -> checked tuple."""
-    if isinstance(centrality, str):
-        if centrality == "all":
-            return SHAPE_CENTRALITIES
-        return (check_choice(centrality, CENTRALITIES + ("all",), name=name),)
-    if isinstance(centrality, (bytes, bytearray)):  # (iterated, its letters read as ints: "got 100")
-        raise TypeError(f"`{name}` must be a centrality name (str), 'all' or a list of names; got {centrality!r}.")
-    try:
-        names = tuple(centrality)
-    except TypeError:
-        raise TypeError(f"`{name}` must be a centrality name, 'all' or a list of names; got {centrality!r}.") from None
-    if not names:
-        raise InputError(f"`{name}` must name at least one centrality; got an empty list.")
-    names = tuple(check_choice(n, CENTRALITIES, name=name) for n in names)
-    repeated = sorted({n for n in names if names.count(n) > 1})
-    if repeated:
-        twice = ", ".join(map(repr, repeated))
-        raise InputError(f"`{name}` must name each centrality once; got {twice} more than once.")
-    return names
 
 
 def _histogram(values: np.ndarray, bins: int, scaling: str) -> np.ndarray:
