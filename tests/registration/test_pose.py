@@ -1,4 +1,5 @@
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -191,3 +192,38 @@ def test_global_search_does_not_depend_on_the_thread_count(blob3d):
         assert np.array_equal(pose.rotation, poses[0].rotation)
         assert np.array_equal(pose.translation, poses[0].translation) and pose.scale == poses[0].scale
     assert angle_degrees(poses[0].rotation, r) < 1.0
+
+
+def _potato_scan(rng, n_points):
+    """A smooth, lopsided closed surface (an ellipsoid with 8 bumps of fixed places and heights),
+    sampled at random, with a 20% slab cut off across a random direction."""
+    shape = np.random.default_rng(99)
+    bumps = shape.normal(size=(8, 3))
+    bumps /= np.linalg.norm(bumps, axis=1, keepdims=True)
+    heights = shape.uniform(0.2, 0.8, 8)
+    u = rng.normal(size=(n_points, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    radius = 1 + (heights * np.exp(-np.sum((u[:, None] - bumps) ** 2, axis=2) / 0.15)).sum(axis=1)
+    points = u * radius[:, None] * [1.6, 1.2, 0.9]
+    direction = rng.normal(size=3)
+    along = points @ direction
+    return points[along < np.quantile(along, 0.8)]
+
+
+def test_global_search_finds_the_basin_of_two_partial_scans():
+    """Two scans that each lack a different 20% of a surface: CPD with a small outlier weight
+    is biased there, and the search, at weight 0.1 with 3 hypotheses, started the fit in the
+    right basin (within 15 degrees) in 7 of these 16 seeded problems; at weight 0.8 with 6
+    hypotheses, in 11."""
+    from centrality_vision.transforms import random_rotation
+
+    found = 0
+    for seed in range(16):
+        rng = np.random.default_rng([5, seed])
+        moving, fixed = _potato_scan(rng, 300), _potato_scan(rng, 300)
+        rotation = random_rotation(3, seed=rng)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # (a fit may stop at max_iter)
+            fit = RigidCPD(scale=False, w="auto", init="global", random_state=0).fit(moving, fixed @ rotation.T + 1.0)
+        found += angle_degrees(fit.transform_.rotation, rotation) < 15
+    assert found >= 10

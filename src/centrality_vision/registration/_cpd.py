@@ -1269,8 +1269,8 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         fits can end tens of degrees off without a warning. On two bunny scans that each
         lack a different 20% (20 seeds, ``benchmarks/partial_overlap.py``), from the true
         pose 45% of fits end within 5 degrees with w=0.2, 95% with 'auto' and 100% with
-        ``ICP(trim=0.3)``; turned by up to 180 degrees, ``init='global'`` finds the pose
-        in only half of them. 'auto' estimates it during EM: the fraction of fixed points that are
+        ``ICP(trim=0.3)``; turned by up to 180 degrees, ``init='global'`` with 'auto'
+        finds the pose in 90% of them. 'auto' estimates it during EM: the fraction of fixed points that are
         outliers under a uniform density over the fixed set's bounding box (along its
         principal axes, so that it does not depend on the sets' orientation; a side below
         1/1000 of the longest, as of a flat set in 3D, is as wide as the Gaussians), updated as
