@@ -448,3 +448,17 @@ def test_points_closer_than_the_graphs_resolve_are_refused_by_the_matchers_name(
         match(other, close, method=method)
     resolved = np.vstack([square, [1e-140, 0]])  # resolved by both: matched onto itself
     np.testing.assert_allclose(match(resolved, resolved, method=method).transform.scale, 1.0)
+
+
+def test_shape_context_tangents_turn_with_a_collinear_set():
+    """On a line the centroid lies on every tangent's line, so the sign that put it on the
+    left was rounding's: turned copies flipped 264 of 500 tangents and the descriptor was not
+    rotation-invariant. The tangent now points away from the centroid there."""
+    from centrality_vision.matching._shape_context import _tangent_angles
+
+    x = np.sort(np.random.default_rng(0).uniform(0, 10, 20))
+    line = np.c_[x, 0.5 * x + 1]
+    for angle in np.linspace(0.1, 6.0, 25):
+        turned = line @ np.array([[np.cos(angle), np.sin(angle)], [-np.sin(angle), np.cos(angle)]])
+        change = (_tangent_angles(turned) - _tangent_angles(line) - angle) % (2 * np.pi)
+        np.testing.assert_allclose(np.minimum(change, 2 * np.pi - change), 0.0, atol=1e-9)

@@ -28,7 +28,7 @@ DUMMY_COST = 0.25  # chi-squared cost of leaving a point unmatched (Belongie et 
 def _tangent_angles(points: np.ndarray, k: int = 5) -> np.ndarray:
     """Angle of each point's local tangent (principal axis of its k nearest neighbours,
     with every point as near as the k-th), its sign chosen so that the set's centroid lies
-    on the left: a rotation-invariant frame.
+    on the left (or, where it lies on the tangent's line, behind): a rotation-invariant frame.
 
     The neighbours tied with the k-th all count: which of them the k-d tree returned
     depended on the order of the points (on grids, 39 of 50 sets turned a tangent when
@@ -43,7 +43,11 @@ def _tangent_angles(points: np.ndarray, k: int = 5) -> np.ndarray:
     axis = vecs[:, :, -1]
     to_centre = points.mean(axis=0) - points
     left = axis[:, 0] * to_centre[:, 1] - axis[:, 1] * to_centre[:, 0]
-    axis = np.where((left < 0)[:, None], -axis, axis)
+    # where the centroid lies on the tangent's line (any point of a collinear set), the sign
+    # of ``left`` is rounding's: the tangent points away from the centroid instead
+    ahead = np.einsum("ni,ni->n", axis, to_centre)
+    on_line = np.abs(left) <= 1e-9 * np.hypot(to_centre[:, 0], to_centre[:, 1])
+    axis = np.where(np.where(on_line, ahead > 0, left < 0)[:, None], -axis, axis)
     return np.arctan2(axis[:, 1], axis[:, 0])
 
 
