@@ -1722,9 +1722,11 @@ class NonRigidCPD(_CPD):
         500 moving points; above, it keeps as many eigenpairs as make the kernel exact to
         1e-12 of its trace (34 for the default beta), up to the largest of 50,
         ``ceil(sqrt(M))`` and ``min(M / 4, 2000, 5e7 / M)``. Where those leave more than
-        1e-6 of the trace out (a narrow kernel), up to 5,000 points are solved exactly and
-        more get a :class:`~centrality_vision.exceptions.ConvergenceWarning`, as does a
-        number that leaves that much out.
+        1e-6 of the trace out (a narrow kernel), up to 5,000 points are solved exactly
+        (above 2,000 with a :class:`UserWarning`: an O(M^3) solve at every step, about a
+        second a step on 4,500 points) and more get a
+        :class:`~centrality_vision.exceptions.ConvergenceWarning`, as does a number that
+        leaves that much out.
     {common}
 
     Attributes
@@ -1835,6 +1837,14 @@ class NonRigidCPD(_CPD):
         if lost > _LOW_RANK_LOSS:
             if isinstance(self.low_rank, str) and n_moving <= _AUTO_EXACT_FALLBACK:
                 kernel = gaussian_kernel(work, work, beta)  # too narrow a kernel to pay off
+                if n_moving > _AUTO_EXACT_SLOW:
+                    warn(
+                        f"`beta={self.beta!r}` is too narrow for the low-rank kernel ({rank} "
+                        f"eigenpairs leave {lost:.2g} of its trace out), so `low_rank='auto'` solves the exact "
+                        f"{n_moving:,} x {n_moving:,} system at every EM step (O(M^3): on 4,500 points, about "
+                        "a second a step). Pass `low_rank=None` to choose this, or a larger `beta`.",
+                        UserWarning,
+                    )
             else:
                 warn(
                     f"`low_rank={self.low_rank!r}`: the {len(kernel.values)} eigenpairs kept leave {lost:.2g} of the "
@@ -1924,6 +1934,8 @@ _FIELD_ROUNDING = 1e-6
 # and more get a warning (as does a low_rank given as a number)
 _AUTO_EXACT_UP_TO = 500
 _AUTO_EXACT_FALLBACK = 5000
+# ... and that fallback warns above this many (4,500 points took 65 s for 60 steps)
+_AUTO_EXACT_SLOW = 2000
 _LOW_RANK_LOSS = 1e-6
 
 
