@@ -1,4 +1,5 @@
 import json
+import re
 
 import matplotlib
 import numpy as np
@@ -93,12 +94,17 @@ def test_report_index_and_computed_explanations(tmp_path):
     assert "| fig. 4.2 | Centrality distribution of graphs | **missing**" in text  # not run here, and said so
     assert "| fig. 1.1 | Scene Understanding | none:" in text
     assert "**What the numbers show.** 4 of 4 centralities equal" in text
+    # the code it ran and how long: a report read later says what made it
+    from centrality_vision._provenance import code_digest
+
+    assert re.search(rf"code digest `{code_digest()}`, written \d{{4}}-\d\d-\d\d \d\d:\d\d UTC; this run took", text)
     # the paragraph is computed from the stored result: change a number, the sentence changes
     record = json.loads((tmp_path / "table-2.1" / "table-2.1-quick.json").read_text())
     record["claims"]["degree equals Table 2.1 to two decimals"] = False
     (tmp_path / "table-2.1" / "table-2.1-quick.json").write_text(json.dumps(record))
     text = write_report(tmp_path, ["table-2.1"], quick=True, seed=0).read_text()
     assert "3 of 4 centralities equal" in text and "degree differ" in text
+    assert "this run took" not in text  # (written from stored results: nothing was timed)
 
 
 def test_report_says_why_an_experiment_did_not_run(tmp_path, monkeypatch):
