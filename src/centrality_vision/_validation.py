@@ -181,6 +181,8 @@ def _edge_list_graph(n, rows, cols, lengths, directed: bool, name: str) -> spars
     """CSR adjacency from an edge list; parallel edges keep their shortest length."""
     try:
         lengths = np.asarray(lengths, dtype=np.float64).reshape(-1)
+    except OverflowError:
+        raise InputError(f"`{name}` must have finite edge lengths ('weight'); got an int beyond float64.") from None
     except (TypeError, ValueError):
         raise TypeError(
             f"`{name}` must have numeric edge attribute 'weight' (an edge length); got non-numeric values."
@@ -254,6 +256,8 @@ def as_any_graph(graph, *, name: str = "graph", allow_directed: bool = False) ->
             raise TypeError(f"`{name}` must hold real edge lengths; got {_describe(dense)}.")
         try:
             dense = dense.astype(np.float64)
+        except OverflowError:
+            raise InputError(f"`{name}` must hold finite edge lengths; got an int beyond float64.") from None
         except (TypeError, ValueError):
             raise not_a_graph() from None
         if dense.ndim != 2:

@@ -173,3 +173,19 @@ def test_hop_counts_do_not_read_lengths_beyond_float64s_range_of_one_another():
     np.testing.assert_array_equal(cen.closeness(wide, epsilon=0.5, seed=0), cen.closeness(unit, epsilon=0.5, seed=0))
     with pytest.raises(InputError, match="within float64's range of one another"):
         cen.closeness(wide, weights=True)  # the lengths are read: still refused
+
+
+def test_an_int_beyond_float64_as_a_length_or_spacing_is_refused_by_name():
+    """Ints of more than 308 digits raised a bare OverflowError from the conversion to float,
+    which `except (ValueError, TypeError)` does not catch."""
+    from centrality_vision.graphs import pixel_graph
+
+    huge = 10**400
+    path = nx.path_graph(3)
+    path[0][1]["weight"] = huge
+    with pytest.raises(InputError, match=r"`graph` must have finite edge lengths \('weight'\); got an int beyond"):
+        cen.closeness(path, weights=True)
+    with pytest.raises(InputError, match=r"`graph` must hold finite edge lengths; got an int beyond float64"):
+        cen.closeness([[0, huge], [huge, 0]])
+    with pytest.raises(InputError, match=r"`spacing` must be 2 positive finite numbers; got an int beyond"):
+        pixel_graph(np.ones((2, 2), dtype=bool), spacing=(huge, 1))

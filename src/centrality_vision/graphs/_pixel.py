@@ -264,6 +264,10 @@ def pixel_graph(
         try:
             raw = np.asarray(spacing)
             spacing = raw.astype(np.float64)
+        except OverflowError:
+            raise InputError(
+                f"`spacing` must be {mask.ndim} positive finite numbers; got an int beyond float64."
+            ) from None
         except (TypeError, ValueError):
             raise TypeError(f"`spacing` must be {mask.ndim} positive finite numbers; got {given!r}.") from None
         items = given if isinstance(given, (list, tuple)) else ()
