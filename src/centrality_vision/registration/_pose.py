@@ -195,8 +195,9 @@ def global_pose_search(
     on subsets of at most ``2 * max_points`` points and re-scored there; the best is
     returned.
 
-    Both stages take the outlier weight ``max(w, 0.8)``: at the search's variances it
-    keeps only pairs closer than about a quarter of the RMS radius (like trimming), so that
+    Both stages take the outlier weight ``max(w, 0.8)``: at the score's variance it counts
+    a fixed point as an outlier beyond about 0.17 (2D) or 0.24 (3D) of the RMS radius from
+    every moving point, against 0.32 and 0.36 at 0.1 (like trimming), so that
     clutter and parts that either set lacks neither pull the poses nor decide the score.
     CPD with a small weight is biased where both sets lack parts: on two 1,000-point bunny
     scans that each lack a different 20% slab, turned by up to 180 degrees, the fit after
