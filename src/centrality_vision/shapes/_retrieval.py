@@ -156,6 +156,7 @@ def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
     (True, (39, 16))
     """
     from skimage.measure import block_reduce
+    from skimage.morphology import disk
     from skimage.transform import resize
 
     resolution = check_int(resolution, name="resolution", low=1, high=MAX_RESOLUTION)
@@ -179,8 +180,8 @@ def normalize_shape(mask: np.ndarray, *, resolution: int = 48) -> np.ndarray:
         # where it joins (a chain of diamonds) are closed over half an input pixel
         small = _joined(resized, small)
         radius = max(1, round(0.5 * scale))
-        disk = np.hypot(*np.mgrid[-radius : radius + 1, -radius : radius + 1]) <= radius
-        small = ndimage.binary_closing(np.pad(small, radius), structure=disk)[radius:-radius, radius:-radius]
+        closed = ndimage.binary_closing(np.pad(small, radius), structure=disk(radius).astype(bool))
+        small = closed[radius:-radius, radius:-radius]
     target = resolution**2
     if small.sum() < 0.5 * target:
         # parts thinner than a pixel at this size (a comb's teeth, a line) average below one
