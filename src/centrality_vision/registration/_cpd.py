@@ -1836,10 +1836,11 @@ class NonRigidCPD(_CPD):
         lost = kernel.residual_trace / n_moving if rank is not None else 0.0
         if lost > _LOW_RANK_LOSS:
             if isinstance(self.low_rank, str) and n_moving <= _AUTO_EXACT_FALLBACK:
+                kept = len(kernel.values)
                 kernel = gaussian_kernel(work, work, beta)  # too narrow a kernel to pay off
                 if n_moving > _AUTO_EXACT_SLOW:
                     warn(
-                        f"`beta={self.beta!r}` is too narrow for the low-rank kernel ({rank} "
+                        f"`beta={self.beta!r}` is too narrow for the low-rank kernel ({kept} "
                         f"eigenpairs leave {lost:.2g} of its trace out), so `low_rank='auto'` solves the exact "
                         f"{n_moving:,} x {n_moving:,} system at every EM step (O(M^3): on 4,500 points, about "
                         "a second a step). Pass `low_rank=None` to choose this, or a larger `beta`.",
