@@ -142,19 +142,6 @@ def test_auto_w_on_a_flat_3d_set_is_not_all_outliers(fish_pair, n_neighbors):
         assert np.sqrt(np.mean(np.sum((reg.moving_transformed_[:, :2] - x) ** 2, axis=1))) < 0.15
 
 
-def test_auto_w_collapse_on_a_flat_set_says_how_to_register_it(fish_pair):
-    """Rigid CPD on the flat fish still reads its residual as outliers (sigma2 is averaged over
-    three axes, the residual lies in two): the collapse message says to register in the plane."""
-    y, x = fish_pair.moving, fish_pair.fixed
-    rng = np.random.default_rng(1)
-    cluttered = np.vstack([x, rng.uniform(x.min(0), x.max(0), (20, 2))])
-    with pytest.warns(CollapseWarning, match="The fixed set spans 2 of 3 dimensions: if both sets lie in it"):
-        RigidCPD(w="auto").fit(np.c_[y, np.zeros(len(y))], np.c_[cluttered, np.zeros(len(cluttered))])
-    with warnings.catch_warnings():
-        warnings.simplefilter("error", CollapseWarning)
-        RigidCPD(w="auto").fit(y, cluttered)  # the same sets in 2D
-
-
 def test_auto_w_at_the_end_of_a_held_gpd_run_is_from_cpds_posterior(fish, rot2):
     """A run that ends before EM settles (here a callback stops it) estimates w once at its end. Under
     GPD that estimate took the posterior with the centrality prior, whose histogram weights

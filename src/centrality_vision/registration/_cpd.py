@@ -8,6 +8,16 @@ Conventions every variant shares:
   variance sigma2 per transformed moving point and a uniform outlier component of weight
   ``w``, ``P(m | x_n) = exp(-|x_n - T(y_m)|^2 / 2 sigma2) / (sum_k exp(...) + c)`` with
   ``c = (2 pi sigma2)^(D/2) w / (1 - w) M / N``, computed in log space.
+* D is the dimension the sets span: a set with no extent along some direction (an outline
+  with ``z = 0`` in 3D, a plane, a line; a principal side below 1/1000 of its longest) is a
+  set of fewer dimensions, and where neither set spans more than d of the coordinates' D
+  dimensions the mixture is a density within d dimensions: ``c`` and the objective take d,
+  and sigma2 is the residual per spanned dimension (the M-steps'
+  ``sum P |x - T(y)|^2 / (Np d)``). A 2D problem lifted into any plane of 3D then registers
+  as it does in 2D (with D = 3, sigma2 was 2/3 of the residual in the plane, and w='auto'
+  read the narrower fit as outliers: the fish with 20 clutter points, lifted, collapsed).
+  A set that spans more than the other (a 3D blob onto a line) keeps the larger D: its
+  residual off the other set is real.
 * ``normalize=True`` (the default): inside ``fit`` each set is centred on its own mean and
   both are divided by one common factor, the RMS distance of all M + N points to their
   set's mean, so the EM runs on sets of unit RMS radius whatever the caller's units and
@@ -215,6 +225,9 @@ def initial_sigma2(moving, fixed) -> float:
     --------
     >>> initial_sigma2([[0.0, 0.0]], [[3.0, 4.0]])
     12.5
+
+    (A fit starts from this value times ``D / d`` when the fixed set spans only ``d`` of the
+    D dimensions; see the module docstring.)
     """
     moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
     fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
@@ -534,25 +547,46 @@ def _principal_sides(points: np.ndarray) -> np.ndarray:
     return np.ptp(centred_points @ axes, axis=0)
 
 
-def _box_volume(sides: np.ndarray, sigma2: float) -> float:
-    """Volume of the uniform outlier density's box at variance ``sigma2``: each side at least
-    the width ``sqrt(2 pi sigma2)`` of CPD's Gaussians.
+def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
+    """Volume of the uniform outlier density's box in the mixture's ``model_dims`` dimensions
+    at variance ``sigma2``: the ``model_dims`` longest of the fixed set's principal ``sides``,
+    a thin one (see :func:`_thin`) at least the width ``sqrt(2 pi sigma2)`` of CPD's Gaussians.
 
-    Along a direction in which the fixed set has no extent (a planar set in 3D, a line), a
-    Gaussian centred in the set has density ``1 / sqrt(2 pi sigma2)`` at every fixed point, and
-    a box of that width gives the uniform density the same factor: the two cancel, and the set
-    is weighed as the lower-dimensional set it is. With a side of 0 (or a fixed floor) the
+    The box of a flat fixed set in a mixture of its own dimension is its area. A thin side
+    remains where the moving set spans more than the fixed set: along it, a Gaussian centred
+    in the set has density ``1 / sqrt(2 pi sigma2)`` at every fixed point, and a box of that
+    width gives the uniform density the same factor. With a side of 0 (or a fixed floor) the
     uniform density was unbounded and took every point as an outlier: the fish with ``z = 0``
-    added and 20 clutter points ended with ``w_`` 0.9 and nothing matched. Along a direction
-    the set spans, the side is its extent once the Gaussians are narrower than it."""
+    added and 20 clutter points ended with ``w_`` 0.9 and nothing matched."""
     width = max(math.sqrt(2.0 * math.pi * sigma2), 1e-300)
-    return float(np.prod(np.where(_thin(sides), np.maximum(sides, width), sides)))
+    longest = np.argsort(-sides, kind="stable")[:model_dims]
+    return float(np.prod(np.where(_thin(sides), np.maximum(sides, width), sides)[np.sort(longest)]))
 
 
 def _thin(sides: np.ndarray) -> np.ndarray:
     """Which of a box's sides are below :data:`_THIN_SIDE` of its longest: directions the set
     does not span (a planar set in 3D)."""
     return sides <= _THIN_SIDE * float(np.max(sides))
+
+
+def _model_dims(moving: np.ndarray, fixed: np.ndarray) -> int:
+    """The dimension of CPD's mixture for these sets: the most that either spans, each set's
+    span being the number of its principal sides longer than :data:`_THIN_SIDE` of its
+    longest (at least 1); see the module docstring."""
+    return max(max(int(np.sum(~_thin(_principal_sides(points)))), 1) for points in (moving, fixed))
+
+
+def _flat_weight(w: float, sigma2: float, lift: int) -> float:
+    """The weight to give the E-step (whose ``c`` takes the sets' D) for a mixture over
+    ``lift`` fewer dimensions with outlier weight ``w``: the odds ``w / (1 - w)`` divided by
+    the Gaussians' width ``sqrt(2 pi sigma2)`` once per dimension lifted, so that ``c`` is
+    ``(2 pi sigma2)^((D - lift) / 2) w / (1 - w) M / N``."""
+    if lift == 0 or w <= 0:
+        return w
+    log_odds = math.log(w) - math.log1p(-w) - 0.5 * lift * math.log(2.0 * math.pi * sigma2)
+    # (odds beyond 1e12 round the weight to 1, where CPD's constant would divide by 0)
+    odds = math.exp(min(log_odds, 690.0))
+    return min(odds / (1.0 + odds), _AUTO_W_E_MAX)
 
 
 def _check_prior(prior, n_moving: int, n_fixed: int, name: str) -> None:
@@ -879,6 +913,9 @@ class _CPD(BaseEstimator):
         final objective, stopped by the callback)``. ``hold`` (w='auto' only): ``w`` held at
         its start, CPD's weight, until EM settles; estimated from then on."""
         n_fixed, n_dims = fixed.shape
+        # the mixture's dimension: what the sets span (see the module docstring)
+        model_dims = _model_dims(moving_n, fixed)
+        lift = n_dims - model_dims
         # the largest coordinate whose rounding the moving points carry, in the frame's units:
         # far from the origin the caller's coordinates round by more than the centred
         # points show, and the M-steps must not take that rounding for spread
@@ -891,7 +928,11 @@ class _CPD(BaseEstimator):
         floor = _SIGMA2_FLOOR * (max(spread_fixed, 1e-280) if spread_fixed > 0 else spread)
         state = self._init_state(moving_n, fixed, start)
         moving_t = self._apply(state, self._work)
-        sigma2 = _initial_sigma2(moving_t, fixed) if self.sigma2 is None else float(self.sigma2)
+        if self.sigma2 is None:
+            sigma2 = _initial_sigma2(moving_t, fixed)
+            sigma2 = sigma2 * n_dims / model_dims if lift else sigma2
+        else:
+            sigma2 = float(self.sigma2)
         if self.sigma2 is not None and not sigma2 <= _SIGMA2_MAX * spread:  # (1e300 overflowed)
             unit = "" if frame.scale == 1.0 else " in the normalised frame"
             raise InputError(
@@ -913,7 +954,7 @@ class _CPD(BaseEstimator):
         previous = None
         current_prior = None
         planner = EStepPlanner()  # method='auto': the E-step path by timing, per fit
-        e_step = self._e_step_of(fixed, planner)
+        e_step = self._e_step_of(fixed, planner, lift)
         # accelerate: the last EM iterates as vectors, and a pending extrapolated jump
         # (the plain step to fall back on, and the objective the jump must not exceed)
         squarem = bool(self.accelerate) and landmarks is None and not auto_w and not callable(prior)
@@ -932,7 +973,7 @@ class _CPD(BaseEstimator):
                     if current_prior is not None:
                         _check_prior(current_prior, moving.shape[0], fixed.shape[0], "prior(sigma2_ratio)")
                 w_e = (
-                    _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2))
+                    _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2, model_dims))
                     if auto_w and not holding
                     else w_fraction
                 )
@@ -947,7 +988,7 @@ class _CPD(BaseEstimator):
                         state, moving_t, sigma2 = fallback
                         continue
                 error = None if true_n is None else float(np.linalg.norm(true_n - moving_t))
-                history["objective"].append(objective + n_fixed * n_dims * log_s)
+                history["objective"].append(objective + n_fixed * model_dims * log_s)
                 history["sigma2"].append(sigma2)
                 history["error"].append(error)
                 history["method"].append(post.method)
@@ -958,7 +999,7 @@ class _CPD(BaseEstimator):
                         self._make_transform(state, moving, frame),
                         frame.points_out(moving_t),
                         sigma2 * frame.scale**2,
-                        objective + n_fixed * n_dims * log_s,
+                        objective + n_fixed * model_dims * log_s,
                         None if error is None else error * frame.scale,
                     )
                     if _stops(self.callback(info)):
@@ -1001,6 +1042,8 @@ class _CPD(BaseEstimator):
                 new_state, new_moving_t, new_sigma2 = self._m_step(m_post, self._work, fixed, state, sigma2)
                 if landmarks is not None:
                     new_sigma2 = _data_sigma2(post, fixed, new_moving_t)
+                if lift:  # (the M-steps divide by the sets' D)
+                    new_sigma2 = new_sigma2 * n_dims / model_dims
                 if not np.all(np.isfinite(new_moving_t)):
                     stopped = (
                         f"the M-step of iteration {iteration + 1} gave non-finite points; "
@@ -1043,9 +1086,9 @@ class _CPD(BaseEstimator):
             # agree, and the run is scored as the other one is; from CPD's posterior, as in the loop
             n_p = post.n_p if current_prior is None else e_step(moving_t, sigma2, w_fraction, None).n_p
             w_fraction = _w_estimate(n_p, n_fixed)
-            w_e = _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2))
+            w_e = _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2, model_dims))
             post = e_step(moving_t, sigma2, w_e, current_prior)
-            final_objective = post.neg_log_likelihood + self._penalty(state) + n_fixed * n_dims * log_s
+            final_objective = post.neg_log_likelihood + self._penalty(state) + n_fixed * model_dims * log_s
         name = type(self).__name__
         notes = []
         if stopped is not None:
@@ -1058,7 +1101,9 @@ class _CPD(BaseEstimator):
                     ConvergenceWarning,
                 )
             )
-        collapse = self._collapse(moving_n, fixed, moving_t, w_fraction, post, sigma2 if converged else None)
+        collapse = self._collapse(
+            moving_n, fixed, moving_t, w_fraction, post, model_dims, sigma2 if converged else None
+        )
         if collapse is not None:
             notes.append((f"{name}: {collapse}", CollapseWarning))
             converged = False
@@ -1079,6 +1124,7 @@ class _CPD(BaseEstimator):
             "method": history["method"],
             "w": np.array(history["w"]),
         }
+        w_e = _flat_weight(w_e, sigma2, lift)  # (the E-step functions' weight, as `e_step` passes it)
         if post.best is None:  # the E-steps skip it (a third of an E-step): once, for the last state
             post = replace(post, best=fixed_to_moving(moving_t, fixed, sigma2, w_e, current_prior))
         self.fixed_to_moving_ = post.best
@@ -1088,7 +1134,7 @@ class _CPD(BaseEstimator):
             else replace(
                 post,
                 px=post.px * frame.scale + post.p1[:, None] * frame.fixed_centre,
-                neg_log_likelihood=post.neg_log_likelihood + n_fixed * n_dims * log_s,
+                neg_log_likelihood=post.neg_log_likelihood + n_fixed * model_dims * log_s,
             )
         )
         # the normalised state, for posterior(): c depends on sigma2 in the frame's units
@@ -1124,8 +1170,24 @@ class _CPD(BaseEstimator):
         sigma2 = float(np.exp(np.clip(log_jump, logs[2] + math.log(_SIGMA_JUMP), logs[2] - math.log(_SIGMA_JUMP))))
         return new_state, moving_t, max(sigma2, floor)
 
-    def _e_step_of(self, fixed, planner):
-        """``e_step(moving_t, sigma2, w, prior) -> Posteriors`` of this fit: CPD's or the k-NN model's."""
+    def _e_step_of(self, fixed, planner, lift=0):
+        """``e_step(moving_t, sigma2, w, prior) -> Posteriors`` of this fit: CPD's or the k-NN
+        model's, for a mixture over ``lift`` fewer dimensions than the sets' (the fixed set's
+        span; see the module docstring): ``w`` is that mixture's, and so is the objective."""
+        e_step = self._full_e_step_of(fixed, planner)
+        if not lift:
+            return e_step
+        half = 0.5 * fixed.shape[0] * lift
+
+        def flat_e_step(moving_t, sigma2, w, prior):
+            post = e_step(moving_t, sigma2, _flat_weight(w, sigma2, lift), prior)
+            # (the E-step's objective takes N D / 2 log sigma2)
+            return replace(post, neg_log_likelihood=post.neg_log_likelihood - half * math.log(sigma2))
+
+        return flat_e_step
+
+    def _full_e_step_of(self, fixed, planner):
+        """The E-step of :meth:`_e_step_of` over the sets' own D."""
         if self.n_neighbors is None:
             # (``best`` from the last state only: see the end of _run)
             memo = {}  # the dense path's sorted fixed points, kept over the fit
@@ -1148,9 +1210,10 @@ class _CPD(BaseEstimator):
         k = int(self.n_neighbors)
         return lambda moving_t, sigma2, w, prior: knn_posterior(moving_t, fixed, sigma2, w, prior, k=k, tree=tree)
 
-    def _collapse(self, moving_n, fixed, moving_t, w, post, sigma2=None) -> str | None:
-        """Why the result is not a registration, or None. ``sigma2``: the final variance of a
-        fit that converged (a fit stopped early is already warned of)."""
+    def _collapse(self, moving_n, fixed, moving_t, w, post, model_dims, sigma2=None) -> str | None:
+        """Why the result is not a registration, or None. ``model_dims``: the mixture's
+        dimension; ``sigma2``: the final variance of a fit that converged (a fit stopped early
+        is already warned of)."""
         one_point = one_point_fixed(moving_n, fixed)
         if one_point is not None:
             return one_point
@@ -1162,14 +1225,6 @@ class _CPD(BaseEstimator):
         tries += ["a fixed `w`"] if auto else ["a smaller `w`"] if w > 0 else []
         tries.append("a starting pose (`init`)")
         advice = "Try " + (", ".join(tries[:-1]) + ", or " if len(tries) > 1 else "") + tries[-1] + "."
-        flat = int(np.sum(_thin(_principal_sides(fixed))))
-        if 0 < flat < fixed.shape[1]:
-            # (CPD's Gaussians have the sets' dimension: on a flat set sigma2 is 1/D of a
-            # residual spread over fewer axes, and w='auto' reads the narrower fit as outliers)
-            advice += (
-                f" The fixed set spans {fixed.shape[1] - flat} of {fixed.shape[1]} dimensions: if both sets lie "
-                "in it, register their coordinates in it."
-            )
         if min(radius_y, radius_x) > 0 and radius_t < _COLLAPSE_RADIUS * min(radius_y, radius_x):
             return (
                 f"the transformed moving set collapsed (RMS radius {radius_t / radius_y:.3g} of the moving set's); "
@@ -1203,7 +1258,7 @@ class _CPD(BaseEstimator):
                 "fixed set in other units than the moving set? A transform with a scale (`scale=True`, affine) "
                 "fits that; otherwise try a starting pose (`init`)."
             )
-        spread = math.sqrt(fixed.shape[1] * sigma2) if sigma2 is not None else 0.0
+        spread = math.sqrt(model_dims * sigma2) if sigma2 is not None else 0.0
         if min(radius_y, radius_x) > 0 and spread > _COLLAPSE_SPREAD * radius_t:
             return (
                 f"the fit ended with Gaussians {spread / radius_t:.3g} times as wide as the transformed moving "

@@ -36,6 +36,7 @@ from .._seeding import as_generator
 from .._validation import ANY_DIMS, as_points, check_int
 from ..exceptions import ConvergenceWarning, InputError
 from ..transforms import NonRigidTransform, RigidTransform
+from ._cpd import _model_dims
 from ._estep import _nearest
 from ._lowrank import PivotedCholesky, nystrom_field
 
@@ -319,11 +320,12 @@ def _start_sigma2(est, moved, sub_moving, sub_fixed, previous):
     The previous level's final variance reflects that level's sampling (its nearest
     neighbours are farther apart); at the current pose on this level's denser points the
     residuals are smaller. The start is the mean squared distance of each fixed point to
-    its nearest transformed moving point, per dimension, capped by the previous level's
-    variance (so that a refinement never starts coarser than the level before it).
+    its nearest transformed moving point, per dimension the sets span, capped by the
+    previous level's variance (so that a refinement never starts coarser than the level
+    before it).
     """
     d2 = _nearest(moved, sub_fixed)[0]
-    sigma2 = min(float(np.mean(d2)) / moved.shape[1], previous)
+    sigma2 = min(float(np.mean(d2)) / _model_dims(moved, sub_fixed), previous)
     scale = est._frame(sub_moving, sub_fixed)[0].scale  # the normalised frame under ``normalize``
     return max(sigma2, np.finfo(float).tiny) / scale**2
 
