@@ -62,3 +62,19 @@ def test_digest_changes_with_a_dependency_version(monkeypatch):
     finally:
         monkeypatch.undo()
         _provenance.code_digest.cache_clear()
+
+
+def test_current_digest_sees_an_edit_after_the_digest_was_read(package_copy):
+    """The digest is read once per process; code loaded later (a lazily imported module, a
+    worker started later) may be an edited file's: current_code_digest() tells."""
+    base = _digest()
+    assert _provenance.current_code_digest() == base
+    source = package_copy / "registration" / "_cpd.py"
+    source.write_text(source.read_text(encoding="utf-8") + "# edited\n", encoding="utf-8")
+    edited = _provenance.current_code_digest()
+    assert edited != base and _provenance.code_digest() == base
+    (package_copy / "graphs" / "_new.py").write_text("", encoding="utf-8")  # a file added
+    assert _provenance.current_code_digest() not in (base, edited)
+    source.write_text(source.read_text(encoding="utf-8").removesuffix("# edited\n"), encoding="utf-8")
+    (package_copy / "graphs" / "_new.py").unlink()
+    assert _provenance.current_code_digest() == base  # restored: the same bytes

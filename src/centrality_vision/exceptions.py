@@ -1,6 +1,13 @@
 """Exceptions and warnings raised by centrality-vision."""
 
-__all__ = ["CentralityVisionError", "InputError", "ConvergenceWarning", "CollapseWarning", "MatchingWarning"]
+__all__ = [
+    "CentralityVisionError",
+    "InputError",
+    "CodeChangedError",
+    "ConvergenceWarning",
+    "CollapseWarning",
+    "MatchingWarning",
+]
 
 
 class CentralityVisionError(Exception):
@@ -37,6 +44,20 @@ class InputError(CentralityVisionError, ValueError):
     ... except ValueError as exc:
     ...     print(type(exc).__name__)
     InputError
+    """
+
+
+class CodeChangedError(CentralityVisionError, RuntimeError):
+    """The package's files changed while a long run went on (a development install edited).
+
+    A result computed then may come from code other than the one its stored key names, so
+    it is not stored: the run stops, keeping the results stored before, and a new run
+    computes the rest with the code as it is. It is a :class:`RuntimeError`.
+
+    Examples
+    --------
+    >>> issubclass(CodeChangedError, RuntimeError), issubclass(CodeChangedError, CentralityVisionError)
+    (True, True)
     """
 
 

@@ -3,7 +3,7 @@ import os
 
 import pytest
 
-from centrality_vision.exceptions import InputError
+from centrality_vision.exceptions import CodeChangedError, InputError
 from centrality_vision.experiments._runner import Unit, _checksum, _connect, load_results, run_units, unit_id
 from centrality_vision.experiments.table_5_1 import register_set
 
@@ -347,3 +347,32 @@ def test_ctrl_c_on_a_pool_run_ends_it_at_once(tmp_path):
     else:
         left = subprocess.run(["ps", "-o", "pid,stat,args", "-g", str(run.pid)], capture_output=True, text=True)
         raise AssertionError(f"processes of the run are left 10 s after it:\n{left.stdout}")
+
+
+def _edited_then(x, marker_dir):
+    """A unit during which the package's files "change" (in the process that runs it)."""
+    from centrality_vision import _provenance
+
+    if x == 2:
+        _provenance.current_code_digest = lambda: "e" * 16
+    return _square(x, marker_dir)
+
+
+@pytest.mark.parametrize("scheduler", ["serial", "processes"])
+def test_a_result_of_code_edited_during_the_run_is_not_stored(tmp_path, scheduler):
+    """The key's digest was read when the run started; a unit computed after the files
+    changed (by a worker started later, or a module imported lazily) was stored under it, and
+    a later run of the original code read the edited code's result back."""
+    from centrality_vision import _provenance
+
+    real = _provenance.current_code_digest
+    units = [Unit(f"u{i}", _edited_then, {"x": i, "marker_dir": str(tmp_path)}) for i in range(4)]
+    try:
+        with pytest.raises(CodeChangedError, match=r"code digest was [0-9a-f]{16} when it started and e{16} once unit"):
+            run_units(units, tmp_path / "r.jsonl", scheduler=scheduler, workers=1, progress=False)
+    finally:
+        _provenance.current_code_digest = real
+    stored = {i.split("#")[0] for i in load_results(tmp_path / "r.jsonl")}
+    assert stored == {"u0", "u1"}  # u2 ran edited code: not stored, and the run stopped
+    again = run_units(units[:2], tmp_path / "r.jsonl", scheduler="serial", progress=False)
+    assert again == {f"u{i}": {"x": i, "square": i * i} for i in range(2)}

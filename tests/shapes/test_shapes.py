@@ -282,10 +282,25 @@ def test_disk_cache_of_other_code_is_not_read(tmp_path, monkeypatch):
     image = _disk(7)
     shape_centralities([image], ["closeness"], cache=CentralityCache(directory=tmp_path))
     monkeypatch.setattr(_cache, "code_digest", lambda: "0" * 16)
+    monkeypatch.setattr(_cache, "current_code_digest", lambda: "0" * 16)
     later = CentralityCache(directory=tmp_path)  # a process running edited code
     shape_centralities([image], ["closeness"], cache=later)
     assert (later.hits, later.misses) == (0, 1)
     assert len(list(tmp_path.glob("*-closeness.npz"))) == 2
+
+
+def test_values_computed_after_the_code_changed_are_not_stored(tmp_path, monkeypatch):
+    """The file's name carries the digest read when the process started: values computed
+    after the package's files changed were stored under it and read back by that code."""
+    from centrality_vision.shapes import _cache
+
+    monkeypatch.setattr(_cache, "current_code_digest", lambda: "e" * 16)
+    cache = CentralityCache(directory=tmp_path)
+    first = shape_centralities([_disk(7)], ["closeness"], cache=cache)
+    assert not list(tmp_path.glob("*.npz"))  # kept in memory only
+    again = shape_centralities([_disk(7)], ["closeness"], cache=cache)
+    assert cache.hits == 1
+    np.testing.assert_array_equal(again[0]["closeness"], first[0]["closeness"])
 
 
 def test_memory_hits_are_written_to_a_directory_set_later(tmp_path):

@@ -11,9 +11,10 @@ when stderr is a terminal unless ``--progress``/``--no-progress`` says otherwise
 command line, not the library, chooses matplotlib's Agg backend.
 
 ``main(argv) -> int`` returns the exit status: 0 success; 2 a usage error, a bad input
-(:class:`~centrality_vision.exceptions.InputError`) or a file that cannot be read or
-written (``OSError``), each told in one line; 130 interrupted; 1 a bug, shown with its
-traceback.
+(:class:`~centrality_vision.exceptions.InputError`), a file that cannot be read or
+written (``OSError``) or a package edited during a run
+(:class:`~centrality_vision.exceptions.CodeChangedError`), each told in one line; 130
+interrupted; 1 a bug, shown with its traceback.
 """
 
 from __future__ import annotations
@@ -65,8 +66,10 @@ def main(argv: list[str] | None = None) -> int:
     """Run the command line; return the exit status (0 success, 2 bad input, 1 a bug, 130 interrupted).
 
     Usage errors exit through :class:`SystemExit` (status 2), as argparse does. Bad inputs
-    (:class:`~centrality_vision.exceptions.InputError`) and files that cannot be read or
-    written (``OSError``) are printed as one line on stderr and give status 2. Any other
+    (:class:`~centrality_vision.exceptions.InputError`), files that cannot be read or
+    written (``OSError``) and a package edited during a run
+    (:class:`~centrality_vision.exceptions.CodeChangedError`) are printed as one line on
+    stderr and give status 2. Any other
     exception is a bug: its traceback is printed and the status is 1. Warnings are
     printed as one line each and recorded in the outputs that keep them.
 
@@ -91,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     import traceback
     import warnings
 
-    from ..exceptions import InputError
+    from ..exceptions import CodeChangedError, InputError
 
     parser = build_parser()
     args, extras = parser.parse_known_args(_glued_columns(sys.argv[1:] if argv is None else list(argv)))
@@ -114,7 +117,7 @@ def main(argv: list[str] | None = None) -> int:
             warnings.filterwarnings("always", category=UserWarning)  # shown on one line, never raised
             warnings.showwarning = show
             return args.run(args)
-    except (InputError, OSError) as exc:
+    except (InputError, OSError, CodeChangedError) as exc:
         message = _in_cli_words(" ".join(str(exc).split()) or type(exc).__name__, getattr(args, "_parser", None), args)
         print(f"{prog}: error: {message}", file=sys.stderr)
         return 2

@@ -40,7 +40,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..exceptions import InputError
+from ..exceptions import CodeChangedError, InputError
 
 __all__ = ["Unit", "unit_id", "run_units", "load_results", "SCHEDULERS", "MAX_WORKERS"]
 
@@ -234,11 +234,14 @@ def _watch_pid(pid: int, interval: float = 0.5) -> None:
 
 
 def _call(func, kwargs):
-    """Run one unit with a single compiled-kernel thread (results independent of the machine)."""
+    """Run one unit with a single compiled-kernel thread (results independent of the machine):
+    ``(result, the package's code digest after it ran)``, in the process that ran it."""
+    from .. import _provenance
     from .._parallel import num_threads
 
     with num_threads(1):
-        return func(**kwargs)
+        result = func(**kwargs)
+    return result, _provenance.current_code_digest()
 
 
 def _checksum(key: str, result) -> str:
@@ -408,8 +411,19 @@ def run_units(
             leave=False,
         )
     appender = _Appender(path)
+    from .._provenance import code_digest
 
-    def finished(key, result):
+    started = code_digest()
+
+    def finished(key, outcome):
+        result, digest = outcome
+        if digest != started:
+            raise CodeChangedError(
+                f"The package's files changed during the run: the code digest was {started} when it started "
+                f"and {digest} once unit {key!r} was computed, so that result (of other code than the run's "
+                f"keys name) was not stored in {str(path)!r}. The {len(done)} result(s) stored before are "
+                "kept; run again to compute the rest with the code as it is now."
+            )
         done[key] = appender.add(ids[key], result)
         if bar is not None:
             bar.update(1)

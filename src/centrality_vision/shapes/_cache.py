@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from .._deprecation import renamed_parameters
-from .._provenance import code_digest
+from .._provenance import code_digest, current_code_digest
 from .._validation import as_binary_image, as_real_array, check_bool, check_choice, check_int, nearest_existing
 from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
@@ -292,7 +292,9 @@ class CentralityCache:
         )
 
     def _save(self, key: tuple, name: str, values: np.ndarray) -> None:
-        if self.directory is None:
+        # (values computed after the package's files changed may come from other code than
+        # the digest in the file's name: kept in memory only)
+        if self.directory is None or current_code_digest() != code_digest():
             return
         path = self._path(key, name)
         tmp = path.with_suffix(f".{os.getpid()}.{threading.get_ident()}.tmp")
