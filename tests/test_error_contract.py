@@ -65,6 +65,7 @@ def test_every_exception_and_warning_of_the_package_is_exported_at_the_top():
     assert defined == {
         "CentralityVisionError",
         "InputError",
+        "CodeChangedError",
         "ConvergenceWarning",
         "CollapseWarning",
         "MatchingWarning",

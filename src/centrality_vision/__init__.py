@@ -11,13 +11,21 @@ Subpackages, in the one direction data flows:
 The package's exceptions and warnings (:mod:`centrality_vision.exceptions`) are exported
 here too: bad input raises :class:`InputError` (a ``ValueError``); a registration that
 stops early warns :class:`ConvergenceWarning`, one whose scale or variance collapses
-:class:`CollapseWarning`, and an unreliable matching :class:`MatchingWarning`.
+:class:`CollapseWarning`, and an unreliable matching :class:`MatchingWarning`; a long run
+whose package files are edited while it goes on stops with :class:`CodeChangedError`.
 """
 
 from importlib.metadata import PackageNotFoundError, version
 
 from ._parallel import get_num_threads, set_num_threads
-from .exceptions import CentralityVisionError, CollapseWarning, ConvergenceWarning, InputError, MatchingWarning
+from .exceptions import (
+    CentralityVisionError,
+    CodeChangedError,
+    CollapseWarning,
+    ConvergenceWarning,
+    InputError,
+    MatchingWarning,
+)
 
 try:
     __version__ = version("centrality-vision")
@@ -26,6 +34,7 @@ except PackageNotFoundError:  # pragma: no cover - running from a source tree
 
 __all__ = [
     "CentralityVisionError",
+    "CodeChangedError",
     "CollapseWarning",
     "ConvergenceWarning",
     "InputError",

@@ -227,7 +227,13 @@ def test_load_mpeg7_reads_gifs_by_class(tmp_path, monkeypatch):
         load_mpeg7(tmp_path / "absent")
 
 
-@pytest.mark.parametrize(("content", "message"), [("1 2 nan\n4 5 6\n", "finite"), ("1 2 a\n4 5 6\n", "3 numbers")])
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("1 2 nan\n4 5 6\n", "NaN or inf, the first at line 1"),
+        ("1 2 a\n4 5 6\n", "line 1, column 3: 'a' is not a number"),
+    ],
+)
 def test_load_face_refuses_bad_values_with_the_path(tmp_path, content, message):
     (tmp_path / "face_source.txt").write_text(content)
     (tmp_path / "face_target.txt").write_text("1 2 3\n4 5 6\n")

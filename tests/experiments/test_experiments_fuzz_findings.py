@@ -312,3 +312,32 @@ def test_every_experiment_run_says_where_it_wrote(tmp_path, capsys):
     err = capsys.readouterr().err
     assert f"wrote {tmp_path}/: table-2.1-quick" in err
     assert "table-2.1-quick.txt" in err and "table-2.1-quick.json" in err
+
+
+# ------------------------------------------------------------------ audit round 31
+def test_a_face_without_spread_along_x_names_the_face_file(tmp_path):
+    """Every point equal: the quantile cut left no point, and the error named `moving`."""
+    from centrality_vision.experiments import fig_5_5
+
+    for name in ("face_source.txt", "face_target.txt"):
+        (tmp_path / name).write_text("1 2 3\n" * 10)
+    with pytest.raises(InputError, match=r"`face_dir`: the face's face_source.txt must have points spread along x"):
+        fig_5_5.problem(0, str(tmp_path))
+
+
+@pytest.mark.parametrize("name", sorted(SEEDS_EXPERIMENTS))
+def test_seed_plus_seeds_beyond_2_32_is_refused_before_anything_runs(tmp_path, name, monkeypatch):
+    """fig-5.3 --seed 4294967295 --seeds 2 ran the whole --seed registration first and left an
+    empty output folder."""
+    import importlib
+
+    from centrality_vision.experiments import check_options
+
+    with pytest.raises(InputError, match=r"`seed` \+ `seeds` must stay below 2\*\*32"):
+        check_options(seed=MAX_SEED, seeds=2)
+    module = importlib.import_module(f"centrality_vision.experiments.{REGISTRY[name].module}")
+    monkeypatch.setattr(module, "run", lambda **kwargs: pytest.fail("ran before the seeds were checked"))
+    out = tmp_path / "out"
+    with pytest.raises(InputError, match=r"`seed` \+ `seeds` must stay below 2\*\*32"):
+        module.main(["--seed", str(MAX_SEED), "--seeds", "2", "--out", str(out)])
+    assert not out.exists()

@@ -110,6 +110,10 @@ def _data_root(path, what: str, sub: str, needed: str, hint: str) -> Path:
     if path is not None:
         if not isinstance(path, (str, os.PathLike)):
             raise TypeError(f"`path` must be a folder path (str or os.PathLike) or None; got {type(path).__name__}.")
+        if not os.fspath(path):  # (Path("") is the current folder)
+            raise InputError(f"`path` must be a folder holding {needed}; got an empty path.")
+        if Path(path).is_file():
+            raise InputError(f"`path` must be a folder holding {needed}; got the file {str(path)!r}.")
         candidates = [Path(path), Path(path) / sub]
     else:
         candidates = []
@@ -158,6 +162,10 @@ def load_face(path=None) -> PointSetPair:
     ------
     FileNotFoundError
         When no folder holds the files; the message lists where it looked.
+    InputError
+        ``path`` is a file or empty, or a file is not 3 coordinates per line (read by
+        :func:`centrality_vision.io.read_points`: a header line, commas or a byte-order
+        mark are fine; the error names the line).
 
     References
     ----------
@@ -176,19 +184,14 @@ def load_face(path=None) -> PointSetPair:
     folder = _data_root(
         path, "The CPD face", "cpd", "face_source.txt", "it is GPL-2; copy face_*.txt of the CPD package to a folder"
     )
+    from ..io import read_points
+
     pair = []
     for name in ("face_source.txt", "face_target.txt"):
-        try:
-            points = np.loadtxt(folder / name, dtype=np.float64, ndmin=2)
-        except ValueError as exc:  # text that is not numbers, or ragged lines
-            raise InputError(f"{folder / name}: must hold 3 numbers per line; {exc}") from None
-        if points.ndim != 2 or points.shape[1] != 3:
-            raise InputError(
-                f"{folder / name}: must hold 3 coordinates per line; got an array of shape {points.shape}."
-            )
-        if not np.all(np.isfinite(points)):
-            raise InputError(f"{folder / name}: must hold finite coordinates; got NaN or inf.")
-        pair.append(points)
+        if not (folder / name).is_file():
+            raise FileNotFoundError(f"{folder} holds face_source.txt but not {name}, which the CPD face needs.")
+        # (the package's reader: a header, a byte-order mark or commas are read, errors name the line)
+        pair.append(read_points(folder / name, n_dims=(3,)))
     return PointSetPair(moving=pair[0], fixed=pair[1])
 
 
@@ -238,6 +241,14 @@ class Kimia99:
             if not all(isinstance(item, (str, np.str_)) for item in getattr(self, name)):
                 raise TypeError(f"`{name}` must hold strings; got {getattr(self, name)!r}.")
             object.__setattr__(self, name, np.array(list(getattr(self, name)), dtype=str))
+        for i, image in enumerate(self.images):
+            if not isinstance(image, np.ndarray) or image.ndim != 2 or image.dtype != bool:
+                what = (
+                    f"an array of shape {image.shape} and dtype {image.dtype}"
+                    if isinstance(image, np.ndarray)
+                    else (f"{type(image).__name__}")
+                )
+                raise TypeError(f"`images` must hold 2D bool masks; got {what} at index {i}.")
         object.__setattr__(self, "images", list(self.images))
 
     def __len__(self) -> int:

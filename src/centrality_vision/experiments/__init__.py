@@ -183,14 +183,17 @@ def check_options(*, quick=False, seed=0, seeds=None, scheduler=None, workers=No
     centrality_vision.exceptions.InputError: `workers` must be an int in [1, 1024]; got 0.
     """
     from .._validation import check_int
-    from ._common import MAX_SEEDS, check_run
+    from ._common import MAX_SEEDS, check_run, seed_list
     from ._runner import MAX_WORKERS, _check_scheduler
 
     quick, seed = check_run(quick, seed)
+    seeds = None if seeds is None else check_int(seeds, name="seeds", low=1, high=MAX_SEEDS)
+    if seeds is not None:
+        seed_list(seed, seeds, quick)  # (seed + seeds must stay within 2**32 as well)
     return {
         "quick": quick,
         "seed": seed,
-        "seeds": None if seeds is None else check_int(seeds, name="seeds", low=1, high=MAX_SEEDS),
+        "seeds": seeds,
         "scheduler": None if scheduler is None else _check_scheduler(scheduler),
         "workers": None if workers is None else check_int(workers, name="workers", low=1, high=MAX_WORKERS),
     }

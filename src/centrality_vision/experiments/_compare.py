@@ -181,9 +181,9 @@ def comparison_main(
         add_options(parser)
     args = parser.parse_args(argv)
     kwargs = options(args) if options is not None else {}
+    seeds = seed_list(args.seed, args.seeds, args.quick)  # (checked before the output folder is made)
     out = prepare_out(args)
     result = run(quick=args.quick, seed=args.seed, **kwargs)
-    seeds = seed_list(args.seed, args.seeds, args.quick)
     records = run_seed_units(
         seed_unit,
         seeds,

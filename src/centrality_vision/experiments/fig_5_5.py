@@ -115,6 +115,14 @@ def problem(seed: int = 0, face_dir=None, digest: str | None = None):
     x = face[:, 0]
     keep_moving = x > np.quantile(x, MISSING)
     keep_fixed = x < np.quantile(x, 1 - MISSING)
+    if min(keep_moving.sum(), keep_fixed.sum()) < 4:
+        from ..exceptions import InputError
+
+        raise InputError(
+            f"`face_dir`: the face's face_source.txt must have points spread along x (the experiment drops "
+            f"the {MISSING:.0%} of largest x from one set and of smallest x from the other); its "
+            f"{len(face)} points keep {keep_moving.sum()} and {keep_fixed.sum()}."
+        )
     return face[keep_moving], moved[keep_fixed], moved[keep_moving], linear, shift
 
 

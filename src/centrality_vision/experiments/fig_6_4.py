@@ -260,11 +260,12 @@ def main(argv=None) -> int:
     parser = experiment_parser("fig_6_4", __doc__, "fig-6.4", runner=True)
     parser.add_argument("--method", choices=("local", "greedy"), default="local")
     args = parser.parse_args(argv)
+    seeds = seed_list(args.seed, args.seeds, args.quick)  # (checked before the output folder is made)
     out = prepare_out(args)
     result = run(
         quick=args.quick,
         seed=args.seed,
-        seeds=seed_list(args.seed, args.seeds, args.quick),
+        seeds=seeds,
         method=args.method,
         out=out,
         scheduler=args.scheduler,

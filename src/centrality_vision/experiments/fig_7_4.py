@@ -487,11 +487,12 @@ def main(argv=None) -> int:
     args = experiment_parser(
         "fig_7_4", __doc__, "fig-7.4", quick_help="3 levels, 3 batches of 10 copies", runner=True
     ).parse_args(argv)
+    seeds = seed_list(args.seed, args.seeds, args.quick)  # (checked before the output folder is made)
     out = prepare_out(args)
     result = run(
         quick=args.quick,
         seed=args.seed,
-        seeds=seed_list(args.seed, args.seeds, args.quick),
+        seeds=seeds,
         out=out,
         scheduler=args.scheduler,
         workers=args.workers,

@@ -486,6 +486,7 @@ def main(argv=None) -> int:
     )
     parser.add_argument("--workers", type=int_in(1, MAX_WORKERS), default=None)
     args = parser.parse_args(argv)
+    seeds = seed_list(args.seed, args.seeds, args.quick)  # (checked before the output folder is made)
     out = make_out_folder(args.out)
     cache = str(Path(args.cache or out / "cache").resolve())
     print(f"Table 4.1: seed={args.seed}, quick={args.quick}", file=sys.stderr)
@@ -498,7 +499,6 @@ def main(argv=None) -> int:
         scheduler=args.scheduler,
         workers=args.workers,
     )
-    seeds = seed_list(args.seed, args.seeds, args.quick)
     others = [s for s in seeds if s != args.seed]
     records = (
         run_seed_units(

@@ -455,8 +455,8 @@ def main(argv=None) -> int:
     from ._common import seed_list
 
     args = experiment_parser("table_5_1", __doc__, "table-5.1", runner=True).parse_args(argv)
+    seeds = seed_list(args.seed, args.seeds, args.quick)  # (checked before the output folder is made)
     out = prepare_out(args)
-    seeds = seed_list(args.seed, args.seeds, args.quick)
     result = run(quick=args.quick, seed=args.seed, seeds=seeds, out=out, scheduler=args.scheduler, workers=args.workers)
     with run_outputs(out, "table-5.1", quick=args.quick) as stage:
         save_outputs(stage, "table-5.1", format_table(result), result)

@@ -327,6 +327,27 @@ def _warn_row_numbers(path: Path, table: _Table, picked: list[int]) -> None:
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*([eE][+-]?\d+)?|\.\d+([eE][+-]?\d+)?|nan|inf|infinity)", re.IGNORECASE | re.ASCII)
 
 
+def _ragged(path: Path, rows, split, names, width: int):
+    """Raise the error of rows of unequal length, naming the first line that differs from the
+    header, or without one from most rows (the first line may be the odd one out; a row with
+    a '#' cell, a comment after the values, counts only where every row has one)."""
+    cells = [split(line) for _, line in rows]
+    widths = [len(row) for row in cells]
+    commented = [any(cell.strip().startswith("#") for cell in row) for row in cells]
+    if names is None:
+        counts = {}
+        for length, comment in zip(widths, commented):
+            if not comment or all(commented):
+                counts[length] = counts.get(length, 0) + 1
+        width = max(counts, key=lambda length: (counts[length], length == widths[0]))
+    k = next(k for k, length in enumerate(widths) if length != width)
+    number = rows[k][0]
+    before = "the header" if names is not None else "the other rows" if k == 0 else "the rows before it"
+    values_word = "value" if widths[k] == 1 else "values"
+    hint = " (a '#' after the values starts no comment: a comment takes a line of its own)" if commented[k] else ""
+    raise InputError(f"{path}: line {number} has {widths[k]} {values_word}, {before} {width}{hint}.")
+
+
 def _read_text(path: Path) -> _Table:
     raw = path.read_bytes()
     try:
@@ -378,9 +399,7 @@ def _read_text(path: Path) -> _Table:
     for k, (number, line) in enumerate(rows):
         cells = split(line)
         if len(cells) != width:
-            before = "the header" if names is not None else "the rows before it"
-            values_word = "value" if len(cells) == 1 else "values"
-            raise InputError(f"{path}: line {number} has {len(cells)} {values_word}, {before} {width}.")
+            _ragged(path, rows, split, names, width)
         for j, cell in enumerate(cells):
             try:
                 values[k, j] = _to_float(cell, decimal_comma)
@@ -701,8 +720,11 @@ def _read_mat(path: Path, variable: str | None) -> _Table:
                 f"{path}: variable {variable!r} must be a 2D real numeric array; got {found[variable].what}."
             )
         return _Table(arrays[variable].astype(np.float64))
+    if not arrays:
+        listed = "; ".join(f"{name!r}: {found[name].what}" for name in sorted(found)) or "none"
+        raise InputError(f"{path}: holds no 2D real numeric array to read as points (variables: {listed}).")
     if len(arrays) != 1:
-        names = ", ".join(sorted(arrays)) or "none"
+        names = ", ".join(sorted(arrays))
         raise InputError(f"{path}: name the variable to read with `variable`; 2D numeric arrays in the file: {names}.")
     return _Table(next(iter(arrays.values())).astype(np.float64))
 
@@ -870,8 +892,16 @@ def _read_ply_binary(path: Path, data: bytes, offset: int, order: str, count: in
 
 
 def _read_ply_ascii(path: Path, body: bytes, elements, names: list[str]) -> _Table:
-    """An ASCII PLY body: one line per element instance, elements in header order."""
+    """An ASCII PLY body: one line per element instance, elements in header order; a body of
+    more lines than the header declares is refused (the header's count may be the wrong one)."""
     lines = [line for line in body.decode("ascii", errors="replace").splitlines() if line.strip()]
+    declared = sum(count for _, count, _ in elements)
+    if len(lines) > declared:
+        counts = ", ".join(f"{count} {name}" for name, count, _ in elements)
+        raise InputError(
+            f"{path}: the header declares {declared} lines ({counts}) but the body holds {len(lines)}: "
+            "is the header's count wrong?"
+        )
     first = 0
     for name, count, properties in elements:
         if name != "vertex":
@@ -979,6 +1009,8 @@ def _read_pcd(path: Path) -> _Table:
         raise InputError(f"{path}: the PCD header's point counts must not be negative; got {', '.join(negative)}.")
     if not (len(sizes) == len(types) == len(counts) == n) or min(counts) < 1:
         raise InputError(f"{path}: the PCD header's FIELDS, SIZE, TYPE and COUNT lines do not match.")
+    if n_points == 0:
+        raise InputError(f"{path}: holds no points (its header declares 0).")
     if sum(counts) > len(data):
         # (a point's values take a byte each at least, and their header a byte per count: a
         # damaged COUNT of 1e13 built that many names and ran the machine out of memory)
@@ -1100,10 +1132,18 @@ def write_points(path, points, /) -> Path:
     if not isinstance(path, (str, Path)) and not hasattr(path, "__fspath__"):
         raise TypeError(f"`path` must be a str or os.PathLike; got {_describe(path)}.")
     path = Path(path)
+    if "\x00" in str(path):
+        raise InputError(f"`path` must be a file name without NUL characters; got {_clip(str(path), 200)!r}.")
     suffix = path.suffix.lower()
     if suffix not in WRITE_SUFFIXES:
         raise InputError(f"`path` must end in one of {', '.join(WRITE_SUFFIXES)}; got {str(path)!r}.")
-    arr = np.asarray(points)
+    try:
+        arr = np.asarray(points)
+    except ValueError:  # (rows of unequal length)
+        raise InputError(
+            "`points` must be rows of equal length (an array of shape (n_points, n_dims)); got rows of "
+            "different lengths."
+        ) from None
     if not is_real_dtype(arr.dtype):
         raise TypeError(f"`points` must be a real numeric array; got {_describe(arr)}.")
     if arr.dtype == bool:  # (as every reader and estimator refuses one)
