@@ -351,6 +351,7 @@ def test_unknown_option():
         (np.ones((2, 3)), ValueError, r"square adjacency of shape \(n, n\); got shape \(2, 3\)"),
         (np.array([[0, -1], [-1, 0]]), ValueError, "non-negative"),
         (np.array([[0, np.nan], [np.nan, 0]]), ValueError, "finite"),
+        (np.array([[0, 1, 1], [1, 0, np.inf], [1, np.inf, 0]]), ValueError, "finite edge lengths"),
         (np.zeros((0, 0)), ValueError, "at least one node"),
         ("graph", TypeError, "`graph` must be a scipy.sparse matrix"),
     ],
@@ -437,3 +438,20 @@ def test_eigenvector_runs_lapack_on_one_blas_thread(monkeypatch):
     assert seen == [1, 1]  # one call per component, each on one thread
     np.testing.assert_allclose(values[:5], values[0])
     np.testing.assert_allclose(values[5:], values[5])
+
+
+def test_normalised_degree_and_harmonic_on_a_path_by_hand():
+    """A path of 4 nodes: its largest degree (2) is not n - 1 (3), so dividing by either tells
+    the rules apart (the star and the doctest have both equal). Harmonic: sum of 1/d over
+    the others, over n - 1: (1 + 1/2 + 1/3) / 3 and (1 + 1 + 1/2) / 3."""
+    path = np.array([[0, 1, 0, 0], [1, 0, 1, 0], [0, 1, 0, 1], [0, 0, 1, 0]])
+    np.testing.assert_allclose(cen.degree(path, normalized=True), [0.5, 1.0, 1.0, 0.5], rtol=1e-15)
+    np.testing.assert_allclose(cen.harmonic(path, normalized=True), [11 / 18, 5 / 6, 5 / 6, 11 / 18], rtol=1e-15)
+
+
+def test_a_self_loop_counts_for_no_measure():
+    looped = np.array([[1, 1, 0], [1, 0, 1], [0, 1, 0]])
+    plain = looped - np.diag(np.diag(looped))
+    np.testing.assert_array_equal(cen.degree(looped), [1, 2, 1])
+    for name in NAMES:
+        np.testing.assert_allclose(cen.compute(looped, name), cen.compute(plain, name), rtol=1e-15)

@@ -212,3 +212,16 @@ def test_an_image_of_other_dimension_is_named_as_2d_or_3d(shape):
     """A 1D or 4D image was told it "must be a 2D array", though 3D images are taken (audit 25)."""
     with pytest.raises(ValueError, match=r"`image` must be a 2D or 3D array; got shape"):
         pixel_graph(np.ones(shape, dtype=bool))
+
+
+def test_a_pixel_or_voxel_at_the_threshold_is_background_in_2d_and_3d():
+    """``threshold`` keeps what is above it, in a volume as in an image (a voxel equal to it
+    was foreground in 3D only)."""
+    image = np.zeros((3, 3))
+    image[1, 1], image[1, 2] = 10.0, 5.0
+    volume = np.zeros((3, 3, 3))
+    volume[1, 1, 1], volume[1, 1, 2] = 10.0, 5.0
+    for grid, kept in ((image, 4), (volume, 13)):
+        graph, nodes = pixel_graph(grid, threshold=5)
+        np.testing.assert_array_equal(nodes, [kept])
+        assert graph.shape == (1, 1)

@@ -383,3 +383,13 @@ def test_a_gabriel_edge_of_points_on_a_tilted_plane_is_kept():
     assert graph[0, 1] > 0
     np.testing.assert_array_equal(graph.indices, flat.indices)
     np.testing.assert_allclose(graph.data, flat.data, rtol=1e-12)
+
+
+@pytest.mark.parametrize("angle", np.linspace(0.05, 1.5, 30))
+def test_a_turned_grid_keeps_its_gabriel_edges_only(angle):
+    """On a square grid the diagonals have their two other corners exactly on the circle of
+    which they are the diameter: only rounding tells them apart. With the tolerance, every
+    turn gives the 60 grid edges of a 6 x 6 grid; without it, the diagonals came and went."""
+    grid = np.stack(np.meshgrid(np.arange(6.0), np.arange(6.0)), axis=-1).reshape(-1, 2)
+    turn = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
+    assert gabriel_graph(grid @ turn.T + [3.7, -1.3]).nnz // 2 == 60

@@ -250,6 +250,7 @@ def test_tiny_initial_sigma2_gives_a_finite_answer(fish, rot2):
     x = fish @ rot2(5).T
     reg = RigidCPD(sigma2=1e-300, tol=1e-8).fit(fish, x)
     assert np.all(np.isfinite(reg.moving_transformed_)) and np.isfinite(reg.sigma2_)
+    np.testing.assert_allclose(reg.moving_transformed_, x, atol=1e-10)  # (and the right one)
 
 
 def test_inputs_are_not_modified(fish, rot2):

@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from centrality_vision.exceptions import CollapseWarning
+from centrality_vision.exceptions import CollapseWarning, ConvergenceWarning
 from centrality_vision.registration import ICP, AffineCPD, NonRigidCPD, RigidCPD
 from centrality_vision.registration._estep import Posteriors
 from centrality_vision.registration._mstep import gaussian_kernel, nonrigid_m_step
@@ -83,10 +83,15 @@ def test_fgt_outlier_constant_beyond_exp_range_is_finite():
     rng = np.random.default_rng(2)
     moving = rng.random((30, 3)) * 1e140
     fixed = moving + 1e138
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
+    # (unnormalised, CPD's outlier constant is in the data's units: at sigma2 ~ 1e279 the
+    # uniform term outweighs every Gaussian, which the fit says instead of overflowing)
+    with pytest.warns(ConvergenceWarning) as record:
         reg = RigidCPD(method="fgt", normalize=False, w=0.5, max_iter=5, tol=0.0).fit(moving, fixed)
+    assert any("every fixed point was explained by the outlier term" in str(r.message) for r in record)
+    assert any(issubclass(r.category, CollapseWarning) for r in record)
     assert np.all(np.isfinite(reg.moving_transformed_))
+    reg = RigidCPD(method="fgt", normalize=False, max_iter=50, tol=0.0).fit(moving, fixed)  # w=0: found
+    np.testing.assert_allclose(reg.moving_transformed_, fixed, rtol=0, atol=1e-10 * 1e140)
 
 
 def test_knn_frame_of_sets_far_apart_relative_to_the_moving_radius():

@@ -109,10 +109,14 @@ def test_precomputed_graphs_and_centralities(fish_pair):
 
 
 @pytest.mark.parametrize("graph", GRAPHS)
-def test_every_graph_runs(fish_pair, graph):
+def test_every_graph_runs(fish_pair, fish, rot2, graph):
     y, x = fish_pair.moving, fish_pair.fixed
     gpd = GPD(RigidCPD(max_iter=5, tol=0), graph=graph).fit(y, x)
     assert gpd.moving_graph_.shape == (len(y), len(y)) and np.all(np.isfinite(gpd.moving_transformed_))
+    turned = fish @ rot2(20).T + 0.1  # and registers a turned copy with it
+    np.testing.assert_allclose(
+        GPD(RigidCPD(tol=1e-10), graph=graph).fit(fish, turned).moving_transformed_, turned, atol=1e-6
+    )
 
 
 def test_base_estimator_is_left_unfitted(fish_pair):

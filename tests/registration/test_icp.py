@@ -164,3 +164,29 @@ def test_a_step_that_leaves_too_few_pairs_is_undone(fish, rot2):
     assert icp.n_iter_ == 0 and len(icp.history_["objective"]) == 1
     assert np.all(np.isfinite(icp.history_["objective"]))
     np.testing.assert_allclose(icp.moving_transformed_, fish, atol=1e-12)  # the start (the identity)
+
+
+def _turned_blob():
+    rng = np.random.default_rng(0)
+    moving = rng.random((50, 2))
+    turn = np.array([[np.cos(0.3), -np.sin(0.3)], [np.sin(0.3), np.cos(0.3)]])
+    return moving, moving @ turn.T + 0.1, turn
+
+
+def test_icp_takes_max_iter_updates_and_no_more():
+    moving, fixed, _ = _turned_blob()
+    icp = ICP(max_iter=3, tol=0).fit(moving, fixed)
+    assert icp.n_iter_ == 3 and not icp.converged_
+    assert len(icp.history_["objective"]) == 4  # the start and one entry per update
+
+
+def test_icp_tol_is_relative_to_the_objective():
+    """With tol=1e-3 read as an absolute change, ICP said it converged after 5 steps at an
+    objective of 0.015, in a wrong pose; read relative, it goes on to the exact pose."""
+    moving, fixed, turn = _turned_blob()
+    icp = ICP(tol=1e-3).fit(moving, fixed)
+    assert icp.converged_ and icp.history_["objective"][-1] < 1e-20
+    np.testing.assert_allclose(icp.transform_.rotation, turn, atol=1e-10)
+    objective = icp.history_["objective"]
+    changes = np.abs(np.diff(objective[:-1]))
+    assert np.all(changes > 1e-3 * objective[:-2])  # no earlier step was within tol

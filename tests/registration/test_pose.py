@@ -227,3 +227,38 @@ def test_global_search_finds_the_basin_of_two_partial_scans():
             fit = RigidCPD(scale=False, w="auto", init="global", random_state=0).fit(moving, fixed @ rotation.T + 1.0)
         found += angle_degrees(fit.transform_.rotation, rotation) < 15
     assert found >= 10
+
+
+def test_the_search_on_flat_3d_sets_keeps_proper_rotations():
+    """On a planar set the cross-covariance has a zero singular value: without the sign
+    correction, 2 of 20 batched M-steps turned a pose into a reflection."""
+    from centrality_vision.transforms import random_rotation
+
+    rng = np.random.default_rng(1)
+    for trial in range(20):
+        moving = np.c_[rng.random((40, 2)) * [1.0, 2.0], np.zeros(40)]
+        fixed = moving @ random_rotation(3, seed=trial).T
+        pose = global_pose_search(moving, fixed, scale=False, w=0.0, random_state=0)
+        assert np.linalg.det(pose.rotation) == pytest.approx(1.0, abs=1e-12)
+
+
+def test_the_hypotheses_refined_are_distinct_poses(fish, monkeypatch):
+    """The second stage refines n_hypotheses poses at least _DISTINCT_DEGREES apart (not the
+    same basin found from neighbouring lattice rotations)."""
+    from centrality_vision.registration import _pose
+
+    starts = []
+    real = _pose._em
+
+    def recording(moving, fixed, rotation, *args):
+        starts.append(rotation.copy())
+        return real(moving, fixed, rotation, *args)
+
+    monkeypatch.setattr(_pose, "_em", recording)
+    turned = fish @ np.array([[0.0, -1.0], [1.0, 0.0]]).T
+    global_pose_search(fish, turned, scale=False, w=0.1, n_hypotheses=6, random_state=0)
+    refined = starts[1]
+    assert len(refined) == 6
+    for i in range(6):
+        for j in range(i):
+            assert _pose._angle_between(refined[i], refined[j]) >= _pose._DISTINCT_DEGREES

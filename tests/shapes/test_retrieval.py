@@ -194,10 +194,20 @@ def _blocks():
     return np.abs(np.subtract.outer(x, x)), np.repeat(["a", "b", "c"], 4)
 
 
+def test_the_query_ranks_first_even_tied_with_an_earlier_shape():
+    """Shape 1 is at distance 0 from shape 0 as from itself: ranked by index alone, query 1
+    found itself at rank 1 (its own class) where its first other shape is of class a."""
+    d = np.array([[0.0, 0.0, 5.0], [0.0, 0.0, 5.0], [5.0, 5.0, 0.0]])
+    labels = ["a", "b", "b"]
+    np.testing.assert_array_equal(retrieval_counts(d, labels, top=1), [0])
+    assert bullseye_score(d, labels, top=1) == 1.0  # each query finds itself first
+
+
 def test_scores_by_hand():
     d, labels = _blocks()
     assert bullseye_score(d, labels, top=4) == 1.0
     assert bullseye_score(d, labels, top=8) == 1.0  # capped at the class size
+    assert bullseye_score(d, labels, top=2) == 1.0  # capped at top (24 of 24, not of 48)
     np.testing.assert_array_equal(retrieval_counts(d, labels, top=4), [12, 12, 12, 0])
     assert nearest_neighbor_accuracy(d, labels, n_train=2, n_splits=4) == 1.0
     swapped = labels.copy()
