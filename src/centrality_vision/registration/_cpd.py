@@ -226,8 +226,8 @@ def initial_sigma2(moving, fixed) -> float:
     >>> initial_sigma2([[0.0, 0.0]], [[3.0, 4.0]])
     12.5
 
-    (A fit starts from this value times ``D / d`` when the fixed set spans only ``d`` of the
-    D dimensions; see the module docstring.)
+    (A fit starts from this value times ``D / d`` where the sets span only ``d`` of the D
+    dimensions; see the module docstring.)
     """
     moving = as_points(moving, name="moving", n_dims=ANY_DIMS)
     fixed = as_points(fixed, name="fixed", n_dims=(moving.shape[1],))
@@ -1172,8 +1172,8 @@ class _CPD(BaseEstimator):
 
     def _e_step_of(self, fixed, planner, lift=0):
         """``e_step(moving_t, sigma2, w, prior) -> Posteriors`` of this fit: CPD's or the k-NN
-        model's, for a mixture over ``lift`` fewer dimensions than the sets' (the fixed set's
-        span; see the module docstring): ``w`` is that mixture's, and so is the objective."""
+        model's, for a mixture over ``lift`` fewer dimensions than the coordinates' (what the
+        sets span; see the module docstring): ``w`` is that mixture's, and so is the objective."""
         e_step = self._full_e_step_of(fixed, planner)
         if not lift:
             return e_step
