@@ -377,6 +377,9 @@ def run_units(
     if path.exists() and not path.is_file():
         raise InputError(f"`path` must be a results file (JSON lines); got {str(path)!r}, which is a folder.")
     ids = {u.key: unit_id(u) for u in units}
+    from .._provenance import code_digest
+
+    started = code_digest()  # (the digest in every id: a result of other code is not stored under it)
     stored, damaged = _read_results(path)
     done = {key: stored[i] for key, i in ids.items() if i in stored}
     todo = [u for u in units if u.key not in done]
@@ -411,9 +414,6 @@ def run_units(
             leave=False,
         )
     appender = _Appender(path)
-    from .._provenance import code_digest
-
-    started = code_digest()
 
     def finished(key, outcome):
         result, digest = outcome
