@@ -120,3 +120,35 @@ def test_a_set_that_spans_more_keeps_the_full_dimension():
         warnings.simplefilter("ignore", UserWarning)  # (the turn about the line is not determined)
         fit = RigidCPD().fit(blob, line)
     assert 0.3 < fit.transform_.scale < 3
+
+
+@pytest.mark.parametrize("n_dims", [2, 3])
+@pytest.mark.parametrize("degrees", [60, 85])
+def test_two_lines_at_an_angle_are_a_problem_in_their_plane(n_dims, degrees):
+    """Each line spans 1 dimension, the two together a plane: taken as 1D, the non-rigid fit
+    read the distance off the line as the Gaussians' width and ended 0.42 off, 'converged'."""
+    t = np.linspace(-1, 1, 40)
+    along = t + 0.3 * t**3  # uneven spacing
+    angle = np.radians(degrees)
+    moving = np.zeros((40, n_dims))
+    moving[:, 0] = along
+    fixed = np.zeros((40, n_dims))
+    fixed[:, 0], fixed[:, 1] = along * np.cos(angle), along * np.sin(angle)
+    fit = NonRigidCPD().fit(moving, fixed)
+    np.testing.assert_allclose(fit.moving_transformed_, fixed, atol=1e-6)
+
+
+def test_a_lifted_fit_that_reaches_the_variance_floor_ends_as_in_2d():
+    """The floor followed the fixed set's spread per coordinate: a lifted exact fit ended at
+    2/3 of the 2D sigma2_."""
+    moving = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 2.0], [1.5, 1.2]])
+    fixed = moving @ np.array([[0.9, -0.3], [0.3, 0.9]]).T + [0.2, 0.1]  # an exact similarity
+    for estimator in (RigidCPD(), NonRigidCPD(w=0.1)):
+        flat = estimator.fit(moving, fixed)
+        expected = (flat.sigma2_, flat.n_iter_, flat.posteriors_.neg_log_likelihood)
+        lifted = estimator.fit(_lifted(moving, True), _lifted(fixed, True))
+        assert lifted.n_iter_ == expected[1]
+        assert lifted.sigma2_ == pytest.approx(expected[0], rel=1e-9)
+        # (c goes to the E-step as a weight: at the floor its odds are ~1e6 times w's, whose
+        # rounding costs ~1e-10 of the objective)
+        assert lifted.posteriors_.neg_log_likelihood == pytest.approx(expected[2], rel=1e-9)

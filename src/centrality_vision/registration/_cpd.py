@@ -10,14 +10,17 @@ Conventions every variant shares:
   ``c = (2 pi sigma2)^(D/2) w / (1 - w) M / N``, computed in log space.
 * D is the dimension the sets span: a set with no extent along some direction (an outline
   with ``z = 0`` in 3D, a plane, a line; a principal side below 1/1000 of its longest) is a
-  set of fewer dimensions, and where neither set spans more than d of the coordinates' D
-  dimensions the mixture is a density within d dimensions: ``c`` and the objective take d,
-  and sigma2 is the residual per spanned dimension (the M-steps'
+  set of fewer dimensions, and where the two sets together (each centred) span only d of
+  the coordinates' D dimensions the mixture is a density within d dimensions: ``c`` and
+  the objective take d, and sigma2 is the residual per spanned dimension (the M-steps'
   ``sum P |x - T(y)|^2 / (Np d)``). A 2D problem lifted into any plane of 3D then registers
   as it does in 2D (with D = 3, sigma2 was 2/3 of the residual in the plane, and w='auto'
   read the narrower fit as outliers: the fish with 20 clutter points, lifted, collapsed).
-  A set that spans more than the other (a 3D blob onto a line) keeps the larger D: its
-  residual off the other set is real.
+  Sets that span more together than apart (two lines at an angle, planes at an angle, a 3D
+  blob onto a line) keep the larger d: their residual off each other is real. The cut at
+  1/1000 is sharp: a planar scan 1/100 thick is a 3D set, and with clutter and w='auto' it
+  can collapse as the flat set did before; with D of 10 or more and w > 0 the lifted fit
+  drifts from the 2D one (the constant goes to the E-step as a weight whose odds round).
 * ``normalize=True`` (the default): inside ``fit`` each set is centred on its own mean and
   both are divided by one common factor, the RMS distance of all M + N points to their
   set's mean, so the EM runs on sets of unit RMS radius whatever the caller's units and
@@ -570,10 +573,22 @@ def _thin(sides: np.ndarray) -> np.ndarray:
 
 
 def _model_dims(moving: np.ndarray, fixed: np.ndarray) -> int:
-    """The dimension of CPD's mixture for these sets: the most that either spans, each set's
-    span being the number of its principal sides longer than :data:`_THIN_SIDE` of its
-    longest (at least 1); see the module docstring."""
-    return max(max(int(np.sum(~_thin(_principal_sides(points)))), 1) for points in (moving, fixed))
+    """The dimension of CPD's mixture for these sets: what they span together, a set's span
+    being the number of its principal sides longer than :data:`_THIN_SIDE` of its longest
+    (at least 1); see the module docstring.
+
+    Together: the span of both sets, each centred and of unit RMS radius, stacked (two lines
+    at an angle span a plane: taken as 1D, a non-rigid fit of one onto the other read the
+    distance off the line as the Gaussians' width and ended 0.42 off, "converged"), and at
+    least each set's own span (a blob far smaller than a line it is fitted onto)."""
+    own = [max(int(np.sum(~_thin(_principal_sides(points)))), 1) for points in (moving, fixed)]
+    unit = []
+    for points in (moving, fixed):
+        centred_points = points - points.mean(axis=0)
+        radius = math.sqrt(float(np.mean(np.sum(centred_points * centred_points, axis=1))))
+        unit.append(centred_points / radius if radius > 0 else centred_points)
+    both = int(np.sum(~_thin(_principal_sides(np.vstack(unit)))))
+    return max(*own, both)
 
 
 def _flat_weight(w: float, sigma2: float, lift: int) -> float:
@@ -926,6 +941,8 @@ class _CPD(BaseEstimator):
         # sigma2 measures residuals among the fixed points: its floor follows their spread (a
         # fixed set 1e6 times smaller than the moving set stopped at a tenth of its radius)
         floor = _SIGMA2_FLOOR * (max(spread_fixed, 1e-280) if spread_fixed > 0 else spread)
+        if lift:  # (the spreads are per coordinate; sigma2 is per spanned dimension)
+            floor = floor * n_dims / model_dims
         state = self._init_state(moving_n, fixed, start)
         moving_t = self._apply(state, self._work)
         if self.sigma2 is None:
