@@ -582,11 +582,7 @@ def _model_dims(moving: np.ndarray, fixed: np.ndarray) -> int:
     distance off the line as the Gaussians' width and ended 0.42 off, "converged"), and at
     least each set's own span (a blob far smaller than a line it is fitted onto)."""
     own = [max(int(np.sum(~_thin(_principal_sides(points)))), 1) for points in (moving, fixed)]
-    unit = []
-    for points in (moving, fixed):
-        centred_points = points - points.mean(axis=0)
-        radius = math.sqrt(float(np.mean(np.sum(centred_points * centred_points, axis=1))))
-        unit.append(centred_points / radius if radius > 0 else centred_points)
+    unit = [centred(points)[1] / (rms_radius(points) or 1.0) for points in (moving, fixed)]
     both = int(np.sum(~_thin(_principal_sides(np.vstack(unit)))))
     return max(*own, both)
 
@@ -599,8 +595,12 @@ def _flat_weight(w: float, sigma2: float, lift: int) -> float:
     if lift == 0 or w <= 0:
         return w
     log_odds = math.log(w) - math.log1p(-w) - 0.5 * lift * math.log(2.0 * math.pi * sigma2)
-    # (odds beyond 1e12 round the weight to 1, where CPD's constant would divide by 0)
-    odds = math.exp(min(log_odds, 690.0))
+    return _weight_of_odds(math.exp(min(log_odds, 690.0)))
+
+
+def _weight_of_odds(odds: float) -> float:
+    """The weight ``odds / (1 + odds)`` of an outlier term, at most :data:`_AUTO_W_E_MAX`
+    (odds beyond 1e12 round the weight to 1, where CPD's constant would divide by 0)."""
     return min(odds / (1.0 + odds), _AUTO_W_E_MAX)
 
 
@@ -931,6 +931,7 @@ class _CPD(BaseEstimator):
         # the mixture's dimension: what the sets span (see the module docstring)
         model_dims = _model_dims(moving_n, fixed)
         lift = n_dims - model_dims
+        per_dim = n_dims / model_dims  # the spreads and M-steps divide by D; sigma2 is per spanned dimension
         # the largest coordinate whose rounding the moving points carry, in the frame's units:
         # far from the origin the caller's coordinates round by more than the centred
         # points show, and the M-steps must not take that rounding for spread
@@ -941,15 +942,10 @@ class _CPD(BaseEstimator):
         # sigma2 measures residuals among the fixed points: its floor follows their spread (a
         # fixed set 1e6 times smaller than the moving set stopped at a tenth of its radius)
         floor = _SIGMA2_FLOOR * (max(spread_fixed, 1e-280) if spread_fixed > 0 else spread)
-        if lift:  # (the spreads are per coordinate; sigma2 is per spanned dimension)
-            floor = floor * n_dims / model_dims
+        floor *= per_dim
         state = self._init_state(moving_n, fixed, start)
         moving_t = self._apply(state, self._work)
-        if self.sigma2 is None:
-            sigma2 = _initial_sigma2(moving_t, fixed)
-            sigma2 = sigma2 * n_dims / model_dims if lift else sigma2
-        else:
-            sigma2 = float(self.sigma2)
+        sigma2 = _initial_sigma2(moving_t, fixed) * per_dim if self.sigma2 is None else float(self.sigma2)
         if self.sigma2 is not None and not sigma2 <= _SIGMA2_MAX * spread:  # (1e300 overflowed)
             unit = "" if frame.scale == 1.0 else " in the normalised frame"
             raise InputError(
@@ -965,7 +961,8 @@ class _CPD(BaseEstimator):
         # set's bounding box; CPD's E-step takes the weight of a density 1/N instead.
         sides = _principal_sides(fixed) if auto_w else None
         history = {"objective": [], "sigma2": [], "error": [], "method": [], "w": []}
-        log_s = math.log(frame.scale)
+        # the objective in the caller's units: plus the density's Jacobian
+        units = n_fixed * model_dims * math.log(frame.scale)
         converged = False
         stopped = None
         previous = None
@@ -1005,7 +1002,7 @@ class _CPD(BaseEstimator):
                         state, moving_t, sigma2 = fallback
                         continue
                 error = None if true_n is None else float(np.linalg.norm(true_n - moving_t))
-                history["objective"].append(objective + n_fixed * model_dims * log_s)
+                history["objective"].append(objective + units)
                 history["sigma2"].append(sigma2)
                 history["error"].append(error)
                 history["method"].append(post.method)
@@ -1016,7 +1013,7 @@ class _CPD(BaseEstimator):
                         self._make_transform(state, moving, frame),
                         frame.points_out(moving_t),
                         sigma2 * frame.scale**2,
-                        objective + n_fixed * model_dims * log_s,
+                        objective + units,
                         None if error is None else error * frame.scale,
                     )
                     if _stops(self.callback(info)):
@@ -1059,8 +1056,7 @@ class _CPD(BaseEstimator):
                 new_state, new_moving_t, new_sigma2 = self._m_step(m_post, self._work, fixed, state, sigma2)
                 if landmarks is not None:
                     new_sigma2 = _data_sigma2(post, fixed, new_moving_t)
-                if lift:  # (the M-steps divide by the sets' D)
-                    new_sigma2 = new_sigma2 * n_dims / model_dims
+                new_sigma2 *= per_dim
                 if not np.all(np.isfinite(new_moving_t)):
                     stopped = (
                         f"the M-step of iteration {iteration + 1} gave non-finite points; "
@@ -1105,7 +1101,7 @@ class _CPD(BaseEstimator):
             w_fraction = _w_estimate(n_p, n_fixed)
             w_e = _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2, model_dims))
             post = e_step(moving_t, sigma2, w_e, current_prior)
-            final_objective = post.neg_log_likelihood + self._penalty(state) + n_fixed * model_dims * log_s
+            final_objective = post.neg_log_likelihood + self._penalty(state) + units
         name = type(self).__name__
         notes = []
         if stopped is not None:
@@ -1151,7 +1147,7 @@ class _CPD(BaseEstimator):
             else replace(
                 post,
                 px=post.px * frame.scale + post.p1[:, None] * frame.fixed_centre,
-                neg_log_likelihood=post.neg_log_likelihood + n_fixed * model_dims * log_s,
+                neg_log_likelihood=post.neg_log_likelihood + units,
             )
         )
         # the normalised state, for posterior(): c depends on sigma2 in the frame's units
@@ -1344,8 +1340,8 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         ``ICP(trim=0.3)``; turned by up to 180 degrees, ``init='global'`` with 'auto'
         finds the pose in 90% of them. 'auto' estimates it during EM: the fraction of fixed points that are
         outliers under a uniform density over the fixed set's bounding box (along its
-        principal axes, so that it does not depend on the sets' orientation; a side below
-        1/1000 of the longest, as of a flat set in 3D, is as wide as the Gaussians), updated as
+        principal axes, so that it does not depend on the sets' orientation; of a flat set
+        in 3D, the area it spans: see the module docstring), updated as
         ``1 - Np / N`` after each E-step (CPD's posterior, also under GPD), from 0.1 and at
         most 0.9 (the estimate is ``w_``). EM runs twice: with ``w`` held at CPD's 0.1 until
         it settles, then estimated, and estimated from the first step. A run that collapsed
@@ -1499,10 +1495,8 @@ def _box_weight(w_fraction: float, n_fixed: int, box: float) -> float:
     density over a box of volume ``box``."""
     if w_fraction <= 0:
         return w_fraction
-    odds = w_fraction / (1.0 - w_fraction) * n_fixed / box
-    # (a nearly flat fixed set has a box of almost no volume: the odds can pass 1e16, where
-    # the weight would round to 1 and CPD's outlier constant divide by 0)
-    return min(odds / (1.0 + odds), _AUTO_W_E_MAX)
+    # (a nearly flat fixed set has a box of almost no volume: the odds can pass 1e16)
+    return _weight_of_odds(w_fraction / (1.0 - w_fraction) * n_fixed / box)
 
 
 def _needed_points(n_dims: int, n_moving: int, n_fixed: int) -> float:
