@@ -343,9 +343,8 @@ def _ragged(path: Path, rows, split, names, width: int):
     k = next(k for k, length in enumerate(widths) if length != width)
     number = rows[k][0]
     before = "the header" if names is not None else "the other rows" if k == 0 else "the rows before it"
-    values_word = "value" if widths[k] == 1 else "values"
     hint = " (a '#' after the values starts no comment: a comment takes a line of its own)" if commented[k] else ""
-    raise InputError(f"{path}: line {number} has {widths[k]} {values_word}, {before} {width}{hint}.")
+    raise InputError(f"{path}: line {number} has {counted(widths[k], 'value')}, {before} {width}{hint}.")
 
 
 def _read_text(path: Path) -> _Table:
