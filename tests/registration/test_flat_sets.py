@@ -152,3 +152,42 @@ def test_a_lifted_fit_that_reaches_the_variance_floor_ends_as_in_2d():
         # (c goes to the E-step as a weight: at the floor its odds are ~1e6 times w's, whose
         # rounding costs ~1e-10 of the objective)
         assert lifted.posteriors_.neg_log_likelihood == pytest.approx(expected[2], rel=1e-9)
+
+
+def test_the_outlier_box_changes_continuously_with_the_sets_thickness():
+    """w='auto''s box: every side at least the Gaussians' width sqrt(2 pi sigma2). Floored
+    only below 1/1000 of the longest side, a side just above the cut (2.2e-3 of 2) gave a
+    box 110 times smaller than one just below it."""
+    from centrality_vision.registration._cpd import _box_volume
+
+    sigma2 = 0.01 / (2.0 * np.pi)  # width 0.1
+    volumes = [_box_volume(np.array([2.0, 1.0, side]), sigma2, 3) for side in (0.0, 1.9e-3, 2.1e-3, 0.05, 0.1)]
+    assert volumes == pytest.approx([0.2] * 5)
+    assert _box_volume(np.array([2.0, 1.0, 0.4]), sigma2, 3) == pytest.approx(0.8)
+    assert _box_volume(np.array([2.0, 0.05, 0.4]), sigma2, 2) == pytest.approx(0.8)  # the 2 longest
+    assert _box_volume(np.array([2.0, 1.0, 0.0]), 1e6, 3) == pytest.approx((2.0 * np.pi * 1e6) ** 1.5)
+
+
+@pytest.mark.parametrize("off_plane", ["one point 1% off", "thickness 1e-3"])
+def test_rigid_auto_w_on_a_nearly_flat_cluttered_set_finds_the_pose(fish_pair, off_plane):
+    """A flat set with one clutter point 1% of its extent off the plane, or a scan 1e-3 of its
+    extent thick, spans 3D: with the box's thin side taken as it is, rigid w='auto' ended
+    0.25 to 0.7 off the true pose in 6 and 7 of 40 such problems, without a warning (the flat
+    ones: none)."""
+    moving = fish_pair.moving
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        angle = rng.uniform(-0.6, 0.6)
+        truth = moving @ np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]]).T + [0.3, -0.2]
+        fixed = truth + rng.normal(scale=0.02, size=truth.shape)
+        fixed = np.vstack([fixed, rng.uniform(fixed.min(0), fixed.max(0), (30, 2))])
+        extent = np.ptp(fixed, axis=0).max()
+        if off_plane == "one point 1% off":
+            lifted_moving = np.c_[moving, np.zeros(len(moving))]
+            lifted_fixed = np.vstack([np.c_[fixed, np.zeros(len(fixed))], [*fixed.mean(axis=0), 0.01 * extent]])
+        else:
+            lifted_moving = np.c_[moving, rng.normal(scale=1e-3 * extent, size=len(moving))]
+            lifted_fixed = np.c_[fixed, rng.normal(scale=1e-3 * extent, size=len(fixed))]
+        fit = RigidCPD(w="auto").fit(lifted_moving, lifted_fixed)
+        error = np.sqrt(np.mean(np.sum((fit.moving_transformed_[:, :2] - truth) ** 2, axis=1)))
+        assert error < 0.02, (seed, error)

@@ -18,9 +18,16 @@ Conventions every variant shares:
   read the narrower fit as outliers: the fish with 20 clutter points, lifted, collapsed).
   Sets that span more together than apart (two lines at an angle, planes at an angle, a 3D
   blob onto a line) keep the larger d: their residual off each other is real. The cut at
-  1/1000 is sharp: a planar scan 1/100 thick is a 3D set, and with clutter and w='auto' it
-  can collapse as the flat set did before; with D of 10 or more and w > 0 the lifted fit
-  drifts from the 2D one (the constant goes to the E-step as a weight whose odds round).
+  1/1000 is sharp: a planar scan 1/100 thick is a 3D set, whose sigma2 averages the
+  residual over all three coordinates, 2/3 of the residual in its plane. w='auto''s box
+  does not jump at the cut (see :func:`_box_volume`): rigid fits of such scans with clutter
+  find the pose as the flat ones do. What remains is the narrower sigma2: a non-rigid fit of
+  such a scan is regularised less than the flat one, and a rigid w='auto' fit whose model
+  does not fit the data (a rigid fit of the bent CPD fish with clutter, 1/1000 thick) reads
+  the residual as outliers and collapses, as the flat one did before d was taken; a remedy
+  is a separate variance across the thin direction. With D of 10 or more and w > 0 the
+  lifted fit drifts from the 2D one (the constant goes to the E-step as a weight whose odds
+  round).
 * ``normalize=True`` (the default): inside ``fit`` each set is centred on its own mean and
   both are divided by one common factor, the RMS distance of all M + N points to their
   set's mean, so the EM runs on sets of unit RMS radius whatever the caller's units and
@@ -119,8 +126,8 @@ _SIGMA2_MAX = 1e10
 # float64's rounding (1e-11 of the extent at 1e6; 2e-5 at 1e12, and 1e100 gave a
 # scale of 3.6e16 reported as converged).
 _LANDMARK_WEIGHT_MAX = 1e6
-# w="auto": a side of the outlier box below this share of the longest is floored at the
-# Gaussians' width (see _box_volume); longer sides are the set's extent.
+# A principal side below this share of a set's longest is a direction the set does not
+# span (see _model_dims).
 _THIN_SIDE = 1e-3
 # w="auto": start and bounds of the estimated outlier fraction.
 _AUTO_W_START, _AUTO_W_MAX = 0.1, 0.9
@@ -553,17 +560,23 @@ def _principal_sides(points: np.ndarray) -> np.ndarray:
 def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
     """Volume of the uniform outlier density's box in the mixture's ``model_dims`` dimensions
     at variance ``sigma2``: the ``model_dims`` longest of the fixed set's principal ``sides``,
-    a thin one (see :func:`_thin`) at least the width ``sqrt(2 pi sigma2)`` of CPD's Gaussians.
+    each at least the width ``sqrt(2 pi sigma2)`` of CPD's Gaussians.
 
-    The box of a flat fixed set in a mixture of its own dimension is its area. A thin side
-    remains where the moving set spans more than the fixed set: along it, a Gaussian centred
-    in the set has density ``1 / sqrt(2 pi sigma2)`` at every fixed point, and a box of that
-    width gives the uniform density the same factor. With a side of 0 (or a fixed floor) the
-    uniform density was unbounded and took every point as an outlier: the fish with ``z = 0``
-    added and 20 clutter points ended with ``w_`` 0.9 and nothing matched."""
+    The box of a flat fixed set in a mixture of its own dimension is its area. Along a side
+    shorter than the Gaussians' width, a Gaussian centred in the set has density about
+    ``1 / sqrt(2 pi sigma2)`` at every fixed point, and a box of that width gives the uniform
+    density the same factor: the uniform is never more concentrated than the Gaussians in
+    any direction, and the box changes continuously with the set's thickness. With a side of
+    0 the uniform density was unbounded and took every point as an outlier (the fish with
+    ``z = 0`` added and 20 clutter points ended with ``w_`` 0.9 and nothing matched); floored
+    only below 1/1000 of the longest side, a scan 1/100 thick kept a box 1/100 thick while
+    sigma2 was far wider, and the same fish with that thickness still ended with ``w_`` 0.88.
+    On sets as wide as the Gaussians in every direction the floor acts only in the first
+    steps, while sigma2 is large: fits of the fish and the bunny were bit-identical or moved
+    by under 2e-5."""
     width = max(math.sqrt(2.0 * math.pi * sigma2), 1e-300)
     longest = np.argsort(-sides, kind="stable")[:model_dims]
-    return float(np.prod(np.where(_thin(sides), np.maximum(sides, width), sides)[np.sort(longest)]))
+    return float(np.prod(np.maximum(sides, width)[np.sort(longest)]))
 
 
 def _thin(sides: np.ndarray) -> np.ndarray:
