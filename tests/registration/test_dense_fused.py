@@ -338,7 +338,7 @@ def test_fit_reports_the_last_e_step_best():
     fixed = (moving @ np.array([[0.9, -0.3], [0.3, 0.9]]))[rng.permutation(400)] + 0.005 * rng.normal(size=(400, 2))
     for est in (RigidCPD(method="dense", w=0.1), NonRigidCPD(method="dense", max_iter=300)):
         est.fit(moving, fixed)
-        moving_t, fixed_n, sigma2, w, prior = est._posterior_state
+        moving_t, fixed_n, sigma2, w, prior, _ = est._posterior_state
         want = _e_step(moving_t, fixed_n, sigma2, w, prior, method="dense").best
         np.testing.assert_array_equal(est.fixed_to_moving_, want)
         np.testing.assert_array_equal(est.posteriors_.best, want)

@@ -170,7 +170,7 @@ def test_prior_switched_off_below_the_sigma2_fraction(fish_pair):
     gpd = GPD(base, centrality="degree", prior_schedule=0.5).fit(y, x)
     assert gpd.history_["sigma2"][-1] < 0.5 * gpd.history_["sigma2"][0]
     # at the end the posterior is CPD's (no prior) at the final state
-    moving_t, fixed, sigma2, w, prior = gpd.estimator_._posterior_state
+    moving_t, fixed, sigma2, w, prior, _ = gpd.estimator_._posterior_state
     assert prior is None
     np.testing.assert_array_equal(gpd.posterior(), dense_posterior(moving_t, fixed, sigma2, w, None))
     full = GPD(base, centrality="degree").fit(y, x)

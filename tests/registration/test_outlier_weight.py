@@ -154,7 +154,7 @@ def test_auto_w_at_the_end_of_a_held_gpd_run_is_from_cpds_posterior(fish, rot2):
     fixed = np.vstack([fish @ rot2(20).T, rng.uniform(-1.5, 1.5, (30, 2))])
     gpd = GPD(RigidCPD(w="auto", callback=lambda info: info.iteration >= 3)).fit(fish, fixed)
     assert len(gpd.history_["w"]) == 4 and set(gpd.history_["w"]) == {_AUTO_W_START}  # held to the end
-    moving_t, fixed_n, sigma2, _, prior = gpd.estimator_._posterior_state
+    moving_t, fixed_n, sigma2, _, prior, _ = gpd.estimator_._posterior_state
     assert prior is not None
     n_p = dense_posterior(moving_t, fixed_n, sigma2, _AUTO_W_START).sum()
     assert gpd.w_ == pytest.approx(_w_estimate(n_p, len(fixed)), abs=1e-9)

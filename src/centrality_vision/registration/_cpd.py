@@ -25,9 +25,7 @@ Conventions every variant shares:
   such a scan is regularised less than the flat one, and a rigid w='auto' fit whose model
   does not fit the data (a rigid fit of the bent CPD fish with clutter, 1/1000 thick) reads
   the residual as outliers and collapses, as the flat one did before d was taken; a remedy
-  is a separate variance across the thin direction. With D of 10 or more and w > 0 the
-  lifted fit drifts from the 2D one (the constant goes to the E-step as a weight whose odds
-  round).
+  is a separate variance across the thin direction.
 * ``normalize=True`` (the default): inside ``fit`` each set is centred on its own mean and
   both are divided by one common factor, the RMS distance of all M + N points to their
   set's mean, so the EM runs on sets of unit RMS radius whatever the caller's units and
@@ -600,17 +598,6 @@ def _model_dims(moving: np.ndarray, fixed: np.ndarray) -> int:
     return max(*own, both)
 
 
-def _flat_weight(w: float, sigma2: float, lift: int) -> float:
-    """The weight to give the E-step (whose ``c`` takes the sets' D) for a mixture over
-    ``lift`` fewer dimensions with outlier weight ``w``: the odds ``w / (1 - w)`` divided by
-    the Gaussians' width ``sqrt(2 pi sigma2)`` once per dimension lifted, so that ``c`` is
-    ``(2 pi sigma2)^((D - lift) / 2) w / (1 - w) M / N``."""
-    if lift == 0 or w <= 0:
-        return w
-    log_odds = math.log(w) - math.log1p(-w) - 0.5 * lift * math.log(2.0 * math.pi * sigma2)
-    return _weight_of_odds(math.exp(min(log_odds, 690.0)))
-
-
 def _weight_of_odds(odds: float) -> float:
     """The weight ``odds / (1 + odds)`` of an outlier term, at most :data:`_AUTO_W_E_MAX`
     (odds beyond 1e12 round the weight to 1, where CPD's constant would divide by 0)."""
@@ -943,7 +930,6 @@ class _CPD(BaseEstimator):
         n_fixed, n_dims = fixed.shape
         # the mixture's dimension: what the sets span (see the module docstring)
         model_dims = _model_dims(moving_n, fixed)
-        lift = n_dims - model_dims
         per_dim = n_dims / model_dims  # the spreads and M-steps divide by D; sigma2 is per spanned dimension
         # the largest coordinate whose rounding the moving points carry, in the frame's units:
         # far from the origin the caller's coordinates round by more than the centred
@@ -981,7 +967,7 @@ class _CPD(BaseEstimator):
         previous = None
         current_prior = None
         planner = EStepPlanner()  # method='auto': the E-step path by timing, per fit
-        e_step = self._e_step_of(fixed, planner, lift)
+        e_step = self._e_step_of(fixed, planner, model_dims)
         # accelerate: the last EM iterates as vectors, and a pending extrapolated jump
         # (the plain step to fall back on, and the objective the jump must not exceed)
         squarem = bool(self.accelerate) and landmarks is None and not auto_w and not callable(prior)
@@ -1150,9 +1136,9 @@ class _CPD(BaseEstimator):
             "method": history["method"],
             "w": np.array(history["w"]),
         }
-        w_e = _flat_weight(w_e, sigma2, lift)  # (the E-step functions' weight, as `e_step` passes it)
+        mixture = model_dims if model_dims < n_dims else None  # (the E-step functions' model_dims)
         if post.best is None:  # the E-steps skip it (a third of an E-step): once, for the last state
-            post = replace(post, best=fixed_to_moving(moving_t, fixed, sigma2, w_e, current_prior))
+            post = replace(post, best=fixed_to_moving(moving_t, fixed, sigma2, w_e, current_prior, model_dims=mixture))
         self.fixed_to_moving_ = post.best
         self.posteriors_ = (
             post
@@ -1164,7 +1150,7 @@ class _CPD(BaseEstimator):
             )
         )
         # the normalised state, for posterior(): c depends on sigma2 in the frame's units
-        self._posterior_state = (moving_t, fixed, sigma2, w_e, current_prior)
+        self._posterior_state = (moving_t, fixed, sigma2, w_e, current_prior, mixture)
         return notes, final_objective, halted
 
     def _extrapolate(self, chain, state, floor):
@@ -1196,24 +1182,12 @@ class _CPD(BaseEstimator):
         sigma2 = float(np.exp(np.clip(log_jump, logs[2] + math.log(_SIGMA_JUMP), logs[2] - math.log(_SIGMA_JUMP))))
         return new_state, moving_t, max(sigma2, floor)
 
-    def _e_step_of(self, fixed, planner, lift=0):
+    def _e_step_of(self, fixed, planner, model_dims=None):
         """``e_step(moving_t, sigma2, w, prior) -> Posteriors`` of this fit: CPD's or the k-NN
-        model's, for a mixture over ``lift`` fewer dimensions than the coordinates' (what the
-        sets span; see the module docstring): ``w`` is that mixture's, and so is the objective."""
-        e_step = self._full_e_step_of(fixed, planner)
-        if not lift:
-            return e_step
-        half = 0.5 * fixed.shape[0] * lift
-
-        def flat_e_step(moving_t, sigma2, w, prior):
-            post = e_step(moving_t, sigma2, _flat_weight(w, sigma2, lift), prior)
-            # (the E-step's objective takes N D / 2 log sigma2)
-            return replace(post, neg_log_likelihood=post.neg_log_likelihood - half * math.log(sigma2))
-
-        return flat_e_step
-
-    def _full_e_step_of(self, fixed, planner):
-        """The E-step of :meth:`_e_step_of` over the sets' own D."""
+        model's, for a mixture in ``model_dims`` dimensions (what the sets span; see the
+        module docstring): ``w`` is that mixture's, and so is the objective."""
+        if model_dims == fixed.shape[1]:
+            model_dims = None  # (the E-step functions' default: the coordinates')
         if self.n_neighbors is None:
             # (``best`` from the last state only: see the end of _run)
             memo = {}  # the dense path's sorted fixed points, kept over the fit
@@ -1229,12 +1203,15 @@ class _CPD(BaseEstimator):
                 want_best=False,
                 memo=memo,
                 fgt_fallback=True,
+                model_dims=model_dims,
             )
         from scipy.spatial import cKDTree
 
         tree = cKDTree(fixed)
         k = int(self.n_neighbors)
-        return lambda moving_t, sigma2, w, prior: knn_posterior(moving_t, fixed, sigma2, w, prior, k=k, tree=tree)
+        return lambda moving_t, sigma2, w, prior: knn_posterior(
+            moving_t, fixed, sigma2, w, prior, k=k, tree=tree, model_dims=model_dims
+        )
 
     def _collapse(self, moving_n, fixed, moving_t, w, post, model_dims, sigma2=None) -> str | None:
         """Why the result is not a registration, or None. ``model_dims``: the mixture's
@@ -1316,7 +1293,7 @@ class _CPD(BaseEstimator):
         ``posteriors_`` (its row and column sums) and ``fixed_to_moving_`` are always there.
         """
         check_is_fitted(self, "transform_")
-        moving_t, fixed, sigma2, w, prior = self._posterior_state
+        moving_t, fixed, sigma2, w, prior, model_dims = self._posterior_state
         if moving_t.shape[0] * fixed.shape[0] > 50_000_000:
             raise InputError(
                 "posterior() builds an M x N matrix; "
@@ -1324,8 +1301,10 @@ class _CPD(BaseEstimator):
                 "Use `fixed_to_moving_` or `posteriors_` instead."
             )
         if self.n_neighbors is not None:
-            return knn_posterior_matrix(moving_t, fixed, sigma2, w, prior, k=int(self.n_neighbors))
-        return dense_posterior(moving_t, fixed, sigma2, w, prior)
+            return knn_posterior_matrix(
+                moving_t, fixed, sigma2, w, prior, k=int(self.n_neighbors), model_dims=model_dims
+            )
+        return dense_posterior(moving_t, fixed, sigma2, w, prior, model_dims=model_dims)
 
     @property
     def correspondence_(self) -> np.ndarray:
@@ -1561,12 +1540,12 @@ def _span(points: np.ndarray) -> int:
 
 def warn_rotation_spans(moving: np.ndarray, fixed: np.ndarray, who: str = "") -> None:
     """Warn when ``moving`` or ``fixed`` does not determine a rotation (they take points not
-    all on one point in 2D, on one line in 3D): the fit still runs, but its turn about the
-    degenerate set is arbitrary. (One fixed point under a spread moving set is the collapse
-    :func:`one_point_fixed` names.)"""
+    all on one point in 2D, on one line in 3D, in one (D - 2)-dimensional flat in D): the fit
+    still runs, but its turn about the degenerate set is arbitrary. (One fixed point under a
+    spread moving set is the collapse :func:`one_point_fixed` names.)"""
     dim = moving.shape[1]
     rank = _span(moving)
-    shape = "point" if dim == 2 else "line"
+    shape = {2: "point", 3: "line"}.get(dim, f"{dim - 2}-dimensional flat")
     if rank < dim - 1:
         warn(
             f"{who}`moving` spans {rank} of {dim} dimensions ({counted(moving.shape[0], 'point')}): a rotation is not "

@@ -479,7 +479,9 @@ def _sorted_rows(fixed, axis, memo):
     return out
 
 
-def fixed_to_moving(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = None) -> np.ndarray:
+def fixed_to_moving(
+    moving_t, fixed, sigma2, w, prior: CentralityPrior | None = None, *, model_dims: int | None = None
+) -> np.ndarray:
     """For each fixed point the moving point of largest posterior (the first, in the moving
     set's order, of equal ones), or -1 where the outlier component is more probable: the
     ``best`` of a dense E-step at this state, which a fit's E-steps skip (``want_best=False``)
@@ -488,12 +490,12 @@ def fixed_to_moving(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = 
     From :data:`_PLAN_PAIRS` pairs without a prior, the most probable moving point is the
     nearest one, found by a grid (or a k-d tree) instead of every pair (at 100,000 points a
     dense pass takes seconds): the same point, but among points at exactly equal distance
-    a k-d tree may name another than the first.
+    a k-d tree may name another than the first. ``model_dims``: see :func:`_e_step`.
     """
     n_moving, n_dims = moving_t.shape
     n_fixed = fixed.shape[0]
     inv2s2 = 1.0 / (2.0 * sigma2)
-    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    log_c = log_outlier_constant(sigma2, w, model_dims or n_dims, n_moving, n_fixed)
     lw, vy, vx, scale, inv2phi2 = _prior_arrays(prior)
     if not lw.size and n_fixed * n_moving > _PLAN_PAIRS:
         d2, index = _nearest(moving_t, fixed)
@@ -940,11 +942,27 @@ def _choose(moving_t, fixed, sigma2, prior, tau, eps):
     return min(costs, key=costs.get), cached
 
 
-def _run(method, moving_t, fixed, sigma2, w, prior, tau, eps, cached, single=False, want_best=True, memo=None):
+def _run(
+    method,
+    moving_t,
+    fixed,
+    sigma2,
+    w,
+    prior,
+    tau,
+    eps,
+    cached,
+    single=False,
+    want_best=True,
+    memo=None,
+    model_dims=None,
+):
     """One E-step by the given path; ``cached`` holds what :func:`_model_costs` computed;
     ``single``: the dense path's exponentials in float32 (the other paths ignore it);
-    ``want_best=False`` lets the dense path leave ``best`` None; ``memo``: see :func:`_dense`."""
-    n_moving, n_dims = moving_t.shape
+    ``want_best=False`` lets the dense path leave ``best`` None; ``memo``: see :func:`_dense`;
+    ``model_dims``: see :func:`_e_step`."""
+    n_moving = moving_t.shape[0]
+    n_dims = model_dims or moving_t.shape[1]
     n_fixed = fixed.shape[0]
     inv2s2 = 1.0 / (2.0 * sigma2)
     log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
@@ -1114,13 +1132,14 @@ class EStepPlanner:
         precision="float64",
         want_best=True,
         memo=None,
+        model_dims=None,
     ):
         """One E-step (see :func:`_e_step` for the arguments) by the path the planner picks."""
         tau = _default_tau(moving_t.shape[0]) if tau is None else tau
         single = _single(precision)
         if moving_t.shape[0] * fixed.shape[0] <= _PLAN_PAIRS:
             self.winner = "dense"
-            return _run("dense", moving_t, fixed, sigma2, w, prior, tau, eps, {}, single, want_best, memo)
+            return _run("dense", moving_t, fixed, sigma2, w, prior, tau, eps, {}, single, want_best, memo, model_dims)
         self._total += 1
         if self.hold and self.winner is not None:
             # a jump's E-step, unprobed: the winner, unless the dense path is predicted far
@@ -1134,13 +1153,15 @@ class EStepPlanner:
             if "dense" in guess and guess["dense"] * _HOLD_SWITCH < guess[self.winner]:
                 path = "dense"
             start = time.perf_counter()
-            post = _run(path, moving_t, fixed, sigma2, w, prior, tau, eps, {}, single, want_best, memo)
+            post = _run(path, moving_t, fixed, sigma2, w, prior, tau, eps, {}, single, want_best, memo, model_dims)
             if path == "dense":  # a time the next probe can take as the dense path's bound
                 self._dense_times(prior).append((sigma2, time.perf_counter() - start))
             return post
         if not self._due(sigma2, moving_t.shape[1]):
             self._calls += 1
-            return _run(self.winner, moving_t, fixed, sigma2, w, prior, tau, eps, {}, single, want_best, memo)
+            return _run(
+                self.winner, moving_t, fixed, sigma2, w, prior, tau, eps, {}, single, want_best, memo, model_dims
+            )
         costs, cached = _model_costs(moving_t, fixed, sigma2, prior, tau, eps)
         setup = cached["setup"]
         order = sorted((c, m) for m, c in costs.items() if math.isfinite(c))
@@ -1158,7 +1179,9 @@ class EStepPlanner:
 
         def timed(path):
             start = time.perf_counter()
-            results[path] = _run(path, moving_t, fixed, sigma2, w, prior, tau, eps, cached, single, want_best, memo)
+            results[path] = _run(
+                path, moving_t, fixed, sigma2, w, prior, tau, eps, cached, single, want_best, memo, model_dims
+            )
             # the nearest points and the grid were built once for the probe; outside it
             # the path builds them itself, so their time counts as its own
             seconds = time.perf_counter() - start + setup[path]
@@ -1226,6 +1249,7 @@ def _e_step(
     want_best=True,
     memo=None,
     fgt_fallback=False,
+    model_dims=None,
 ):
     """The shared E-step; see the module docstring.
 
@@ -1246,6 +1270,9 @@ def _e_step(
     its E-steps on one ``fixed`` set (the dense path's sorted fixed points).
     ``fgt_fallback`` (a fit's): 'fgt' on over 2^20 pairs where its expansion is predicted
     to cost over 10 times the dense path takes the exact truncated path instead.
+    ``model_dims``: the dimension of the mixture, when the sets span fewer dimensions than
+    their coordinates (None: the coordinates'): the outlier constant ``c`` and the
+    objective are those of a density within ``model_dims`` dimensions.
     """
     if tau is None:
         tau = _default_tau(moving_t.shape[0])
@@ -1262,6 +1289,7 @@ def _e_step(
                 precision=precision,
                 want_best=want_best,
                 memo=memo,
+                model_dims=model_dims,
             )
         method, cached = _choose(moving_t, fixed, sigma2, log_prior, tau, eps)
     else:
@@ -1284,18 +1312,23 @@ def _e_step(
         raise InputError(
             f"`method` 'fgt' is for 2D and 3D sets; got {moving_t.shape[1]}D points (use 'dense' or 'truncated')."
         )
-    return _run(method, moving_t, fixed, sigma2, w, log_prior, tau, eps, cached, _single(precision), want_best, memo)
+    return _run(
+        method, moving_t, fixed, sigma2, w, log_prior, tau, eps, cached, _single(precision), want_best, memo, model_dims
+    )
 
 
-def dense_posterior(moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None) -> np.ndarray:
-    """The full posterior matrix ``P`` of shape (M, N), computed in log space (small sets only)."""
+def dense_posterior(
+    moving_t, fixed, sigma2, w, log_prior: CentralityPrior | None = None, *, model_dims: int | None = None
+) -> np.ndarray:
+    """The full posterior matrix ``P`` of shape (M, N), computed in log space (small sets only);
+    ``model_dims``: see :func:`_e_step`."""
     n_moving, n_dims = moving_t.shape
     n_fixed = fixed.shape[0]
     d2 = np.sum((moving_t[:, None, :] - fixed[None, :, :]) ** 2, axis=2)
     s = -d2 / (2.0 * sigma2)
     if log_prior is not None and log_prior.strength != 0:
         s = s + log_prior.matrix()
-    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    log_c = log_outlier_constant(sigma2, w, model_dims or n_dims, n_moving, n_fixed)
     ref = np.maximum(s.max(axis=0), log_c)
     e = np.exp(s - ref)
     den = e.sum(axis=0) + np.exp(log_c - ref)
@@ -1320,7 +1353,9 @@ def _knn_scores(moving_t, fixed, sigma2, prior, k, tree):
     return rows, cols, s
 
 
-def knn_posterior(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = None, *, k, tree=None) -> Posteriors:
+def knn_posterior(
+    moving_t, fixed, sigma2, w, prior: CentralityPrior | None = None, *, k, tree=None, model_dims: int | None = None
+) -> Posteriors:
     """E-step of the k-nearest-neighbour CPD model (``n_neighbors=k`` on the estimators).
 
     The dense model lets every moving point explain every fixed point. Here a moving point
@@ -1333,7 +1368,8 @@ def knn_posterior(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = No
     the dense E-step. The objective takes, for such an unclaimed fixed point, the term of its
     nearest transformed moving point, so it stays finite and continuous.
 
-    ``tree``: a ``scipy.spatial.cKDTree`` of ``fixed`` (built here when None).
+    ``tree``: a ``scipy.spatial.cKDTree`` of ``fixed`` (built here when None); ``model_dims``:
+    see :func:`_e_step`.
 
     Examples
     --------
@@ -1351,7 +1387,7 @@ def knn_posterior(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = No
     if tree is None:
         tree = cKDTree(fixed)
     rows, cols, s = _knn_scores(moving_t, fixed, sigma2, prior, k, tree)
-    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    log_c = log_outlier_constant(sigma2, w, model_dims or n_dims, n_moving, n_fixed)
     col_max = np.full(n_fixed, -np.inf)
     np.maximum.at(col_max, cols, s)
     claimed = np.isfinite(col_max)
@@ -1380,18 +1416,20 @@ def knn_posterior(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = No
     top = order[first]
     wins = p[top] * den[cols[top]] > outlier[cols[top]]
     best[cols[top][wins]] = rows[top][wins]
-    nll = float(-np.sum(log_den) + 0.5 * n_fixed * n_dims * math.log(sigma2))
+    nll = float(-np.sum(log_den) + 0.5 * n_fixed * (model_dims or n_dims) * math.log(sigma2))
     return Posteriors(p1=p1, pt1=pt1, px=px, n_p=float(np.sum(pt1)), neg_log_likelihood=nll, best=best, method="knn")
 
 
-def knn_posterior_matrix(moving_t, fixed, sigma2, w, prior: CentralityPrior | None = None, *, k) -> np.ndarray:
+def knn_posterior_matrix(
+    moving_t, fixed, sigma2, w, prior: CentralityPrior | None = None, *, k, model_dims: int | None = None
+) -> np.ndarray:
     """The full (M, N) posterior of the k-NN model (see :func:`knn_posterior`; small sets only)."""
     from scipy.spatial import cKDTree
 
     n_moving, n_dims = moving_t.shape
     n_fixed = fixed.shape[0]
     rows, cols, s = _knn_scores(moving_t, fixed, sigma2, prior, k, cKDTree(fixed))
-    log_c = log_outlier_constant(sigma2, w, n_dims, n_moving, n_fixed)
+    log_c = log_outlier_constant(sigma2, w, model_dims or n_dims, n_moving, n_fixed)
     full = np.full((n_moving, n_fixed), -np.inf)
     full[rows, cols] = s
     ref = np.maximum(full.max(axis=0), log_c)
