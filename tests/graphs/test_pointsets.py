@@ -393,3 +393,21 @@ def test_a_turned_grid_keeps_its_gabriel_edges_only(angle):
     grid = np.stack(np.meshgrid(np.arange(6.0), np.arange(6.0)), axis=-1).reshape(-1, 2)
     turn = np.array([[np.cos(angle), -np.sin(angle)], [np.sin(angle), np.cos(angle)]])
     assert gabriel_graph(grid @ turn.T + [3.7, -1.3]).nnz // 2 == 60
+
+
+@pytest.mark.parametrize("offset", [1e4, 1e6, 1e8])
+def test_a_turned_plane_far_from_the_origin_is_a_plane(offset):
+    """Rounding alone makes a turned plane at 1e4 6e-12 of its extent thick: read against a
+    fixed 1e-12 it was 3D, and its Delaunay graph was Qhull's luck (slivers, or a refusal)."""
+    flat = np.random.default_rng(3).random((60, 2))
+    turn = np.linalg.qr(np.random.default_rng(4).normal(size=(3, 3)))[0]
+    lifted = np.c_[flat, np.zeros(len(flat))] @ turn.T + np.array([1.0, -2.0, 0.5]) * offset
+
+    def edges(graph):
+        graph = sparse.coo_array(graph)
+        return set(zip(graph.row.tolist(), graph.col.tolist()))
+
+    assert edges(emst_graph(lifted)) == edges(emst_graph(flat))
+    assert edges(gabriel_graph(lifted)) == edges(gabriel_graph(flat))
+    with pytest.raises(InputError, match="got 60 coplanar points .* or the rounding of their coordinates"):
+        delaunay_graph(lifted)

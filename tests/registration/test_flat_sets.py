@@ -222,3 +222,24 @@ def test_a_2d_problem_lifted_into_many_dimensions_registers_as_in_2d(fish_pair, 
     assert lifted.posteriors_.neg_log_likelihood == pytest.approx(flat.posteriors_.neg_log_likelihood, rel=1e-9)
     np.testing.assert_array_equal(lifted.fixed_to_moving_, flat.fixed_to_moving_)
     np.testing.assert_allclose(lifted.posterior(), flat.posterior(), atol=1e-9)
+
+
+@pytest.mark.parametrize("graph", ["delaunay", "gabriel", "emst"])
+@pytest.mark.parametrize("offset", [0.0, 1e4], ids=["at the origin", "turned, at 1e4"])
+def test_gpd_builds_the_graphs_of_a_flat_set_in_its_plane(fish_pair, graph, offset):
+    """A flat 3D set's graphs are built in the plane it spans. The default Delaunay graph of
+    any flat 3D set was refused, and at 1e4 the centred set's rounding made a 3D Delaunay
+    triangulation fail Qhull's check: GPD raised for every graph."""
+    moving, fixed = _cluttered_fish(fish_pair)
+
+    def up(points):
+        lifted = np.c_[points, np.zeros(len(points))]
+        return lifted @ _TURN.T + offset * np.array([1.0, -2.0, 0.5]) if offset else lifted
+
+    def down(points):
+        return ((points - offset * np.array([1.0, -2.0, 0.5])) @ _TURN)[:, :2] if offset else points[:, :2]
+
+    flat = GPD(RigidCPD(w=0.1), graph=graph).fit(moving, fixed)
+    lifted = GPD(RigidCPD(w=0.1), graph=graph).fit(up(moving), up(fixed))
+    np.testing.assert_allclose(down(lifted.moving_transformed_), flat.moving_transformed_, atol=1e-8)
+    np.testing.assert_allclose(lifted.moving_centrality_, flat.moving_centrality_, atol=1e-9)

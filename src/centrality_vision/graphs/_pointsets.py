@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from scipy import sparse
 from scipy.spatial import Delaunay, QhullError, cKDTree
@@ -142,18 +144,31 @@ def _spread(points: np.ndarray) -> np.ndarray:
 
 
 def _affine_rank(points: np.ndarray) -> int:
-    """The dimension the points span (to within 1e-12 of their extent)."""
-    return int(np.count_nonzero(_spread(points) > 1e-12))
+    """The dimension the points span: their principal extents above 1e-12 of the whole and
+    above what the rounding of the coordinates themselves can give (16 ulps of the largest
+    coordinate, times the square root of the point count), and at least 1 for points not
+    all equal. A plane 1e4 from the origin, turned, is 6e-12 of its extent thick from
+    rounding alone: taken as 3D, its Delaunay triangulation passed or failed Qhull's
+    empty-sphere test by chance."""
+    peak = float(np.max(np.abs(points), initial=0.0))
+    extent = float(np.max(np.abs(_mean_centred(points)), initial=0.0))
+    if extent == 0.0:
+        return 0
+    rounding = 16.0 * np.finfo(np.float64).eps * peak * math.sqrt(points.shape[0]) / extent
+    # (distinct points a few ulps apart are within rounding of each other: a line, as before)
+    return max(int(np.count_nonzero(_spread(points) > max(1e-12, rounding))), 1)
 
 
-def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
+def _triangulation(points: np.ndarray, rank: int, name: str = "points") -> Delaunay:
+    """Qhull's Delaunay triangulation of ``points`` (centred), whose uncentred set spans
+    ``rank`` dimensions (see :func:`_affine_rank`)."""
     n, dim = points.shape
-    if _affine_rank(points) < dim:
+    if rank < dim:
         what = "collinear" if dim == 2 else "coplanar"
         # (to within 1e-12 of the extent: ten points in the unit square beside one at 1e300 are)
         raise InputError(
             f"`{name}` must span {dim} dimensions for a Delaunay triangulation; got {n} {what} points (to within "
-            "1e-12 of their extent)."
+            "1e-12 of their extent, or the rounding of their coordinates)."
         )
     try:
         tri = Delaunay(points)
@@ -171,7 +186,7 @@ def _triangulation(points: np.ndarray, name: str = "points") -> Delaunay:
 
 def _delaunay_edges(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     unit = _unit_scale(points)[0]
-    tri = _triangulation(_centred(unit))
+    tri = _triangulation(_centred(unit), _affine_rank(unit))
     # Qhull's floating-point in-circle tests can return a triangulation that is not Delaunay
     # for a tight cluster beside distant points (about 1e-7 of the extent): every facet checked
     failed = delaunay_violations(unit, tri.simplices, tri.neighbors)
@@ -279,7 +294,7 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
         At least 2 distinct points. As for :func:`delaunay_graph`, except that points on
-        a line, or in 3D on a plane (to within 1e-12 of their extent), are accepted (so 2
+        a line, or in 3D on a plane (to within 1e-12 of their extent or their rounding), are accepted (so 2
         points, and 3 in 3D): for points exactly on a line the graph is the path along it;
         within the plane, the Gabriel graph there.
 
@@ -399,7 +414,7 @@ def emst_graph(points, /) -> sparse.csr_array:
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
         At least 2 distinct points. As for :func:`delaunay_graph`, except that points on
-        a line, or in 3D on a plane (to within 1e-12 of their extent), are accepted (so 2
+        a line, or in 3D on a plane (to within 1e-12 of their extent or their rounding), are accepted (so 2
         points, and 3 in 3D): for points exactly on a line the tree is the path along it
         (a cluster across the line below the coordinates' precision is joined by its own
         tree); on a plane, the tree within it.

@@ -15,6 +15,7 @@ from .._deprecation import FORMER, former_parameter, renamed_parameters
 from .._validation import ANY_DIMS, as_graph, as_points, as_real_array, check_bool, check_choice, check_float, check_int
 from ..centrality import CENTRALITIES, PATH_CENTRALITIES, compute
 from ..exceptions import InputError
+from ..graphs._pointsets import _affine_rank
 from ..transforms import centred, power_of_two_scale
 from ._cpd import _CPD, RigidCPD
 from ._estep import CentralityPrior
@@ -39,6 +40,25 @@ def _unit_radius(points: np.ndarray) -> np.ndarray:
     return c / radius if radius > 0 else c
 
 
+def _graph_points(points: np.ndarray) -> np.ndarray:
+    """The coordinates the graphs are built on: ``points`` of unit RMS radius (see
+    :func:`_unit_radius`), and for a set that spans 2 or 3 of more dimensions (a flat scan
+    in 3D, an outline lifted into a plane of 10D) its coordinates in the space it spans,
+    whose graphs are the set's own (they depend on distances only).
+
+    The span is read off the caller's points, to within the rounding of their coordinates
+    (as the graphs read it: ``graphs._pointsets._affine_rank``): centring takes the offset away,
+    and with it the knowledge that a turned plane 1e4 from the origin, 6e-12 of its extent
+    thick, is a plane. Built as 3D, its Delaunay graph passed or failed Qhull's check by
+    chance, and the default graph of any flat 3D set was refused."""
+    rank = _affine_rank(points)
+    unit = _unit_radius(points)
+    if 2 <= rank < points.shape[1]:
+        centred_unit = unit - unit.mean(axis=0)
+        return centred_unit @ np.linalg.svd(centred_unit, full_matrices=False)[2][:rank].T
+    return unit
+
+
 def _build_graph(points: np.ndarray, graph, k: int):
     if callable(graph):
         built = as_graph(graph(points), name="graph(points)")
@@ -48,7 +68,7 @@ def _build_graph(points: np.ndarray, graph, k: int):
                 f"got {built.shape[0]} nodes."
             )
         return built
-    points = _unit_radius(points)
+    points = _graph_points(points)
     if points.shape[0] < 3 and graph in ("delaunay", "gabriel"):
         return _graphs.complete_graph(points) if points.shape[0] > 1 else _edgeless(points)
     if graph == "delaunay":
@@ -268,7 +288,10 @@ class GPD(BaseEstimator):
     centrality : str or callable, default='closeness'
         One of :data:`centrality_vision.centrality.CENTRALITIES`, or ``f(graph) -> values``.
     graph : str or callable, default='delaunay'
-        One of :data:`GRAPHS` or ``f(points) -> sparse graph`` with one node per point.
+        One of :data:`GRAPHS` or ``f(points) -> sparse graph`` with one node per point. A
+        named graph of a set that spans 2 or 3 dimensions of more (a flat scan in 3D) is
+        built in the space the set spans, to within the rounding of its coordinates; a
+        callable gets the caller's points.
     bins : int in [1, 100,000] or str, default=10
         Histogram bins for ``h(m)`` (see :func:`centrality_prior`).
     phi : float in [1e-100, 1e100], optional
