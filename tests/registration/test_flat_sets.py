@@ -155,18 +155,20 @@ def test_a_lifted_fit_that_reaches_the_variance_floor_ends_as_in_2d():
         assert lifted.posteriors_.neg_log_likelihood == pytest.approx(expected[2], rel=1e-9)
 
 
-def test_the_outlier_box_changes_continuously_with_the_sets_thickness():
-    """w='auto''s box: every side at least the Gaussians' width sqrt(2 pi sigma2). Floored
-    only below 1/1000 of the longest side, a side just above the cut (2.2e-3 of 2) gave a
-    box 110 times smaller than one just below it."""
+def test_the_outlier_box_floors_every_thin_side_at_the_gaussians_width():
+    """w='auto''s box: a side below a tenth of the longest at least the Gaussians' width
+    sqrt(2 pi sigma2). Floored only below 1/1000 of the longest side, a side just above
+    that cut (2.2e-3 of 2) gave a box 48 times smaller than one just below it."""
     from centrality_vision.registration._cpd import _box_volume
 
     sigma2 = 0.01 / (2.0 * np.pi)  # width 0.1
     volumes = [_box_volume(np.array([2.0, 1.0, side]), sigma2, 3) for side in (0.0, 1.9e-3, 2.1e-3, 0.05, 0.1)]
     assert volumes == pytest.approx([0.2] * 5)
-    assert _box_volume(np.array([2.0, 1.0, 0.4]), sigma2, 3) == pytest.approx(0.8)
+    assert _box_volume(np.array([2.0, 1.0, 0.15]), sigma2, 3) == pytest.approx(0.3)  # wider than the Gaussians
     assert _box_volume(np.array([2.0, 0.05, 0.4]), sigma2, 2) == pytest.approx(0.8)  # the 2 longest
-    assert _box_volume(np.array([2.0, 1.0, 0.0]), 1e6, 3) == pytest.approx((2.0 * np.pi * 1e6) ** 1.5)
+    # a tenth of the longest or more: the set's own extent, however wide the Gaussians
+    assert _box_volume(np.array([2.0, 1.0, 0.2]), 1e6, 3) == pytest.approx(0.4)
+    assert _box_volume(np.array([2.0, 1.0, 0.0]), 1e6, 3) == pytest.approx(2.0 * (2.0 * np.pi * 1e6) ** 0.5)
 
 
 @pytest.mark.parametrize("off_plane", ["one point 1% off", "thickness 1e-3"])
