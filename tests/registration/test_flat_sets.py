@@ -156,7 +156,7 @@ def test_a_lifted_fit_that_reaches_the_variance_floor_ends_as_in_2d():
 
 
 def test_the_outlier_box_floors_every_thin_side_at_the_gaussians_width():
-    """w='auto''s box: a side below a tenth of the longest at least the Gaussians' width
+    """w='auto''s box: a side up to a tenth of the longest at least the Gaussians' width
     sqrt(2 pi sigma2). Floored only below 1/1000 of the longest side, a side just above
     that cut (2.2e-3 of 2) gave a box 48 times smaller than one just below it."""
     from centrality_vision.registration._cpd import _box_volume
@@ -166,8 +166,10 @@ def test_the_outlier_box_floors_every_thin_side_at_the_gaussians_width():
     assert volumes == pytest.approx([0.2] * 5)
     assert _box_volume(np.array([2.0, 1.0, 0.15]), sigma2, 3) == pytest.approx(0.3)  # wider than the Gaussians
     assert _box_volume(np.array([2.0, 0.05, 0.4]), sigma2, 2) == pytest.approx(0.8)  # the 2 longest
-    # a tenth of the longest or more: the set's own extent, however wide the Gaussians
-    assert _box_volume(np.array([2.0, 1.0, 0.2]), 1e6, 3) == pytest.approx(0.4)
+    # over a tenth of the longest: the set's own extent, however wide the Gaussians
+    assert _box_volume(np.array([2.0, 1.0, 0.21]), 1e6, 3) == pytest.approx(0.42)
+    # a one-point set (every side 0): a box of the Gaussians' width
+    assert _box_volume(np.zeros(2), 1.0, 2) == pytest.approx(2.0 * np.pi)
     assert _box_volume(np.array([2.0, 1.0, 0.0]), 1e6, 3) == pytest.approx(2.0 * (2.0 * np.pi * 1e6) ** 0.5)
 
 

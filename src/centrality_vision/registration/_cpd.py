@@ -562,7 +562,7 @@ def _principal_sides(points: np.ndarray) -> np.ndarray:
 def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
     """Volume of the uniform outlier density's box in the mixture's ``model_dims`` dimensions
     at variance ``sigma2``: the ``model_dims`` longest of the fixed set's principal ``sides``,
-    one below :data:`_BOX_FLOOR` of the longest at least the width ``sqrt(2 pi sigma2)`` of
+    one up to :data:`_BOX_FLOOR` of the longest at least the width ``sqrt(2 pi sigma2)`` of
     CPD's Gaussians.
 
     The box of a flat fixed set in a mixture of its own dimension is its area. Along a side
@@ -572,8 +572,8 @@ def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
     every point as an outlier (the fish with ``z = 0`` added and 20 clutter points ended
     with ``w_`` 0.9 and nothing matched). Floored only below 1/1000 of the longest side, a
     scan 1/100 thick kept a box 1/100 thick while sigma2 was far wider: rigid w='auto' fits
-    of such cluttered scans ended 0.25 to 0.7 off in 5 to 7 of 40 (now none). Sides of a
-    tenth of the longest or more are the set's extent, as before: floored at the width too,
+    of such cluttered scans ended 0.25 to 0.7 off in 5 to 7 of 40 (now none). Sides over a
+    tenth of the longest are the set's extent, as before: floored at the width too,
     the early steps' wider box cost the k-NN w='auto' fits of the registration suite's
     occlusion family up to 30% in mean error; floored at no more than a tenth of the
     longest (which is continuous), the thin scans failed as before. The cut at a tenth acts
@@ -581,7 +581,7 @@ def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
     times longer than wide, with clutter or a third occluded, fits were as good or as bad
     as with the floor below 1/1000 (20 seeds each)."""
     width = max(math.sqrt(2.0 * math.pi * sigma2), 1e-300)
-    thin = sides < _BOX_FLOOR * float(np.max(sides))
+    thin = sides <= _BOX_FLOOR * float(np.max(sides))  # (all of a one-point set's: 0 <= 0)
     longest = np.argsort(-sides, kind="stable")[:model_dims]
     return float(np.prod(np.where(thin, np.maximum(sides, width), sides)[np.sort(longest)]))
 
