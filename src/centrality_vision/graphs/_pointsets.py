@@ -218,7 +218,8 @@ def delaunay_graph(points, /) -> sparse.csr_array:
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
         At least ``n_dims + 1`` distinct points that are not all collinear (2D) or
-        coplanar (3D). Row ``i`` is node ``i``.
+        coplanar (3D), to within 1e-12 of their extent or the rounding of their
+        coordinates (a turned plane 1e4 from the origin is a plane). Row ``i`` is node ``i``.
 
     Returns
     -------
@@ -294,9 +295,9 @@ def gabriel_graph(points, /) -> sparse.csr_array:
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
         At least 2 distinct points. As for :func:`delaunay_graph`, except that points on
-        a line, or in 3D on a plane (to within 1e-12 of their extent or their rounding), are accepted (so 2
-        points, and 3 in 3D): for points exactly on a line the graph is the path along it;
-        within the plane, the Gabriel graph there.
+        a line, or in 3D on a plane (to within 1e-12 of their extent or the rounding of
+        their coordinates), are accepted (so 2 points, and 3 in 3D): for points exactly on
+        a line the graph is the path along it; within the plane, the Gabriel graph there.
 
     Returns
     -------
@@ -414,10 +415,10 @@ def emst_graph(points, /) -> sparse.csr_array:
     ----------
     points : array_like of shape (n_points, 2) or (n_points, 3)
         At least 2 distinct points. As for :func:`delaunay_graph`, except that points on
-        a line, or in 3D on a plane (to within 1e-12 of their extent or their rounding), are accepted (so 2
-        points, and 3 in 3D): for points exactly on a line the tree is the path along it
-        (a cluster across the line below the coordinates' precision is joined by its own
-        tree); on a plane, the tree within it.
+        a line, or in 3D on a plane (to within 1e-12 of their extent or the rounding of
+        their coordinates), are accepted (so 2 points, and 3 in 3D): for points exactly on
+        a line the tree is the path along it (a cluster across the line below the
+        coordinates' precision is joined by its own tree); on a plane, the tree within it.
 
     Returns
     -------

@@ -128,9 +128,9 @@ _LANDMARK_WEIGHT_MAX = 1e6
 # A principal side below this share of a set's longest is a direction the set does not
 # span (see _model_dims).
 _THIN_SIDE = 1e-3
-# w="auto": the box's sides are floored at the Gaussians' width, but not above this share of
-# the longest side (see _box_volume).
-_BOX_FLOOR = 0.1
+# w="auto": a side of the outlier box up to this share of the longest is floored at the
+# Gaussians' width (see _box_volume); longer sides are the set's extent.
+_BOX_THIN_SIDE = 0.1
 # w="auto": start and bounds of the estimated outlier fraction.
 _AUTO_W_START, _AUTO_W_MAX = 0.1, 0.9
 # ... and the most the E-step's w may take from it (odds of 1e12 to 1)
@@ -562,7 +562,7 @@ def _principal_sides(points: np.ndarray) -> np.ndarray:
 def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
     """Volume of the uniform outlier density's box in the mixture's ``model_dims`` dimensions
     at variance ``sigma2``: the ``model_dims`` longest of the fixed set's principal ``sides``,
-    one up to :data:`_BOX_FLOOR` of the longest at least the width ``sqrt(2 pi sigma2)`` of
+    one up to :data:`_BOX_THIN_SIDE` of the longest at least the width ``sqrt(2 pi sigma2)`` of
     CPD's Gaussians.
 
     The box of a flat fixed set in a mixture of its own dimension is its area. Along a side
@@ -581,7 +581,7 @@ def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
     times longer than wide, with clutter or a third occluded, fits were as good or as bad
     as with the floor below 1/1000 (20 seeds each)."""
     width = max(math.sqrt(2.0 * math.pi * sigma2), 1e-300)
-    thin = sides <= _BOX_FLOOR * float(np.max(sides))  # (all of a one-point set's: 0 <= 0)
+    thin = sides <= _BOX_THIN_SIDE * float(np.max(sides))  # (all of a one-point set's: 0 <= 0)
     longest = np.argsort(-sides, kind="stable")[:model_dims]
     return float(np.prod(np.where(thin, np.maximum(sides, width), sides)[np.sort(longest)]))
 
