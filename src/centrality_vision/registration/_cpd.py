@@ -1145,9 +1145,10 @@ class _CPD(BaseEstimator):
             "method": history["method"],
             "w": np.array(history["w"]),
         }
-        mixture = model_dims if model_dims < n_dims else None  # (the E-step functions' model_dims)
         if post.best is None:  # the E-steps skip it (a third of an E-step): once, for the last state
-            post = replace(post, best=fixed_to_moving(moving_t, fixed, sigma2, w_e, current_prior, model_dims=mixture))
+            post = replace(
+                post, best=fixed_to_moving(moving_t, fixed, sigma2, w_e, current_prior, model_dims=model_dims)
+            )
         self.fixed_to_moving_ = post.best
         self.posteriors_ = (
             post
@@ -1159,7 +1160,7 @@ class _CPD(BaseEstimator):
             )
         )
         # the normalised state, for posterior(): c depends on sigma2 in the frame's units
-        self._posterior_state = (moving_t, fixed, sigma2, w_e, current_prior, mixture)
+        self._posterior_state = (moving_t, fixed, sigma2, w_e, current_prior, model_dims)
         return notes, final_objective, halted
 
     def _extrapolate(self, chain, state, floor):
@@ -1195,8 +1196,6 @@ class _CPD(BaseEstimator):
         """``e_step(moving_t, sigma2, w, prior) -> Posteriors`` of this fit: CPD's or the k-NN
         model's, for a mixture in ``model_dims`` dimensions (what the sets span; see the
         module docstring): ``w`` is that mixture's, and so is the objective."""
-        if model_dims == fixed.shape[1]:
-            model_dims = None  # (the E-step functions' default: the coordinates')
         if self.n_neighbors is None:
             # (``best`` from the last state only: see the end of _run)
             memo = {}  # the dense path's sorted fixed points, kept over the fit

@@ -53,9 +53,8 @@ def _graph_points(points: np.ndarray) -> np.ndarray:
     chance, and the default graph of any flat 3D set was refused."""
     rank = _affine_rank(points)
     unit = _unit_radius(points)
-    if 2 <= rank < points.shape[1]:
-        centred_unit = unit - unit.mean(axis=0)
-        return centred_unit @ np.linalg.svd(centred_unit, full_matrices=False)[2][:rank].T
+    if 2 <= rank < points.shape[1]:  # (unit is centred)
+        return unit @ np.linalg.svd(unit, full_matrices=False)[2][:rank].T
     return unit
 
 
