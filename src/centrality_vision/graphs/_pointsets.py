@@ -136,10 +136,11 @@ def _mean_centred(points: np.ndarray) -> np.ndarray:
     return centred - centred.mean(axis=0)
 
 
-def _spread(points: np.ndarray) -> np.ndarray:
+def _spread(points: np.ndarray, centred: np.ndarray | None = None) -> np.ndarray:
     """Singular values of the centred points over their largest centred coordinate, largest
-    first: the extent along each principal axis, relative to the whole."""
-    centred = _mean_centred(points)
+    first: the extent along each principal axis, relative to the whole. ``centred``: the
+    points' :func:`_mean_centred`, where the caller has it."""
+    centred = _mean_centred(points) if centred is None else centred
     return np.linalg.svd(centred / np.abs(centred).max(), compute_uv=False)
 
 
@@ -151,12 +152,13 @@ def _affine_rank(points: np.ndarray) -> int:
     rounding alone: taken as 3D, its Delaunay triangulation passed or failed Qhull's
     empty-sphere test by chance."""
     peak = float(np.max(np.abs(points), initial=0.0))
-    extent = float(np.max(np.abs(_mean_centred(points)), initial=0.0))
+    centred = _mean_centred(points)
+    extent = float(np.max(np.abs(centred), initial=0.0))
     if extent == 0.0:
         return 0
     rounding = 16.0 * np.finfo(np.float64).eps * peak * math.sqrt(points.shape[0]) / extent
     # (distinct points a few ulps apart are within rounding of each other: a line, as before)
-    return max(int(np.count_nonzero(_spread(points) > max(1e-12, rounding))), 1)
+    return max(int(np.count_nonzero(_spread(points, centred) > max(1e-12, rounding))), 1)
 
 
 def _triangulation(points: np.ndarray, rank: int, name: str = "points") -> Delaunay:
