@@ -232,7 +232,11 @@ def test_gabriel_graph_and_emst_of_two_points_and_of_a_3d_triangle(builder):
 
 @pytest.mark.parametrize(
     ("points", "match"),
-    [([[0, 0], [1, 1], [2, 2], [3, 3]], "collinear"), ([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], "coplanar")],
+    [
+        ([[0, 0], [1, 1], [2, 2], [3, 3]], "collinear"),
+        ([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], "coplanar"),
+        ([[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3]], "collinear"),  # (a line in 3D was "coplanar")
+    ],
 )
 def test_a_delaunay_triangulation_needs_the_full_dimension(points, match):
     with pytest.raises(ValueError, match=match):

@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from sklearn.base import clone
 
-from centrality_vision.exceptions import CollapseWarning
+from centrality_vision.exceptions import CollapseWarning, InputError
 from centrality_vision.registration import GPD, AffineCPD, MultiscaleCPD, NonRigidCPD, RigidCPD
 from centrality_vision.transforms import random_rotation
 
@@ -157,20 +157,56 @@ def test_a_lifted_fit_that_reaches_the_variance_floor_ends_as_in_2d():
 
 def test_the_outlier_box_floors_every_thin_side_at_the_gaussians_width():
     """w='auto''s box: a side up to a tenth of the longest at least the Gaussians' width
-    sqrt(2 pi sigma2). Floored only below 1/1000 of the longest side, a side just above
-    that cut (2.2e-3 of 2) gave a box 48 times smaller than one just below it."""
+    sqrt(2 pi sigma2) (from there to a fifth, a falling share of it). Floored only below
+    1/1000 of the longest side, a side just above that cut (2.2e-3 of 2) gave a box 48
+    times smaller than one just below it."""
     from centrality_vision.registration._cpd import _box_volume
 
     sigma2 = 0.01 / (2.0 * np.pi)  # width 0.1
     volumes = [_box_volume(np.array([2.0, 1.0, side]), sigma2, 3) for side in (0.0, 1.9e-3, 2.1e-3, 0.05, 0.1)]
     assert volumes == pytest.approx([0.2] * 5)
     assert _box_volume(np.array([2.0, 1.0, 0.15]), sigma2, 3) == pytest.approx(0.3)  # wider than the Gaussians
+    # between a tenth and a fifth: at least a share of the width falling to 0
+    assert _box_volume(np.array([2.0, 1.0, 0.25]), 1e6, 3) == pytest.approx(2.0 * 0.75 * (2.0 * np.pi * 1e6) ** 0.5)
     assert _box_volume(np.array([2.0, 0.05, 0.4]), sigma2, 2) == pytest.approx(0.8)  # the 2 longest
-    # over a tenth of the longest: the set's own extent, however wide the Gaussians
-    assert _box_volume(np.array([2.0, 1.0, 0.21]), 1e6, 3) == pytest.approx(0.42)
+    # over a fifth of the longest: the set's own extent, however wide the Gaussians
+    assert _box_volume(np.array([2.0, 1.0, 0.41]), 1e6, 3) == pytest.approx(0.82)
     # a one-point set (every side 0): a box of the Gaussians' width
     assert _box_volume(np.zeros(2), 1.0, 2) == pytest.approx(2.0 * np.pi)
     assert _box_volume(np.array([2.0, 1.0, 0.0]), 1e6, 3) == pytest.approx(2.0 * (2.0 * np.pi * 1e6) ** 0.5)
+
+
+@pytest.mark.parametrize("sigma2", [1e-4, 0.01, 1.0, 1e4])
+def test_the_outlier_box_changes_continuously_with_a_side(sigma2):
+    """The floor falls to 0 between a tenth and a fifth of the longest side. Cut off at the
+    tenth, sides 0.0999999999 and 0.1000000001 of the longest gave boxes up to 25 times
+    apart, and non-rigid w='auto' fits of a cluttered scan ended 0.0285 and 0.0324 off."""
+    from centrality_vision.registration._cpd import _box_volume
+
+    shares = np.linspace(0.0, 0.4, 4001)
+    volumes = np.array([_box_volume(np.array([1.0, 0.5, share]), sigma2, 3) for share in shares])
+    width = np.sqrt(2.0 * np.pi * sigma2)
+    # Lipschitz in the side: a step of 1e-4 moves the box by at most 0.5 (the other sides)
+    # times (1 + the floor's slope, width / 0.1) times the step
+    assert np.max(np.abs(np.diff(volumes))) <= 0.5 * (1.0 + width / 0.1) * 1e-4 * (1.0 + 1e-9)
+    for cut in (0.1, 0.2):
+        at_cut = [_box_volume(np.array([1.0, 0.5, cut + step]), sigma2, 3) for step in (-1e-10, 1e-10)]
+        assert at_cut[0] == pytest.approx(at_cut[1], rel=1e-6)
+    assert volumes[0] == pytest.approx(0.5 * width)  # floored
+    assert volumes[-1] == pytest.approx(0.2)  # the set's own side
+
+
+@pytest.mark.parametrize("estimator", [AffineCPD(w="auto"), RigidCPD(w="auto"), NonRigidCPD(w="auto")], ids=repr)
+def test_one_fixed_point_in_many_dimensions_gets_a_fit(estimator):
+    """The box of one fixed point in 50D is 50 sides of the Gaussians' width at the variance
+    floor: its volume rounded to 0, and AffineCPD raised ZeroDivisionError from 46D on."""
+    rng = np.random.default_rng(0)
+    moving, fixed = rng.standard_normal((100, 50)), rng.standard_normal((1, 50))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # (one fixed point: not a registration)
+        fit = clone(estimator).fit(moving, fixed)
+    assert np.all(np.isfinite(fit.moving_transformed_))
+    assert 0.0 <= fit.w_ < 1.0
 
 
 @pytest.mark.parametrize("off_plane", ["one point 1% off", "thickness 1e-3"])
@@ -281,3 +317,27 @@ def test_gpd_builds_the_graphs_of_a_flat_set_in_its_plane(fish_pair, graph, offs
     lifted = GPD(RigidCPD(w=0.1), graph=graph).fit(up(moving), up(fixed))
     np.testing.assert_allclose(down(lifted.moving_transformed_), flat.moving_transformed_, atol=1e-8)
     np.testing.assert_allclose(lifted.moving_centrality_, flat.moving_centrality_, atol=1e-9)
+
+
+@pytest.mark.parametrize("n_dims", [2, 3, 5])
+@pytest.mark.parametrize("offset", [0.0, 1e6], ids=["at the origin", "at 1e6"])
+def test_gpd_builds_the_graphs_of_a_line_on_the_line(n_dims, offset):
+    """A line's graphs are built on the line (with a second coordinate of 0). Centred, a
+    turned line 1e6 from the origin kept its rounding as a second dimension: GPD's Delaunay
+    graph of 30 points had 137 edges (the path has 29), and at the origin it was refused."""
+    turn = np.linalg.qr(np.random.default_rng(n_dims).normal(size=(n_dims, n_dims)))[0]
+    t = np.linspace(0.0, 1.0, 30)[:, None] ** 1.5  # (unequal gaps: one path)
+
+    def up(points):
+        return np.c_[points, np.zeros((len(points), n_dims - 1))] @ turn.T + offset
+
+    moving, fixed = up(t), up(1.1 * t + 0.05)
+    with pytest.raises(InputError, match="30 collinear points"):
+        GPD(RigidCPD(w=0.1), graph="delaunay").fit(moving, fixed)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)  # (a rotation about the line is undetermined)
+        fit = GPD(RigidCPD(w=0.1), graph="gabriel").fit(moving, fixed)
+    path = {(i, i + 1) for i in range(29)}
+    for graph in (fit.moving_graph_, fit.fixed_graph_):
+        rows, cols = graph.nonzero()
+        assert {(int(i), int(j)) for i, j in zip(rows, cols) if i < j} == path

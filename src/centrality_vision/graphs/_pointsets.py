@@ -166,7 +166,7 @@ def _triangulation(points: np.ndarray, rank: int, name: str = "points") -> Delau
     ``rank`` dimensions (see :func:`_affine_rank`)."""
     n, dim = points.shape
     if rank < dim:
-        what = "collinear" if dim == 2 else "coplanar"
+        what = "collinear" if rank <= 1 else "coplanar"
         # (to within 1e-12 of the extent: ten points in the unit square beside one at 1e300 are)
         raise InputError(
             f"`{name}` must span {dim} dimensions for a Delaunay triangulation; got {n} {what} points (to within "

@@ -20,13 +20,12 @@ Conventions every variant shares:
   blob onto a line) keep the larger d: their residual off each other is real. The cut at
   1/1000 is sharp: a planar scan 1/100 thick is a 3D set, whose sigma2 averages the
   residual over all three coordinates, 2/3 of the residual in its plane. w='auto''s box
-  floors its thin side at the Gaussians' width (see :func:`_box_volume`): rigid fits of
-  such scans with clutter find the pose as the flat ones do (sets 3/100 thick, whose thin
-  side passes a tenth of the longest, not always). What remains is the narrower sigma2: a
-  non-rigid fit of such a scan is regularised less than the flat one, and a rigid w='auto'
-  fit whose model does not fit the data (a rigid fit of the bent CPD fish with clutter,
-  1/1000 thick) reads the residual as outliers and collapses, as the flat one did before d
-  was taken; a remedy is a separate variance across the thin direction.
+  floors its thin side at the Gaussians' width (see :func:`_box_sides`): rigid fits of
+  such scans with clutter find the pose as the flat ones do. What remains is the narrower
+  sigma2: a non-rigid fit of such a scan is regularised less than the flat one, and a
+  rigid w='auto' fit whose model does not fit the data (a rigid fit of the bent CPD fish
+  with clutter, 1/1000 thick) reads the residual as outliers and collapses, as the flat
+  one did before d was taken; a remedy is a separate variance across the thin direction.
 * ``normalize=True`` (the default): inside ``fit`` each set is centred on its own mean and
   both are divided by one common factor, the RMS distance of all M + N points to their
   set's mean, so the EM runs on sets of unit RMS radius whatever the caller's units and
@@ -128,9 +127,10 @@ _LANDMARK_WEIGHT_MAX = 1e6
 # A principal side below this share of a set's longest is a direction the set does not
 # span (see _model_dims).
 _THIN_SIDE = 1e-3
-# w="auto": a side of the outlier box up to this share of the longest is floored at the
-# Gaussians' width (see _box_volume); longer sides are the set's extent.
-_BOX_THIN_SIDE = 0.1
+# w="auto": a side of the outlier box up to _BOX_FLOORED_SIDE of the longest is floored at
+# the Gaussians' width, one from there to _BOX_THIN_SIDE at a floor falling to 0 (see
+# _box_sides); longer sides are the set's extent.
+_BOX_FLOORED_SIDE, _BOX_THIN_SIDE = 0.1, 0.2
 # w="auto": start and bounds of the estimated outlier fraction.
 _AUTO_W_START, _AUTO_W_MAX = 0.1, 0.9
 # ... and the most the E-step's w may take from it (odds of 1e12 to 1)
@@ -584,10 +584,17 @@ def _span_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
 
 
 def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
-    """Volume of the uniform outlier density's box in the mixture's ``model_dims`` dimensions
+    """Volume of the uniform outlier density's box (see :func:`_box_sides`)."""
+    return float(np.prod(_box_sides(sides, sigma2, model_dims)))
+
+
+def _box_sides(sides: np.ndarray, sigma2: float, model_dims: int) -> np.ndarray:
+    """Sides of the uniform outlier density's box in the mixture's ``model_dims`` dimensions
     at variance ``sigma2``: the ``model_dims`` longest of the fixed set's principal ``sides``,
-    one up to :data:`_BOX_THIN_SIDE` of the longest at least the width ``sqrt(2 pi sigma2)`` of
-    CPD's Gaussians.
+    one up to :data:`_BOX_FLOORED_SIDE` of the longest at least the width ``sqrt(2 pi sigma2)``
+    of CPD's Gaussians, and from there to :data:`_BOX_THIN_SIDE` at least a share of it that
+    falls linearly to 0 (a floor cut off at the tenth made the box, and the fit, jump there:
+    sides 0.0999999999 and 0.1000000001 of the longest gave boxes up to 25 times apart).
 
     The box of a flat fixed set in a mixture of its own dimension is its area. Along a side
     shorter than the Gaussians' width, a Gaussian centred in the set has density about
@@ -597,17 +604,22 @@ def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
     with ``w_`` 0.9 and nothing matched). Floored only below 1/1000 of the longest side, a
     scan 1/100 thick kept a box 1/100 thick while sigma2 was far wider: rigid w='auto' fits
     of such cluttered scans ended 0.25 to 0.7 off in 5 to 7 of 40 (now none). Sides over a
-    tenth of the longest are the set's extent, as before: floored at the width too,
+    fifth of the longest are the set's extent, as before: floored at the width too,
     the early steps' wider box cost the k-NN w='auto' fits of the registration suite's
     occlusion family up to 30% in mean error; floored at no more than a tenth of the
-    longest (which is continuous), the thin scans failed as before. The cut at a tenth acts
-    only while the Gaussians are wider than the side (the first steps); on shapes 15 and 40
-    times longer than wide, with clutter or a third occluded, fits were as good or as bad
-    as with the floor below 1/1000 (20 seeds each)."""
+    longest (which is continuous), the thin scans failed as before. The floor falls off
+    above a tenth, not below it: falling from a twentieth to a tenth, rigid fits of
+    cluttered scans 0.095 thick failed in 4 of 20 (none at the full floor); falling from a
+    tenth to a fifth, scans 0.12 thick fail in none of 20 (4 with the floor cut off at a
+    tenth). The floor acts only while the Gaussians are wider than the side (the first
+    steps); on shapes 15 and 40 times longer than wide, with clutter or a third occluded,
+    fits were as good or as bad as with the floor below 1/1000 (20 seeds each)."""
     width = max(math.sqrt(2.0 * math.pi * sigma2), 1e-300)
-    thin = sides <= _BOX_THIN_SIDE * float(np.max(sides))  # (all of a one-point set's: 0 <= 0)
+    longest_side = float(np.max(sides))
+    share = sides / longest_side if longest_side > 0 else np.zeros_like(sides)  # (a one-point set)
+    floor = width * np.clip((_BOX_THIN_SIDE - share) / (_BOX_THIN_SIDE - _BOX_FLOORED_SIDE), 0.0, 1.0)
     longest = np.argsort(-sides, kind="stable")[:model_dims]
-    return float(np.prod(np.where(thin, np.maximum(sides, width), sides)[np.sort(longest)]))
+    return np.where(floor > 0, np.maximum(sides, floor), sides)[np.sort(longest)]
 
 
 def _thin(sides: np.ndarray) -> np.ndarray:
@@ -1020,7 +1032,7 @@ class _CPD(BaseEstimator):
                     if current_prior is not None:
                         _check_prior(current_prior, moving.shape[0], fixed.shape[0], "prior(sigma2_ratio)")
                 w_e = (
-                    _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2, model_dims))
+                    _box_weight(w_fraction, n_fixed, _box_sides(sides, sigma2, model_dims))
                     if auto_w and not holding
                     else w_fraction
                 )
@@ -1132,7 +1144,7 @@ class _CPD(BaseEstimator):
             # agree, and the run is scored as the other one is; from CPD's posterior, as in the loop
             n_p = post.n_p if current_prior is None else e_step(moving_t, sigma2, w_fraction, None).n_p
             w_fraction = _w_estimate(n_p, n_fixed)
-            w_e = _box_weight(w_fraction, n_fixed, _box_volume(sides, sigma2, model_dims))
+            w_e = _box_weight(w_fraction, n_fixed, _box_sides(sides, sigma2, model_dims))
             post = e_step(moving_t, sigma2, w_e, current_prior)
             final_objective = post.neg_log_likelihood + self._penalty(state) + units
         name = type(self).__name__
@@ -1515,13 +1527,19 @@ def _w_estimate(n_p: float, n_fixed: int) -> float:
     return min(max(1.0 - n_p / n_fixed, 0.0), _AUTO_W_MAX)
 
 
-def _box_weight(w_fraction: float, n_fixed: int, box: float) -> float:
+def _box_weight(w_fraction: float, n_fixed: int, box_sides: np.ndarray) -> float:
     """CPD's outlier weight (of a density 1/N) for w='auto''s share ``w_fraction`` of a uniform
-    density over a box of volume ``box``."""
+    density over a box with sides ``box_sides`` (see :func:`_box_sides`)."""
     if w_fraction <= 0:
         return w_fraction
-    # (a nearly flat fixed set has a box of almost no volume: the odds can pass 1e16)
-    return _weight_of_odds(w_fraction / (1.0 - w_fraction) * n_fixed / box)
+    box = float(np.prod(box_sides))
+    if 0.0 < box < math.inf:
+        # (a nearly flat fixed set has a box of almost no volume: the odds can pass 1e16)
+        return _weight_of_odds(w_fraction / (1.0 - w_fraction) * n_fixed / box)
+    # a volume past float's range, in logs: one fixed point in 46 dimensions has a box of
+    # 46 sides of the Gaussians' width at the variance floor, which rounded to 0 (ZeroDivisionError)
+    log_odds = math.log(w_fraction / (1.0 - w_fraction) * n_fixed) - float(np.sum(np.log(box_sides)))
+    return _weight_of_odds(math.exp(min(log_odds, 100.0)))  # (odds past 1e12 give the bound)
 
 
 def _needed_points(n_dims: int, n_moving: int, n_fixed: int) -> float:

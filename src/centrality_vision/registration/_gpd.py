@@ -42,19 +42,22 @@ def _unit_radius(points: np.ndarray) -> np.ndarray:
 
 def _graph_points(points: np.ndarray) -> np.ndarray:
     """The coordinates the graphs are built on: ``points`` of unit RMS radius (see
-    :func:`_unit_radius`), and for a set that spans 2 or 3 of more dimensions (a flat scan
-    in 3D, an outline lifted into a plane of 10D) its coordinates in the space it spans,
-    whose graphs are the set's own (they depend on distances only).
+    :func:`_unit_radius`), and for a set that spans fewer dimensions than it has (a flat
+    scan in 3D, an outline lifted into a plane of 10D, a line) its coordinates in the space
+    it spans, whose graphs are the set's own (they depend on distances only); a line's with
+    a second coordinate of 0 (the graphs are built in 2D at least).
 
     The span is read off the caller's points, to within the rounding of their coordinates
     (as the graphs read it: ``graphs._pointsets._affine_rank``): centring takes the offset away,
     and with it the knowledge that a turned plane 1e4 from the origin, 6e-12 of its extent
     thick, is a plane. Built as 3D, its Delaunay graph passed or failed Qhull's check by
-    chance, and the default graph of any flat 3D set was refused."""
+    chance, and the default graph of any flat 3D set was refused. A turned line 1e6 from the
+    origin got a "Delaunay graph" of its rounding (137 edges where the path has 29)."""
     rank = _affine_rank(points)
     unit = _unit_radius(points)
-    if 2 <= rank < points.shape[1]:  # (unit is centred)
-        return unit @ np.linalg.svd(unit, full_matrices=False)[2][:rank].T
+    if 1 <= rank < points.shape[1]:  # (unit is centred)
+        spanned = unit @ np.linalg.svd(unit, full_matrices=False)[2][:rank].T
+        return spanned if rank >= 2 else np.c_[spanned, np.zeros(len(spanned))]
     return unit
 
 
