@@ -209,6 +209,16 @@ def test_one_fixed_point_in_many_dimensions_gets_a_fit(estimator):
     assert 0.0 <= fit.w_ < 1.0
 
 
+@pytest.mark.parametrize("sides", [[1e-310], [1e-154, 1e-154], [1e-300, 1e-300], [1e-200] * 50])
+def test_a_box_too_small_for_floats_gives_the_weights_bound(sides):
+    """Odds past float's range: a box of 1e-310 gave odds of inf and a NaN weight (and NaN
+    objectives, without a warning); one whose volume rounded to 0 divided by zero."""
+    from centrality_vision.registration._cpd import _AUTO_W_E_MAX, _box_weight
+
+    assert _box_weight(0.5, 3, np.array(sides)) == _AUTO_W_E_MAX
+    assert _box_weight(1e-300, 3, np.array([1.0, 2.0])) == pytest.approx(1.5e-300)  # (small odds as such)
+
+
 @pytest.mark.parametrize("off_plane", ["one point 1% off", "thickness 1e-3"])
 def test_rigid_auto_w_on_a_nearly_flat_cluttered_set_finds_the_pose(fish_pair, off_plane):
     """A flat set with one clutter point 1% of its extent off the plane, or a scan 1e-3 of its

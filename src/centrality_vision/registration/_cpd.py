@@ -1480,9 +1480,13 @@ _COMMON_PARAMETERS = """w : float in [0, 1) or 'auto', default=0
         and non-rigid (``benchmarks/registration.py``); on the 44 family/levels of
         ``benchmarks/registration_suite.py`` (non-rigid, 100 pairs each) its mean error is
         plain EM's (ratio 0.87-1.03, median 1.00) with the same success rate. A rejected
-        jump costs one E-step more. Not used with ``w='auto'``, ``landmarks`` or a
-        scheduled GPD prior (the EM map then changes between steps); off by default so
-        that iteration counts are CPD's own.
+        jump costs one E-step more. On a set short of full span (a plane in 3D, a line) a
+        rigid or affine map is extrapolated on the set's span, where it is determined. Over
+        3,000 random rigid, similarity and affine problems (flat, nearly flat and line
+        sets turned in random planes; 375 spanning every direction) an accelerated fit
+        ended over 1.5 times as far from the truth as plain EM in 19, none full-span.
+        Not used with ``w='auto'``, ``landmarks`` or a scheduled GPD prior (the EM map then
+        changes between steps); off by default so that iteration counts are CPD's own.
     callback : callable, optional
         Called with an :class:`IterationInfo` after each E-step; return ``True`` (or
         ``numpy.True_``, as a comparison gives) to stop.
@@ -1533,11 +1537,13 @@ def _box_weight(w_fraction: float, n_fixed: int, box_sides: np.ndarray) -> float
     if w_fraction <= 0:
         return w_fraction
     box = float(np.prod(box_sides))
-    if 0.0 < box < math.inf:
+    odds = w_fraction / (1.0 - w_fraction) * n_fixed / box if 0.0 < box < math.inf else math.inf
+    if odds < math.inf:
         # (a nearly flat fixed set has a box of almost no volume: the odds can pass 1e16)
-        return _weight_of_odds(w_fraction / (1.0 - w_fraction) * n_fixed / box)
-    # a volume past float's range, in logs: one fixed point in 46 dimensions has a box of
-    # 46 sides of the Gaussians' width at the variance floor, which rounded to 0 (ZeroDivisionError)
+        return _weight_of_odds(odds)
+    # a volume or odds past float's range, in logs: one fixed point in 46 dimensions has a
+    # box of 46 sides of the Gaussians' width at the variance floor, which rounded to 0
+    # (ZeroDivisionError), and a box of 1e-310 gave odds of inf and a NaN weight
     log_odds = math.log(w_fraction / (1.0 - w_fraction) * n_fixed) - float(np.sum(np.log(box_sides)))
     return _weight_of_odds(math.exp(min(log_odds, 100.0)))  # (odds past 1e12 give the bound)
 
