@@ -1536,15 +1536,15 @@ def _box_weight(w_fraction: float, n_fixed: int, box_sides: np.ndarray) -> float
     density over a box with sides ``box_sides`` (see :func:`_box_sides`)."""
     if w_fraction <= 0:
         return w_fraction
-    box = float(np.prod(box_sides))
-    odds = w_fraction / (1.0 - w_fraction) * n_fixed / box if 0.0 < box < math.inf else math.inf
+    box, odds_per_volume = float(np.prod(box_sides)), w_fraction / (1.0 - w_fraction) * n_fixed
+    odds = odds_per_volume / box if 0.0 < box < math.inf else math.inf
     if odds < math.inf:
         # (a nearly flat fixed set has a box of almost no volume: the odds can pass 1e16)
         return _weight_of_odds(odds)
     # a volume or odds past float's range, in logs: one fixed point in 46 dimensions has a
     # box of 46 sides of the Gaussians' width at the variance floor, which rounded to 0
     # (ZeroDivisionError), and a box of 1e-310 gave odds of inf and a NaN weight
-    log_odds = math.log(w_fraction / (1.0 - w_fraction) * n_fixed) - float(np.sum(np.log(box_sides)))
+    log_odds = math.log(odds_per_volume) - float(np.sum(np.log(box_sides)))
     return _weight_of_odds(math.exp(min(log_odds, 100.0)))  # (odds past 1e12 give the bound)
 
 
@@ -1735,6 +1735,7 @@ class RigidCPD(_CPD):
 
     def _from_vector(self, vector, state):
         dim = state.translation.shape[0]
+        scale = max(float(vector[-1]), 1e-300) if self.scale else 1.0
         if self._jump_frame is None:
             rotation = proper_rotation(vector[: dim * dim].reshape(dim, dim))[0]
             translation = vector[dim * dim : dim * dim + dim]
@@ -1743,10 +1744,9 @@ class RigidCPD(_CPD):
             size = dim * basis.shape[1]
             on_span = vector[:size].reshape(dim, basis.shape[1]) @ basis.T
             rotation = proper_rotation(on_span + state.rotation - (state.rotation @ basis) @ basis.T)[0]
-            scale = max(float(vector[-1]), 1e-300) if self.scale else 1.0
             translation = vector[size : size + dim] - scale * rotation @ centre
         if self.scale:
-            new = SimilarityTransform._trusted(rotation, translation, max(float(vector[-1]), 1e-300))
+            new = SimilarityTransform._trusted(rotation, translation, scale)
         else:
             new = RigidTransform._trusted(rotation, translation)
         return new, new._apply(self._work)
