@@ -583,6 +583,12 @@ def _span_frame(points: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     return points.mean(axis=0), axes[:, keep]
 
 
+def _off_span_kept(on_span: np.ndarray, matrix: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """The D x D map that takes the ``basis`` columns (a set's span, see :func:`_span_frame`)
+    as ``on_span`` (D x k, flattened) does and acts as ``matrix`` off the span."""
+    return on_span.reshape(matrix.shape[0], basis.shape[1]) @ basis.T + matrix - (matrix @ basis) @ basis.T
+
+
 def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
     """Volume of the uniform outlier density's box (see :func:`_box_sides`)."""
     return float(np.prod(_box_sides(sides, sigma2, model_dims)))
@@ -1742,8 +1748,7 @@ class RigidCPD(_CPD):
         else:  # off the span, the state's rotation
             centre, basis = self._jump_frame
             size = dim * basis.shape[1]
-            on_span = vector[:size].reshape(dim, basis.shape[1]) @ basis.T
-            rotation = proper_rotation(on_span + state.rotation - (state.rotation @ basis) @ basis.T)[0]
+            rotation = proper_rotation(_off_span_kept(vector[:size], state.rotation, basis))[0]
             translation = vector[size : size + dim] - scale * rotation @ centre
         if self.scale:
             new = SimilarityTransform._trusted(rotation, translation, scale)
@@ -1828,8 +1833,7 @@ class AffineCPD(_CPD):
         else:  # off the span, the state's map
             centre, basis = self._jump_frame
             size = dim * basis.shape[1]
-            on_span = vector[:size].reshape(dim, basis.shape[1]) @ basis.T
-            linear = on_span + state.linear - (state.linear @ basis) @ basis.T
+            linear = _off_span_kept(vector[:size], state.linear, basis)
             new = AffineTransform(linear, vector[size:] - linear @ centre)
         return new, new(self._work)
 
