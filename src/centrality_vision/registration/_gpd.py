@@ -291,9 +291,10 @@ class GPD(BaseEstimator):
         One of :data:`centrality_vision.centrality.CENTRALITIES`, or ``f(graph) -> values``.
     graph : str or callable, default='delaunay'
         One of :data:`GRAPHS` or ``f(points) -> sparse graph`` with one node per point. A
-        named graph of a set that spans 2 or 3 dimensions of more (a flat scan in 3D) is
-        built in the space the set spans, to within the rounding of its coordinates; a
-        callable gets the caller's points.
+        named graph of a set that spans fewer dimensions than it has (a flat scan in 3D, a
+        line) is built in the space the set spans (a line's in 2D, with a second coordinate
+        of 0), to within the rounding of its coordinates; a callable gets the caller's
+        points.
     bins : int in [1, 100,000] or str, default=10
         Histogram bins for ``h(m)`` (see :func:`centrality_prior`).
     phi : float in [1e-100, 1e100], optional
