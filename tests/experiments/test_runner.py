@@ -52,6 +52,18 @@ def test_a_result_json_cannot_hold_is_named_with_its_unit(tmp_path):
         run_units([Unit("u3", _unstorable, {"x": 3})], tmp_path / "r.jsonl", scheduler="serial", progress=False)
 
 
+def _colliding(x):
+    return {"per_seed": [{"n": x, 1: "one", "1": "text one"}]}
+
+
+def test_a_result_whose_keys_collide_in_json_is_refused_not_halved(tmp_path):
+    """Keys 1 and "1" are one key in JSON: the stored result kept only one value, silently
+    (audit 31)."""
+    with pytest.raises(TypeError, match=r"unit 'c' returned .*the keys 1 and '1' are the same in JSON"):
+        run_units([Unit("c", _colliding, {"x": 0})], tmp_path / "r.jsonl", scheduler="serial", progress=False)
+    assert load_results(tmp_path / "r.jsonl") == {}
+
+
 def test_a_crash_keeps_what_finished_and_a_rerun_does_the_rest(tmp_path):
     units = [Unit(f"u{i}", _square, {"x": i if i != 3 else -1, "marker_dir": str(tmp_path)}) for i in range(5)]
     with pytest.raises(RuntimeError, match="boom"):
@@ -146,6 +158,8 @@ def test_damaged_or_edited_lines_are_recomputed_never_read(tmp_path, capsys):
         assert run_units([unit], path, scheduler="serial", progress=False) == good
         assert _calls(tmp_path) == before + 1
         assert "skipped 1 damaged line (" in capsys.readouterr().err
+    run_units([unit], path, scheduler="serial", progress=False)  # the damaged line is still there: said so
+    assert "they are left in the file, and a unit of this run whose result was among them" in capsys.readouterr().err
     path.write_bytes(line)  # one whole record
     assert run_units([unit], path, scheduler="serial", progress=False) == good
     assert "damaged" not in capsys.readouterr().err

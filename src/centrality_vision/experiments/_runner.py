@@ -284,6 +284,27 @@ def _read_results(path) -> tuple[dict, int]:
     return out, damaged
 
 
+def _check_keys(result, depth: int = 0):
+    """Refuse a dict whose keys collide as JSON text (``1`` and ``"1"``, ``True`` and ``"true"``):
+    JSON keeps one of them, so the stored result would silently lose the other."""
+    if depth > 200:  # (json.dumps refuses deeper data itself)
+        return
+    if isinstance(result, dict):
+        seen = {}
+        for key in result:
+            text = json.dumps({key: 0})[1:-4]  # the key as JSON writes it (TypeError for a key it cannot)
+            if text in seen:
+                raise ValueError(f"the keys {seen[text]!r} and {key!r} are the same in JSON")
+            seen[text] = key
+        values = result.values()
+    elif isinstance(result, list | tuple):
+        values = result
+    else:
+        return
+    for value in values:
+        _check_keys(value, depth + 1)
+
+
 class _Appender:
     """Append one JSON line per result with a single ``write`` on an O_APPEND descriptor."""
 
@@ -304,6 +325,7 @@ class _Appender:
         """Append ``result`` under ``key`` and return it as it will be read back (tuples become
         lists, dict keys text), so that a run and its resumption hand out the same values."""
         try:
+            _check_keys(result)
             stored = json.loads(json.dumps(result))
         except (TypeError, ValueError) as error:
             raise TypeError(
@@ -386,7 +408,8 @@ def run_units(
     if damaged:  # (a resume that recomputes work says why)
         print(
             f"{path}: skipped {damaged} damaged line{'' if damaged == 1 else 's'} (a write cut short, or a record "
-            "edited by hand); a unit of this run stored there is computed again.",
+            "edited by hand); they are left in the file, and a unit of this run whose result was among them is "
+            "computed again.",
             file=sys.stderr,
         )
     other = len(set(stored) - set(ids.values()))
