@@ -105,3 +105,26 @@ def test_on_a_line_a_jump_does_not_leave_the_line_turned(estimator):
 def test_bad_accelerate(fish, bad):
     with pytest.raises(TypeError, match="accelerate"):
         RigidCPD(accelerate=bad).fit(fish, fish)
+
+
+def test_accelerate_saves_a_third_of_the_e_steps_over_five_problems(fish_pair):
+    """The docstring's claim, on small sets: rigid (with and without scale), affine 3D,
+    non-rigid and affine with clutter take 83 E-steps accelerated against plain EM's 136
+    (0.61). A weaker extrapolation still beats plain EM on each; this sum does not: ``a v`` in
+    place of ``a^2 v`` took 102 E-steps, sigma2 extrapolated on a linear path 90."""
+    fish, fixed = fish_pair.moving, fish_pair.fixed
+    problems = []
+    for scale in (1.0, 1.3):
+        x = scale * fish @ _rotation(0.6).T + [0.4, -0.2]
+        problems.append((RigidCPD(scale=scale != 1.0, tol=1e-10, max_iter=500), fish, x))
+    y = np.random.default_rng(1).random((300, 3))
+    linear = np.array([[1.1, 0.1, 0.0], [0.0, 0.9, 0.2], [0.1, 0.0, 1.0]])
+    problems.append((AffineCPD(tol=1e-10, max_iter=500), y, y @ linear.T + 0.3))
+    problems.append((NonRigidCPD(tol=1e-8, max_iter=1000), fish, fixed))
+    cluttered = np.vstack([fish @ _rotation(0.5).T, np.random.default_rng(3).uniform(-1.5, 1.5, (30, 2))])
+    problems.append((AffineCPD(w=0.2, tol=1e-10, max_iter=500), fish, cluttered))
+    steps = {False: 0, True: 0}
+    for estimator, moving, target in problems:
+        for accelerate in steps:
+            steps[accelerate] += clone(estimator).set_params(accelerate=accelerate).fit(moving, target).n_iter_
+    assert steps[True] <= 0.65 * steps[False], steps

@@ -220,3 +220,30 @@ def test_posteriors_are_mapped_back_with_the_fixed_sets_centre_and_units(fish, e
     fit = estimator.fit(moving, fixed)
     np.testing.assert_allclose(fit.posteriors_.px, fit.posterior() @ fixed, atol=1e-9 * np.abs(fixed).max())
     assert fit.posteriors_.neg_log_likelihood == pytest.approx(fit.history_["objective"][-1], rel=1e-12)
+
+
+# --- the normalised frame ---------------------------------------------------------------------------
+
+
+def test_the_frame_is_the_rms_radius_of_all_points_about_their_centres(fish_pair):
+    """Hand-computed: sqrt((|Y - mean Y|^2 + |X - mean X|^2) / (M + N)). The non-rigid fit's
+    beta is read in this frame, so its divisor changes every result (M + N - 1: the fish
+    pair's first point moved by 2.6e-5)."""
+    from centrality_vision.registration._cpd import _Frame
+
+    moving, fixed = fish_pair.moving * 3.0 + 7.0, fish_pair.fixed[:50] * 3.0 - 2.0
+    frame = _Frame.of(moving, fixed, True)[0]
+    total = np.sum((moving - moving.mean(axis=0)) ** 2) + np.sum((fixed - fixed.mean(axis=0)) ** 2)
+    assert frame.scale == pytest.approx(np.sqrt(total / (len(moving) + len(fixed))), rel=1e-12)
+    np.testing.assert_allclose(frame.moving_centre, moving.mean(axis=0), rtol=1e-12)
+
+
+@pytest.mark.parametrize(("ratio", "moving_scale"), [(3e5, True), (3e6, False)])
+def test_the_moving_sets_radius_is_the_frame_unless_the_fixed_set_is_a_million_times_larger(fish, ratio, moving_scale):
+    """The k-NN model's frame: the moving set's radius, unless the fixed set's exceeds it a
+    million times (its coordinates could then overflow when squared)."""
+    from centrality_vision.registration._cpd import _Frame
+
+    fixed = ratio * np.vstack([fish, np.random.default_rng(0).uniform(-1, 1, (30, 2))])
+    frame = _Frame.of(fish, fixed, True, moving_scale=True)[0]
+    assert (frame.scale == pytest.approx(_radius(fish - fish.mean(axis=0)), rel=1e-12)) == moving_scale
