@@ -294,7 +294,7 @@ def _check_keys(result, depth: int = 0):
         for key in result:
             text = json.dumps({key: 0})[1:-4]  # the key as JSON writes it (TypeError for a key it cannot)
             if text in seen:
-                raise ValueError(f"the keys {seen[text]!r} and {key!r} are the same in JSON")
+                raise TypeError(f"the keys {seen[text]!r} and {key!r} are the same in JSON")
             seen[text] = key
         values = result.values()
     elif isinstance(result, list | tuple):
