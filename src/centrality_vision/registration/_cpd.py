@@ -1141,7 +1141,7 @@ class _CPD(BaseEstimator):
                                 pending = ((state, moving_t, sigma2), objective)
                                 state, moving_t, sigma2 = jump
                                 chain = None
-                                if self._jump_frame is not None and _is_line(self._jump_frame[1]):
+                                if _is_line(self._jump_frame[1]):
                                     # A line's pose is held only by where its points lie along
                                     # it: under a variance below what the jumped pose leaves
                                     # (the M-step's for that pose, under the last posteriors)
@@ -1149,7 +1149,8 @@ class _CPD(BaseEstimator):
                                     # turned (3,000 random rigid, similarity and affine
                                     # problems: 19 ended over 1.5x plain EM's error, 12 of
                                     # them on 1,352 lines; with this floor none, at 1.15x the
-                                    # E-steps, 0.7x plain EM's; half of it left 3)
+                                    # E-steps, 0.7x plain EM's; a floor of half that
+                                    # variance left 3)
                                     pose = _data_sigma2(m_post, fixed, moving_t) * per_dim
                                     if math.isfinite(pose):
                                         sigma2 = max(sigma2, pose)
@@ -1770,11 +1771,11 @@ class RigidCPD(_CPD):
         dim = state.translation.shape[0]
         scale = max(float(vector[-1]), 1e-300) if self.scale else 1.0
         centre, basis = self._jump_frame
-        if basis is None:
-            rotation = proper_rotation(vector[: dim * dim].reshape(dim, dim))[0]
-        else:  # off the span, the state's rotation
-            rotation = proper_rotation(_off_span_kept(vector[: dim * basis.shape[1]], state.rotation, basis))[0]
         size = dim * (dim if basis is None else basis.shape[1])
+        if basis is None:
+            rotation = proper_rotation(vector[:size].reshape(dim, dim))[0]
+        else:  # off the span, the state's rotation
+            rotation = proper_rotation(_off_span_kept(vector[:size], state.rotation, basis))[0]
         translation = vector[size : size + dim] - scale * rotation @ centre
         if self.scale:
             new = SimilarityTransform._trusted(rotation, translation, scale)
@@ -1854,10 +1855,11 @@ class AffineCPD(_CPD):
     def _from_vector(self, vector, state):
         dim = state.translation.shape[0]
         centre, basis = self._jump_frame
+        size = dim * (dim if basis is None else basis.shape[1])
         if basis is None:
-            linear = vector[: dim * dim].reshape(dim, dim)
+            linear = vector[:size].reshape(dim, dim)
         else:  # off the span, the state's map
-            linear = _off_span_kept(vector[: dim * basis.shape[1]], state.linear, basis)
+            linear = _off_span_kept(vector[:size], state.linear, basis)
         new = AffineTransform(linear, vector[-dim:] - linear @ centre)
         return new, new(self._work)
 
