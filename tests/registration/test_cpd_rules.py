@@ -200,7 +200,7 @@ def test_an_accelerated_objective_never_rises(fish_pair, estimator):
 def test_an_accelerated_fit_does_not_end_below_the_variance_floor(fish):
     """A jump's sigma2 is floored as an EM step's is: the jump once ended at 9.8e-15 where EM
     ends at its floor, 1.06e-14."""
-    fixed = np.vstack([fish @ _rotation(29).T, np.random.default_rng(3).uniform(-1.5, 1.5, (30, 2))])
+    fixed = _cluttered(fish)
     plain = AffineCPD(w=0.2, tol=1e-10, max_iter=500).fit(fish, fixed)
     fast = AffineCPD(w=0.2, tol=1e-10, max_iter=500, accelerate=True).fit(fish, fixed)
     assert plain.sigma2_ < 1e-13  # (both fits reach the floor)
