@@ -155,13 +155,18 @@ def test_a_lifted_fit_that_reaches_the_variance_floor_ends_as_in_2d():
         assert lifted.posteriors_.neg_log_likelihood == pytest.approx(expected[2], rel=1e-9)
 
 
+def _box_volume(sides, sigma2, model_dims):
+    """The volume of w='auto''s outlier box (what ``_box_weight`` divides the odds by)."""
+    from centrality_vision.registration._cpd import _box_sides
+
+    return float(np.prod(_box_sides(sides, sigma2, model_dims)))
+
+
 def test_the_outlier_box_floors_every_thin_side_at_the_gaussians_width():
     """w='auto''s box: a side up to a tenth of the longest at least the Gaussians' width
     sqrt(2 pi sigma2) (from there to a fifth, a falling share of it). Floored only below
     1/1000 of the longest side, a side just above that cut (2.2e-3 of 2) gave a box 48
     times smaller than one just below it."""
-    from centrality_vision.registration._cpd import _box_volume
-
     sigma2 = 0.01 / (2.0 * np.pi)  # width 0.1
     volumes = [_box_volume(np.array([2.0, 1.0, side]), sigma2, 3) for side in (0.0, 1.9e-3, 2.1e-3, 0.05, 0.1)]
     assert volumes == pytest.approx([0.2] * 5)
@@ -181,8 +186,6 @@ def test_the_outlier_box_changes_continuously_with_a_side(sigma2):
     """The floor falls to 0 between a tenth and a fifth of the longest side. Cut off at the
     tenth, sides 0.0999999999 and 0.1000000001 of the longest gave boxes up to 25 times
     apart, and non-rigid w='auto' fits of a cluttered scan ended 0.0285 and 0.0324 off."""
-    from centrality_vision.registration._cpd import _box_volume
-
     shares = np.linspace(0.0, 0.4, 4001)
     volumes = np.array([_box_volume(np.array([1.0, 0.5, share]), sigma2, 3) for share in shares])
     width = np.sqrt(2.0 * np.pi * sigma2)

@@ -549,7 +549,7 @@ KERNEL_RANGE = (1e-150, 1e150)
 def _principal_sides(points: np.ndarray) -> np.ndarray:
     """Sides of the points' bounding box in their principal axes (the covariance's eigenvectors).
 
-    The box of ``w="auto"``'s uniform outlier density (see :func:`_box_volume`). Taken along the
+    The box of ``w="auto"``'s uniform outlier density (see :func:`_box_sides`). Taken along the
     principal axes rather than the coordinate axes, so that the estimate does not depend on how
     the sets are oriented: the axis-aligned box of a set rotated by 45 degrees has up to twice
     the volume (a fuzz run found ``w_`` 0.83 for a long thin set with 20% clutter and 1e-10 for
@@ -596,11 +596,6 @@ def _off_span_kept(on_span: np.ndarray, matrix: np.ndarray, basis: np.ndarray) -
     """The D x D map that takes the ``basis`` columns (a set's span, see :func:`_span_frame`)
     as ``on_span`` (D x k, flattened) does and acts as ``matrix`` off the span."""
     return on_span.reshape(matrix.shape[0], basis.shape[1]) @ basis.T + matrix - (matrix @ basis) @ basis.T
-
-
-def _box_volume(sides: np.ndarray, sigma2: float, model_dims: int) -> float:
-    """Volume of the uniform outlier density's box (see :func:`_box_sides`)."""
-    return float(np.prod(_box_sides(sides, sigma2, model_dims)))
 
 
 def _box_sides(sides: np.ndarray, sigma2: float, model_dims: int) -> np.ndarray:
